@@ -1,0 +1,28 @@
+//! Triangle meshes: the output of every engine.
+
+pub mod marching_cubes;
+pub mod topology;
+
+use glam::Vec3;
+
+/// An indexed triangle mesh with one normal per vertex; triangles wind counter-clockwise seen
+/// from outside the fluid.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct TriMesh {
+    pub vertices: Vec<Vec3>,
+    pub normals: Vec<Vec3>,
+    pub triangles: Vec<[u32; 3]>,
+}
+
+impl TriMesh {
+    pub fn is_empty(&self) -> bool {
+        self.triangles.is_empty()
+    }
+
+    /// Bytes held by the mesh's arrays.
+    pub fn heap_bytes(&self) -> usize {
+        self.vertices.capacity() * size_of::<Vec3>()
+            + self.normals.capacity() * size_of::<Vec3>()
+            + self.triangles.capacity() * size_of::<[u32; 3]>()
+    }
+}
