@@ -1,0 +1,73 @@
+//! Closing the band where the surface leaves it.
+//!
+//! The band of Sec. 4.1 holds the surface only where the surface stays near surface particles.
+//! SSP07 can bridge two splash particles about 2.5r apart with a surface whose middle lies
+//! beyond 2r of both, and a cell there lacks corners: a hole. Here the surface is followed out
+//! of the band instead: wherever a triangulated cell's face is crossed by the surface and the
+//! cell beyond it is incomplete, that cell's missing corners join the band, until none is
+//! missing. The surface is closed by construction, and the band grows only where it has to.
+
+use glam::IVec3;
+use rayon::prelude::*;
+
+use super::band::{BRICK, Band};
+use super::field_sampling::BrickValues;
+use super::halo::{Halo, offset};
+use crate::mesh::marching_cubes::{case_index, cases};
+
+/// Grid vertices that must join the band, sorted and without repeats.
+pub fn missing_vertices(band: &Band, values: &BrickValues) -> Vec<IVec3> {
+    let mut missing: Vec<IVec3> = band
+        .bricks
+        .par_iter()
+        .map_init(Halo::new, |halo, &brick| {
+            halo.fill(band, values, brick);
+            let mut out = Vec::new();
+            for z in 0..BRICK {
+                for y in 0..BRICK {
+                    for x in 0..BRICK {
+                        open_faces(halo, IVec3::new(x, y, z), brick * BRICK, &mut out);
+                    }
+                }
+            }
+            out
+        })
+        .flatten()
+        .collect();
+    missing.par_sort_unstable_by_key(|v| (v.z, v.y, v.x));
+    missing.dedup();
+    missing
+}
+
+/// Appends the missing corners of the incomplete cells across the crossed faces of cell `l`.
+fn open_faces(halo: &Halo, l: IVec3, base: IVec3, out: &mut Vec<IVec3>) {
+    if !halo.complete(l) {
+        return;
+    }
+    let corners = halo.corners(l);
+    let case = case_index(&corners);
+    if cases()[case].triangles().is_empty() {
+        return;
+    }
+    for axis in 0..3 {
+        for side in 0..2 {
+            let on_face = |c: usize| (c >> axis & 1) == side;
+            let inside = (0..8).filter(|&c| on_face(c)).map(|c| case >> c & 1);
+            let (lo, hi) = inside.fold((1, 0), |(lo, hi), s| (lo.min(s), hi.max(s)));
+            if lo == hi {
+                continue;
+            }
+            let step = if side == 1 { 1 } else { -1 };
+            let beyond = l + IVec3::AXES[axis] * step;
+            if halo.complete(beyond) {
+                continue;
+            }
+            for c in 0..8 {
+                let v = beyond + offset(c);
+                if halo.at(v).is_nan() {
+                    out.push(base + v);
+                }
+            }
+        }
+    }
+}

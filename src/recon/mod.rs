@@ -1,0 +1,13 @@
+//! Surface reconstruction engines.
+
+pub mod band;
+pub mod band_closure;
+pub mod field_sampling;
+pub mod halo;
+pub mod handler_array;
+pub mod narrow_band;
+pub mod neighbourhood;
+pub mod surface_particles;
+pub mod triangulation;
+
+pub use narrow_band::{Engine, Reconstruction, reconstruct};

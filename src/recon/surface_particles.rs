@@ -1,0 +1,85 @@
+//! Surface particles (Sec. 4): the smoothed colour field of Müller et al. 2003 flags the
+//! particles of the main body's surface; particles with few neighbours (splashes, whose colour
+//! field gradient vanishes by symmetry) are flagged as well.
+
+use std::f32::consts::PI;
+
+use glam::Vec3;
+use rayon::prelude::*;
+
+use super::handler_array::HandlerArray;
+use super::neighbourhood::{LANES, Neighbourhood};
+
+pub struct SurfaceCriteria {
+    /// Colour field support h; also the neighbour count radius.
+    pub support: f32,
+    /// Particle volume m/ρ, r³ for particles at spacing r.
+    pub volume: f32,
+    /// Threshold on the dimensionless |∇c|·h.
+    pub colour_threshold: f32,
+    pub min_neighbours: u32,
+}
+
+/// Positions of the surface particles, in handler order. The handler array's lookup cells must
+/// be at least `criteria.support` wide.
+pub fn surface_particles(handlers: &HandlerArray, criteria: &SurfaceCriteria) -> Vec<Vec3> {
+    assert!(handlers.cell_size() >= criteria.support);
+    let h = criteria.support;
+    // |∇c|·h for the poly6 kernel W = 315/(64π h⁹)(h² − d²)³ written with q = d/h:
+    // ∇c = −V·945/(32π h⁴) Σ (1 − q²)² (x_i − x_j)/h.
+    let scale = criteria.volume * 945.0 / (32.0 * PI * h.powi(3));
+    let inv_h2 = 1.0 / (h * h);
+    let positions = &handlers.positions;
+    let flags: Vec<bool> = positions
+        .par_iter()
+        .map_init(
+            || (Neighbourhood::default(), None),
+            |(near, cached), &p| {
+                let cell = handlers.cell_of(p);
+                if *cached != Some(cell) {
+                    let lo = cell.as_vec3() * handlers.cell_size();
+                    near.gather_box(handlers, lo, lo + handlers.cell_size(), h);
+                    *cached = Some(cell);
+                }
+                let (gradient, neighbours) = colour_gradient(near, p - near.anchor, inv_h2);
+                // The particle itself is among its neighbours.
+                neighbours - 1.0 < criteria.min_neighbours as f32
+                    || gradient.length() * scale > criteria.colour_threshold
+            },
+        )
+        .collect();
+    positions
+        .iter()
+        .zip(&flags)
+        .filter_map(|(&p, &s)| s.then_some(p))
+        .collect()
+}
+
+/// Returns Σ (1 − q²)² (x − x_j)/h and the number of particles with q < 1.
+fn colour_gradient(near: &Neighbourhood, x: Vec3, inv_h2: f32) -> (Vec3, f32) {
+    let inv_h = inv_h2.sqrt();
+    let mut g = [[0.0f32; LANES]; 3];
+    let mut count = [0.0f32; LANES];
+    for ((cx, cy), cz) in near
+        .x
+        .chunks_exact(LANES)
+        .zip(near.y.chunks_exact(LANES))
+        .zip(near.z.chunks_exact(LANES))
+    {
+        for l in 0..LANES {
+            let (dx, dy, dz) = (x.x - cx[l], x.y - cy[l], x.z - cz[l]);
+            let q2 = (dx * dx + dy * dy + dz * dz) * inv_h2;
+            let t = (1.0 - q2).max(0.0);
+            let w = t * t;
+            g[0][l] += w * dx;
+            g[1][l] += w * dy;
+            g[2][l] += w * dz;
+            count[l] += if q2 < 1.0 { 1.0 } else { 0.0 };
+        }
+    }
+    let sum = |a: &[f32; LANES]| a.iter().sum::<f32>();
+    (
+        Vec3::new(sum(&g[0]), sum(&g[1]), sum(&g[2])) * inv_h,
+        sum(&count),
+    )
+}

@@ -1,0 +1,175 @@
+//! Triangulation of the surface cells (Sec. 4.2): a cell is triangulated only when all eight
+//! corners are surface vertices, which also keeps the inner rim of the band from forming a
+//! second layer. Each intersected edge gets one vertex, owned by the edge's lower end and
+//! shared by every cell around it.
+//!
+//! Unlike the paper's serial pass, bricks are triangulated in parallel, in two passes so that
+//! vertex numbers do not depend on the thread count: the first creates each brick's edge
+//! vertices, a prefix sum numbers them, the second emits triangles.
+
+use glam::{IVec3, Vec3};
+use rayon::prelude::*;
+
+use super::band::{BRICK, Band, brick_of, local_index};
+use super::field_sampling::{BrickValues, vertex_position};
+use super::halo::{Halo, neighbour_slot, offset};
+use crate::mesh::TriMesh;
+use crate::mesh::marching_cubes::{case_index, cases, edge_axis, edge_corners};
+
+/// The edge vertices owned by one brick: bit `3 * local_index + axis` marks an edge that holds
+/// one, numbered in bit order from `first`.
+struct BrickEdges {
+    bits: [u64; 24],
+    /// Vertices in the words before each word.
+    ranks: [u32; 24],
+    first: u32,
+    positions: Vec<Vec3>,
+    normals: Vec<Vec3>,
+}
+
+impl BrickEdges {
+    fn id(&self, local: usize, axis: usize) -> u32 {
+        let bit = 3 * local + axis;
+        let (w, b) = (bit / 64, bit % 64);
+        debug_assert!(self.bits[w] >> b & 1 == 1, "edge without a vertex");
+        self.first + self.ranks[w] + (self.bits[w] & ((1u64 << b) - 1)).count_ones()
+    }
+}
+
+pub struct Triangulation {
+    pub mesh: TriMesh,
+    /// Cells with all eight corners in the band that the surface crosses.
+    pub surface_cells: usize,
+}
+
+pub fn triangulate(band: &Band, values: &BrickValues) -> Triangulation {
+    let cell = band.cell;
+    let mut edges: Vec<BrickEdges> = band
+        .bricks
+        .par_iter()
+        .map_init(Halo::new, |halo, &brick| {
+            halo.fill(band, values, brick);
+            edge_vertices(halo, brick, cell)
+        })
+        .collect();
+    let mut next = 0u32;
+    for e in &mut edges {
+        e.first = next;
+        next += e.positions.len() as u32;
+    }
+    let per_brick: Vec<(Vec<[u32; 3]>, usize)> = band
+        .bricks
+        .par_iter()
+        .map_init(Halo::new, |halo, &brick| {
+            halo.fill(band, values, brick);
+            brick_triangles(halo, &edges)
+        })
+        .collect();
+    let surface_cells = per_brick.iter().map(|(_, n)| n).sum();
+    let mut mesh = TriMesh {
+        vertices: Vec::with_capacity(next as usize),
+        normals: Vec::with_capacity(next as usize),
+        triangles: Vec::with_capacity(per_brick.iter().map(|(t, _)| t.len()).sum()),
+    };
+    for e in &edges {
+        mesh.vertices.extend_from_slice(&e.positions);
+        mesh.normals.extend_from_slice(&e.normals);
+    }
+    for (t, _) in &per_brick {
+        mesh.triangles.extend_from_slice(t);
+    }
+    Triangulation {
+        mesh,
+        surface_cells,
+    }
+}
+
+/// Vertices on the sign-changing edges leaving this brick's vertices in +x, +y, +z, where at
+/// least one of the four cells around the edge is triangulated.
+fn edge_vertices(halo: &Halo, brick: IVec3, cell: f32) -> BrickEdges {
+    let mut edges = BrickEdges {
+        bits: [0; 24],
+        ranks: [0; 24],
+        first: 0,
+        positions: Vec::new(),
+        normals: Vec::new(),
+    };
+    for z in 0..BRICK {
+        for y in 0..BRICK {
+            for x in 0..BRICK {
+                let l = IVec3::new(x, y, z);
+                let v0 = halo.at(l);
+                if v0.is_nan() {
+                    continue;
+                }
+                for axis in 0..3 {
+                    let e = IVec3::AXES[axis];
+                    let v1 = halo.at(l + e);
+                    if v1.is_nan()
+                        || (v0 < 0.0) == (v1 < 0.0)
+                        || !edge_in_surface_cell(halo, l, axis)
+                    {
+                        continue;
+                    }
+                    let bit = 3 * local_index(l) + axis;
+                    edges.bits[bit / 64] |= 1 << (bit % 64);
+                    let t = v0 / (v0 - v1);
+                    let p0 = vertex_position(brick * BRICK + l, cell);
+                    let mut p = p0;
+                    p[axis] += t * cell;
+                    edges.positions.push(p);
+                    let g = halo.gradient(l, cell).lerp(halo.gradient(l + e, cell), t);
+                    edges.normals.push(
+                        g.try_normalize()
+                            .unwrap_or(e.as_vec3() * (v1 - v0).signum()),
+                    );
+                }
+            }
+        }
+    }
+    let mut count = 0;
+    for (rank, bits) in edges.ranks.iter_mut().zip(&edges.bits) {
+        *rank = count;
+        count += bits.count_ones();
+    }
+    edges
+}
+
+fn edge_in_surface_cell(halo: &Halo, l: IVec3, axis: usize) -> bool {
+    let (u, v) = (IVec3::AXES[(axis + 1) % 3], IVec3::AXES[(axis + 2) % 3]);
+    [l, l - u, l - v, l - u - v]
+        .into_iter()
+        .any(|c| halo.complete(c))
+}
+
+fn brick_triangles(halo: &Halo, edges: &[BrickEdges]) -> (Vec<[u32; 3]>, usize) {
+    let mut triangles = Vec::new();
+    let mut surface_cells = 0;
+    for z in 0..BRICK {
+        for y in 0..BRICK {
+            for x in 0..BRICK {
+                let l = IVec3::new(x, y, z);
+                if !halo.complete(l) {
+                    continue;
+                }
+                let case = case_index(&halo.corners(l));
+                let tris = cases()[case].triangles();
+                if tris.is_empty() {
+                    continue;
+                }
+                surface_cells += 1;
+                for t in tris {
+                    triangles.push(t.map(|e| {
+                        let e = e as usize;
+                        let owner = l + offset(edge_corners(e).0);
+                        let d = brick_of(owner);
+                        let b = halo.neighbours[neighbour_slot(d)]
+                            .expect("a complete cell's corners lie in existing bricks");
+                        edges[b].id(local_index(owner - d * BRICK), edge_axis(e))
+                    }));
+                }
+            }
+        }
+    }
+    (triangles, surface_cells)
+}
