@@ -1,7 +1,10 @@
 //! splash: triangle meshes from SPH particle frames, after Akinci et al. 2012.
 
+pub mod batch;
 pub mod config;
 pub mod field;
+pub mod io;
 pub mod mesh;
 pub mod recon;
 pub mod report;
+pub mod spacing;

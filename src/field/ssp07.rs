@@ -79,43 +79,51 @@ impl Sums {
 
     #[inline(always)]
     fn over_lanes(near: &Neighbourhood, x: Vec3, inv_r2: f32) -> Sums {
-        let mut k = [0.0f32; LANES];
-        let mut kd = [[0.0f32; LANES]; 3];
-        let mut wd = [[0.0f32; LANES]; 3];
-        let mut wdd = [[0.0f32; LANES]; 6];
-        for ((cx, cy), cz) in near
-            .x
-            .chunks_exact(LANES)
-            .zip(near.y.chunks_exact(LANES))
-            .zip(near.z.chunks_exact(LANES))
-        {
+        // Fourteen lane-wise running sums: k, k d (3), w d (3), w d dᵀ (6) and a spare lane
+        // block so that every sum is one register of LANES floats.
+        let mut acc = [[0.0f32; LANES]; 13];
+        let n = near.len() / LANES;
+        for i in 0..n {
+            let r = i * LANES..(i + 1) * LANES;
+            let (cx, cy, cz) = (&near.x[r.clone()], &near.y[r.clone()], &near.z[r]);
+            let mut terms = [[0.0f32; LANES]; 13];
             for l in 0..LANES {
                 let (dx, dy, dz) = (cx[l] - x.x, cy[l] - x.y, cz[l] - x.z);
                 let t = (1.0 - (dx * dx + dy * dy + dz * dz) * inv_r2).max(0.0);
                 let w = t * t;
-                let kl = w * t;
-                k[l] += kl;
-                kd[0][l] += kl * dx;
-                kd[1][l] += kl * dy;
-                kd[2][l] += kl * dz;
+                let k = w * t;
                 let (wx, wy, wz) = (w * dx, w * dy, w * dz);
-                wd[0][l] += wx;
-                wd[1][l] += wy;
-                wd[2][l] += wz;
-                wdd[0][l] += wx * dx;
-                wdd[1][l] += wy * dy;
-                wdd[2][l] += wz * dz;
-                wdd[3][l] += wx * dy;
-                wdd[4][l] += wx * dz;
-                wdd[5][l] += wy * dz;
+                let lane = [
+                    k,
+                    k * dx,
+                    k * dy,
+                    k * dz,
+                    wx,
+                    wy,
+                    wz,
+                    wx * dx,
+                    wy * dy,
+                    wz * dz,
+                    wx * dy,
+                    wx * dz,
+                    wy * dz,
+                ];
+                for (term, v) in terms.iter_mut().zip(lane) {
+                    term[l] = v;
+                }
+            }
+            for (a, t) in acc.iter_mut().zip(&terms) {
+                for l in 0..LANES {
+                    a[l] += t[l];
+                }
             }
         }
-        let sum = |a: &[f32; LANES]| a.iter().sum::<f32>();
+        let s = acc.map(|a| a.iter().sum::<f32>());
         Sums {
-            k: sum(&k),
-            kd: kd.each_ref().map(sum),
-            wd: wd.each_ref().map(sum),
-            wdd: wdd.each_ref().map(sum),
+            k: s[0],
+            kd: [s[1], s[2], s[3]],
+            wd: [s[4], s[5], s[6]],
+            wdd: [s[7], s[8], s[9], s[10], s[11], s[12]],
         }
     }
 

@@ -1,0 +1,171 @@
+//! Text-table particle input (CSV and friends); the accepted dialect is documented on
+//! [`super::read_particles`].
+
+use std::io::BufReader;
+use std::path::Path;
+
+use anyhow::{Result, anyhow, bail};
+use glam::Vec3;
+
+use super::lines::Lines;
+
+#[derive(Clone, Copy)]
+enum Separator {
+    Comma,
+    Semicolon,
+    Whitespace,
+}
+
+impl Separator {
+    fn detect(line: &str) -> Self {
+        if line.contains(',') {
+            Self::Comma
+        } else if line.contains(';') {
+            Self::Semicolon
+        } else {
+            Self::Whitespace
+        }
+    }
+
+    /// The line's fields, trimmed and unquoted. Runs of whitespace separate one field, while
+    /// two adjacent commas enclose an empty one.
+    fn fields(self, line: &str) -> impl Iterator<Item = &str> {
+        match self {
+            Self::Comma => Fields::Char(line.split(',')),
+            Self::Semicolon => Fields::Char(line.split(';')),
+            Self::Whitespace => Fields::Whitespace(line.split_ascii_whitespace()),
+        }
+        .map(unquote)
+    }
+}
+
+/// Splits on a character, or on whitespace; both are much faster than splitting with a closure.
+enum Fields<'a> {
+    Char(std::str::Split<'a, char>),
+    Whitespace(std::str::SplitAsciiWhitespace<'a>),
+}
+
+impl<'a> Iterator for Fields<'a> {
+    type Item = &'a str;
+
+    fn next(&mut self) -> Option<&'a str> {
+        match self {
+            Self::Char(fields) => fields.next(),
+            Self::Whitespace(fields) => fields.next(),
+        }
+    }
+}
+
+fn unquote(field: &str) -> &str {
+    let field = field.trim();
+    field
+        .strip_prefix('"')
+        .and_then(|f| f.strip_suffix('"'))
+        .map_or(field, str::trim)
+}
+
+/// Which columns hold the coordinates, and what to call them in messages.
+struct Columns {
+    index: [usize; 3],
+    names: [String; 3],
+}
+
+pub(super) fn read(path: &Path) -> Result<Vec<Vec3>> {
+    let (file, file_len) = super::open_input(path)?;
+    let mut lines = Lines::new(BufReader::with_capacity(1 << 16, file), 0);
+    let mut particles = Vec::new();
+    let mut layout: Option<(Separator, Columns)> = None;
+    while let Some((line, text)) = lines.next_non_blank()? {
+        let text = text.trim_start_matches('\u{feff}');
+        if text.is_empty() || text.starts_with('#') {
+            continue;
+        }
+        let (separator, columns) = match &layout {
+            Some((separator, columns)) => (*separator, columns),
+            None => {
+                let separator = Separator::detect(text);
+                let is_header = separator.fields(text).any(|f| f.parse::<f32>().is_err());
+                let columns = if is_header {
+                    header_columns(separator, text, line)?
+                } else {
+                    Columns {
+                        index: [0, 1, 2],
+                        names: ["x", "y", "z"].map(String::from),
+                    }
+                };
+                // Typical lines are 20-40 bytes; the file size bounds the estimate.
+                particles.reserve(usize::try_from(file_len / 32)?);
+                let (separator, columns) = layout.insert((separator, columns));
+                if is_header {
+                    continue;
+                }
+                (*separator, &*columns)
+            }
+        };
+        let p = parse_row(separator, text, columns, line)?;
+        particles.push(super::finite(p, || format!("line {line}"))?);
+    }
+    Ok(particles)
+}
+
+/// Finds the `x`, `y` and `z` columns in a header line.
+fn header_columns(separator: Separator, text: &str, line: usize) -> Result<Columns> {
+    let names: Vec<&str> = separator.fields(text).collect();
+    let mut index = [0; 3];
+    for (slot, wanted) in index.iter_mut().zip(["x", "y", "z"]) {
+        *slot = names
+            .iter()
+            .position(|name| name.eq_ignore_ascii_case(wanted))
+            .ok_or_else(|| {
+                anyhow!(
+                    "line {line} is taken as a header (not all its fields are numbers), but it has \
+                     no column '{wanted}' (its columns: {})",
+                    names.join(", ")
+                )
+            })?;
+    }
+    Ok(Columns {
+        index,
+        names: index.map(|i| names.get(i).copied().unwrap_or_default().to_owned()),
+    })
+}
+
+/// Parses the coordinates from data row `line`.
+fn parse_row(separator: Separator, text: &str, columns: &Columns, line: usize) -> Result<Vec3> {
+    let mut coordinates = [None; 3];
+    let last = columns.index.iter().copied().max().unwrap_or_default();
+    let mut found = 0;
+    for (i, field) in separator.fields(text).enumerate().take(last + 1) {
+        found = i + 1;
+        for ((slot, &wanted), name) in coordinates
+            .iter_mut()
+            .zip(&columns.index)
+            .zip(&columns.names)
+        {
+            if wanted == i {
+                let value = field.parse::<f32>().map_err(|_| {
+                    anyhow!(
+                        "line {line}, column {} ('{name}'): '{field}' is not a number",
+                        i + 1
+                    )
+                })?;
+                *slot = Some(value);
+            }
+        }
+    }
+    let [Some(x), Some(y), Some(z)] = coordinates else {
+        let missing = columns
+            .index
+            .iter()
+            .zip(&columns.names)
+            .filter(|&(&i, _)| i >= found);
+        let missing: Vec<String> = missing
+            .map(|(i, name)| format!("column {} ('{name}')", i + 1))
+            .collect();
+        bail!(
+            "line {line}: the row has only {found} columns; missing {}",
+            missing.join(", ")
+        );
+    };
+    Ok(Vec3::new(x, y, z))
+}

@@ -1,0 +1,50 @@
+//! Line-by-line reading of text payloads, with line numbers for error messages.
+
+use std::io::BufRead;
+
+use anyhow::{Context, Result, bail};
+
+pub(super) struct Lines<R> {
+    reader: R,
+    buf: Vec<u8>,
+    line: usize,
+}
+
+impl<R: BufRead> Lines<R> {
+    /// `lines_before` is the number of lines already consumed (a PLY header), so that the
+    /// numbers reported are the file's.
+    pub fn new(reader: R, lines_before: usize) -> Self {
+        Self {
+            reader,
+            buf: Vec::new(),
+            line: lines_before,
+        }
+    }
+
+    /// Number of the last line read (1-based), or of the last line before the text.
+    pub fn line(&self) -> usize {
+        self.line
+    }
+
+    /// The next line that is not blank, trimmed, with its number; `None` at the end of the file.
+    pub fn next_non_blank(&mut self) -> Result<Option<(usize, &str)>> {
+        loop {
+            self.buf.clear();
+            let n = self
+                .reader
+                .read_until(b'\n', &mut self.buf)
+                .with_context(|| format!("read error after line {}", self.line))?;
+            if n == 0 {
+                return Ok(None);
+            }
+            self.line += 1;
+            if !self.buf.trim_ascii().is_empty() {
+                break;
+            }
+        }
+        match std::str::from_utf8(self.buf.trim_ascii()) {
+            Ok(text) => Ok(Some((self.line, text))),
+            Err(_) => bail!("line {} is not valid UTF-8 text", self.line),
+        }
+    }
+}

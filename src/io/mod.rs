@@ -1,0 +1,210 @@
+//! Reading particle frames and writing meshes.
+//!
+//! Particle inputs (see [`InputFormat`]):
+//! - PLY, ascii or binary (either byte order): the `vertex` element's `x`, `y`, `z` properties,
+//!   of any scalar type and in any position; other properties and elements are skipped.
+//! - Text tables (`.csv`, `.txt`): see [`read_particles`] for the accepted dialect.
+//! - Raw: little-endian `f32` `x y z` triples and nothing else.
+//!
+//! Every reader error names the file and what is wrong with it, with the line (text) or byte
+//! offset (binary) where that helps. Coordinates must be finite. A frame without particles is
+//! valid and reads as an empty `Vec`.
+//!
+//! Meshes are written as OBJ or PLY (binary little-endian or ascii), atomically when written to
+//! a file with [`write_mesh_file`].
+
+mod atomic;
+mod csv;
+mod lines;
+mod obj;
+mod ply;
+mod ply_ascii;
+mod ply_binary;
+mod ply_write;
+mod raw;
+mod records;
+
+use std::fs::File;
+use std::io::{self, BufWriter, Write};
+use std::path::Path;
+
+use anyhow::{Context, Result, anyhow, bail};
+use glam::Vec3;
+
+use crate::mesh::TriMesh;
+
+/// File format of a particle frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum InputFormat {
+    Ply,
+    Csv,
+    Raw,
+}
+
+const INPUT_EXTENSIONS: &str = ".ply, .csv, .txt, .bin, .raw";
+
+impl InputFormat {
+    /// The format implied by the file's extension, case-insensitively: `.ply`; `.csv` and `.txt`
+    /// (text tables, whatever their separator); `.bin` and `.raw` (raw `f32` triples).
+    pub fn from_path(path: &Path) -> Result<Self> {
+        let extension = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase);
+        match extension.as_deref() {
+            Some("ply") => Ok(Self::Ply),
+            Some("csv" | "txt") => Ok(Self::Csv),
+            Some("bin" | "raw") => Ok(Self::Raw),
+            _ => bail!(
+                "cannot tell the particle format of '{}' from its extension: known extensions are \
+                 {INPUT_EXTENSIONS} (or give the input format explicitly: ply, csv or raw)",
+                path.display()
+            ),
+        }
+    }
+
+    /// Parses a format name as given on the command line: `ply`, `csv` or `raw`.
+    pub fn parse(name: &str) -> Result<Self> {
+        match name.trim().to_ascii_lowercase().as_str() {
+            "ply" => Ok(Self::Ply),
+            "csv" => Ok(Self::Csv),
+            "raw" => Ok(Self::Raw),
+            _ => bail!("unknown input format '{name}': expected ply, csv or raw"),
+        }
+    }
+}
+
+/// Reads the particle positions of one frame; `format` overrides the guess from the extension.
+///
+/// Text tables: fields are separated by commas if the first data or header line has one, else
+/// by semicolons if it has one, else by runs of spaces/tabs. Fields are trimmed and may be
+/// wrapped in double quotes (a quoted field cannot contain the separator). Blank lines and lines
+/// starting with `#` are skipped; CRLF line ends and a UTF-8 byte order mark are accepted. The
+/// first line is a header if any of its fields is not a number; the header must then name
+/// columns `x`, `y` and `z` (case-insensitive, anywhere), otherwise the first three columns are
+/// used. Extra columns are ignored.
+pub fn read_particles(path: &Path, format: Option<InputFormat>) -> Result<Vec<Vec3>> {
+    let format = match format {
+        Some(format) => format,
+        None => InputFormat::from_path(path)?,
+    };
+    let particles = match format {
+        InputFormat::Ply => ply::read(path),
+        InputFormat::Csv => csv::read(path),
+        InputFormat::Raw => raw::read(path),
+    };
+    // One flat message, so that the path and the cause both show however the caller prints it.
+    particles.map_err(|e| anyhow!("cannot read particles from '{}': {e:#}", path.display()))
+}
+
+/// Opens a particle file, returning it with its length in bytes.
+fn open_input(path: &Path) -> Result<(File, u64)> {
+    let file = File::open(path).context("cannot open the file")?;
+    let metadata = file.metadata().context("cannot query the file's size")?;
+    if metadata.is_dir() {
+        bail!("it is a directory");
+    }
+    Ok((file, metadata.len()))
+}
+
+/// File format of an output mesh.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MeshFormat {
+    Obj,
+    PlyBinary,
+    PlyAscii,
+}
+
+impl MeshFormat {
+    /// File extension, without the dot.
+    pub fn extension(self) -> &'static str {
+        match self {
+            Self::Obj => "obj",
+            Self::PlyBinary | Self::PlyAscii => "ply",
+        }
+    }
+
+    /// Parses a format name as given on the command line: `obj`, `ply` (binary little-endian)
+    /// or `ply-ascii`.
+    pub fn parse(name: &str) -> Result<Self> {
+        match name.trim().to_ascii_lowercase().as_str() {
+            "obj" => Ok(Self::Obj),
+            "ply" => Ok(Self::PlyBinary),
+            "ply-ascii" => Ok(Self::PlyAscii),
+            _ => bail!("unknown mesh format '{name}': expected obj, ply or ply-ascii"),
+        }
+    }
+
+    /// The format implied by the extension (`.obj`, `.ply` as binary), case-insensitively.
+    pub fn from_path(path: &Path) -> Option<Self> {
+        let extension = path.extension()?.to_str()?.to_ascii_lowercase();
+        match extension.as_str() {
+            "obj" => Some(Self::Obj),
+            "ply" => Some(Self::PlyBinary),
+            _ => None,
+        }
+    }
+}
+
+/// Writes `mesh` in `format`. `normals` must be empty or have one entry per vertex; without
+/// normals, none are written.
+pub fn write_mesh(mesh: &TriMesh, format: MeshFormat, w: &mut impl Write) -> io::Result<()> {
+    check_mesh(mesh)?;
+    let mut out = BufWriter::with_capacity(1 << 16, w);
+    match format {
+        MeshFormat::Obj => obj::write(mesh, &mut out)?,
+        MeshFormat::PlyBinary => ply_write::write(mesh, false, &mut out)?,
+        MeshFormat::PlyAscii => ply_write::write(mesh, true, &mut out)?,
+    }
+    out.flush()
+}
+
+/// Writes to a temporary file in the same directory, fsyncs, renames onto `path`; on any error
+/// removes the temporary and leaves an existing `path` untouched. Creates missing parent
+/// directories.
+pub fn write_mesh_file(path: &Path, mesh: &TriMesh, format: MeshFormat) -> Result<()> {
+    atomic::write_file(path, |file| write_mesh(mesh, format, file))
+}
+
+/// Rejects meshes that would make a corrupt file rather than writing them.
+fn check_mesh(mesh: &TriMesh) -> io::Result<()> {
+    let invalid = |message: String| io::Error::new(io::ErrorKind::InvalidInput, message);
+    if !mesh.normals.is_empty() && mesh.normals.len() != mesh.vertices.len() {
+        return Err(invalid(format!(
+            "mesh has {} normals for {} vertices",
+            mesh.normals.len(),
+            mesh.vertices.len()
+        )));
+    }
+    let vertex_count = mesh.vertices.len();
+    let out_of_range = mesh.triangles.iter().enumerate().find_map(|(t, corners)| {
+        let bad = corners.iter().find(|&&i| i as usize >= vertex_count)?;
+        Some((t, *bad))
+    });
+    if let Some((t, index)) = out_of_range {
+        return Err(invalid(format!(
+            "mesh triangle {t} refers to vertex {index}, but there are only {vertex_count} vertices"
+        )));
+    }
+    Ok(())
+}
+
+/// Passes finite points through; `at` says where a non-finite one was found.
+#[inline]
+fn finite(p: Vec3, at: impl FnOnce() -> String) -> Result<Vec3> {
+    if p.is_finite() {
+        Ok(p)
+    } else {
+        Err(non_finite(p, &at()))
+    }
+}
+
+#[cold]
+fn non_finite(p: Vec3, at: &str) -> anyhow::Error {
+    anyhow!(
+        "{at} has a non-finite coordinate: ({}, {}, {})",
+        p.x,
+        p.y,
+        p.z
+    )
+}

@@ -1,0 +1,89 @@
+//! Ascii PLY payload: one record per line.
+
+use std::fs::File;
+use std::io::BufReader;
+
+use anyhow::{Result, anyhow, bail};
+use glam::Vec3;
+
+use super::lines::Lines;
+use super::ply::{Element, Kind, Layout};
+
+/// Reads the payload, `remaining_bytes` long, skipping blank lines.
+pub(super) fn read(
+    mut lines: Lines<BufReader<File>>,
+    layout: &Layout,
+    remaining_bytes: u64,
+) -> Result<Vec<Vec3>> {
+    let (vertex, xyz) = (&layout.vertex, layout.xyz_indices());
+    // Records of an element without properties would be empty lines, which are skipped anyway.
+    for element in layout.before.iter().filter(|e| !e.props.is_empty()) {
+        for index in 0..element.count {
+            if lines.next_non_blank()?.is_none() {
+                bail!(
+                    "the file ends at line {} inside element '{}', after {index} of {} records",
+                    lines.line(),
+                    element.name,
+                    element.count
+                );
+            }
+        }
+    }
+    // "0 0 0\n" is the shortest vertex line, which bounds the allocation.
+    let fit = usize::try_from(remaining_bytes / 6)?;
+    let mut out = Vec::with_capacity(vertex.count.min(fit));
+    let last = xyz.iter().copied().max().unwrap_or_default();
+    for index in 0..vertex.count {
+        let Some((line, text)) = lines.next_non_blank()? else {
+            bail!(
+                "the file ends at line {} after {index} of {} vertices",
+                lines.line(),
+                vertex.count
+            );
+        };
+        let p = parse_vertex(text, vertex, xyz, last)
+            .map_err(|e| anyhow!("line {line} (vertex {index}): {e}"))?;
+        out.push(super::finite(p, || {
+            format!("line {line} (vertex {index})")
+        })?);
+    }
+    Ok(out)
+}
+
+/// Parses the coordinates from one vertex line, reading its values up to property `last`.
+fn parse_vertex(
+    text: &str,
+    vertex: &Element,
+    xyz: [usize; 3],
+    last: usize,
+) -> Result<Vec3, String> {
+    let mut tokens = text.split_ascii_whitespace();
+    let too_few = || {
+        format!(
+            "too few values for the {} properties of the 'vertex' element",
+            vertex.props.len()
+        )
+    };
+    let mut coordinates = [0.0; 3];
+    for (i, prop) in vertex.props.iter().enumerate().take(last + 1) {
+        let token = tokens.next().ok_or_else(too_few)?;
+        match prop.kind {
+            Kind::Scalar(_) => {
+                if let Some(c) = xyz.iter().position(|&j| j == i) {
+                    coordinates[c] = token.parse().map_err(|_| {
+                        format!("cannot parse '{token}' as property '{}'", prop.name)
+                    })?;
+                }
+            }
+            Kind::List { .. } => {
+                let n: usize = token.parse().map_err(|_| {
+                    format!("invalid list length '{token}' for property '{}'", prop.name)
+                })?;
+                if n > 0 {
+                    tokens.nth(n - 1).ok_or_else(too_few)?;
+                }
+            }
+        }
+    }
+    Ok(Vec3::from_array(coordinates))
+}

@@ -1,0 +1,187 @@
+//! Binary PLY payload, either byte order: the elements before `vertex` are skipped, then the
+//! vertices decoded in chunks when their records have a fixed size.
+
+use std::fs::File;
+use std::io::{self, BufRead, BufReader, ErrorKind, Read};
+
+use anyhow::{Context, Result, anyhow, bail};
+use glam::Vec3;
+
+use super::ply::{Element, Kind, Layout, Scalar};
+use super::records::{self, Records};
+
+/// Reads the payload that starts at byte `offset`.
+pub(super) fn read(
+    reader: &mut BufReader<File>,
+    layout: &Layout,
+    big_endian: bool,
+    mut offset: u64,
+    file_len: u64,
+) -> Result<Vec<Vec3>> {
+    for element in &layout.before {
+        offset = skip(reader, element, big_endian, offset, file_len)?;
+    }
+    let vertex = &layout.vertex;
+    let Some(stride) = vertex.fixed_stride() else {
+        return read_varying(reader, layout, big_endian, offset, file_len);
+    };
+    let records = Records {
+        count: vertex.count,
+        stride,
+        start: offset,
+        file_len,
+        what: "vertex",
+    };
+    let [(ax, sx), (ay, sy), (az, sz)] = layout
+        .xyz
+        .map(|(i, scalar)| (vertex.scalar_offset(i), scalar));
+    records::read(reader, &records, |record, p| {
+        p.x = sx.to_f32(record.get(ax..)?, big_endian)?;
+        p.y = sy.to_f32(record.get(ay..)?, big_endian)?;
+        p.z = sz.to_f32(record.get(az..)?, big_endian)?;
+        Some(())
+    })
+}
+
+/// Skips the records of a binary element that starts at byte `offset`; returns where it ends.
+fn skip(
+    reader: &mut BufReader<File>,
+    element: &Element,
+    big_endian: bool,
+    offset: u64,
+    file_len: u64,
+) -> Result<u64> {
+    if let Some(stride) = element.fixed_stride() {
+        let remaining = file_len.saturating_sub(offset);
+        let Some(bytes) = (element.count as u64)
+            .checked_mul(stride as u64)
+            .filter(|&bytes| bytes <= remaining)
+        else {
+            bail!(
+                "truncated binary data: element '{}' declares {} records of {stride} bytes from \
+                 byte offset {offset}, but the file ends at byte offset {file_len}",
+                element.name,
+                element.count
+            );
+        };
+        reader
+            .seek_relative(i64::try_from(bytes)?)
+            .with_context(|| format!("read error at byte offset {offset}"))?;
+        return Ok(offset + bytes);
+    }
+    (0..element.count).try_fold(offset, |offset, index| {
+        walk_record(
+            reader,
+            element,
+            index,
+            big_endian,
+            offset,
+            file_len,
+            |_, _, _| {},
+        )
+    })
+}
+
+/// Reads vertex records that contain list properties, one property at a time.
+fn read_varying(
+    reader: &mut BufReader<File>,
+    layout: &Layout,
+    big_endian: bool,
+    mut offset: u64,
+    file_len: u64,
+) -> Result<Vec<Vec3>> {
+    let (vertex, xyz) = (&layout.vertex, layout.xyz_indices());
+    // Every record holds at least its scalars and list lengths, which bounds the allocation.
+    let min_record: usize = vertex.props.iter().map(|p| p.kind.head_size()).sum();
+    let fit = file_len.saturating_sub(offset) / min_record.max(1) as u64;
+    let mut out = Vec::with_capacity(vertex.count.min(usize::try_from(fit)?));
+    for index in 0..vertex.count {
+        let start = offset;
+        let mut coordinates = [None; 3];
+        offset = walk_record(
+            reader,
+            vertex,
+            index,
+            big_endian,
+            offset,
+            file_len,
+            |i, s, bytes| {
+                if let Some(c) = xyz.iter().position(|&j| j == i) {
+                    coordinates[c] = s.to_f32(bytes, big_endian);
+                }
+            },
+        )?;
+        let [Some(x), Some(y), Some(z)] = coordinates else {
+            bail!("cannot decode vertex {index} at byte offset {start}");
+        };
+        out.push(super::finite(Vec3::new(x, y, z), || {
+            format!("vertex {index} (byte offset {start})")
+        })?);
+    }
+    Ok(out)
+}
+
+/// Reads record `index` of a binary `element` from byte `offset`, passing each scalar property's
+/// index, type and bytes to `visit`; returns the offset after the record.
+fn walk_record(
+    reader: &mut impl BufRead,
+    element: &Element,
+    index: usize,
+    big_endian: bool,
+    mut offset: u64,
+    file_len: u64,
+    mut visit: impl FnMut(usize, Scalar, &[u8]),
+) -> Result<u64> {
+    let truncated = || {
+        anyhow!(
+            "truncated binary data: the file ends at byte offset {file_len}, inside {} record \
+             {index} of {}",
+            element.name,
+            element.count
+        )
+    };
+    let mut buf = [0; 8];
+    for (i, prop) in element.props.iter().enumerate() {
+        match prop.kind {
+            Kind::Scalar(scalar) => {
+                let bytes = &mut buf[..scalar.size()];
+                if !read_field(reader, bytes, offset)? {
+                    return Err(truncated());
+                }
+                visit(i, scalar, bytes);
+                offset += scalar.size() as u64;
+            }
+            Kind::List { len, item } => {
+                let bytes = &mut buf[..len.size()];
+                if !read_field(reader, bytes, offset)? {
+                    return Err(truncated());
+                }
+                let n = len.to_len(bytes, big_endian).ok_or_else(|| {
+                    anyhow!(
+                        "negative list length for property '{}' of {} record {index} at byte offset {offset}",
+                        prop.name,
+                        element.name
+                    )
+                })?;
+                offset += len.size() as u64;
+                let skip = n.checked_mul(item.size() as u64).ok_or_else(truncated)?;
+                let skipped = io::copy(&mut (&mut *reader).take(skip), &mut io::sink())
+                    .with_context(|| format!("read error at byte offset {offset}"))?;
+                if skipped < skip {
+                    return Err(truncated());
+                }
+                offset += skip;
+            }
+        }
+    }
+    Ok(offset)
+}
+
+/// Fills `buf` from the reader; `false` if the file ends first.
+fn read_field(reader: &mut impl Read, buf: &mut [u8], offset: u64) -> Result<bool> {
+    match reader.read_exact(buf) {
+        Ok(()) => Ok(true),
+        Err(e) if e.kind() == ErrorKind::UnexpectedEof => Ok(false),
+        Err(e) => Err(anyhow!("read error at byte offset {offset}: {e}")),
+    }
+}

@@ -1,0 +1,39 @@
+//! Raw particle input: little-endian `f32` `x y z` triples, no header.
+
+use std::path::Path;
+
+use anyhow::{Result, bail};
+use glam::Vec3;
+
+use super::records::{self, Records};
+
+const RECORD_BYTES: usize = 12;
+
+pub(super) fn read(path: &Path) -> Result<Vec<Vec3>> {
+    let (mut file, file_len) = super::open_input(path)?;
+    let remainder = file_len % RECORD_BYTES as u64;
+    if remainder != 0 {
+        bail!(
+            "raw particle data is a sequence of {RECORD_BYTES}-byte records (x, y, z as \
+             little-endian f32), but the file is {file_len} bytes long, not a multiple of \
+             {RECORD_BYTES} (remainder {remainder})"
+        );
+    }
+    let records = Records {
+        count: usize::try_from(file_len / RECORD_BYTES as u64)?,
+        stride: RECORD_BYTES,
+        start: 0,
+        file_len,
+        what: "particle",
+    };
+    records::read(&mut file, &records, |r, p| {
+        p.x = f32_le(r, 0)?;
+        p.y = f32_le(r, 4)?;
+        p.z = f32_le(r, 8)?;
+        Some(())
+    })
+}
+
+fn f32_le(record: &[u8], at: usize) -> Option<f32> {
+    Some(f32::from_le_bytes(record.get(at..at + 4)?.try_into().ok()?))
+}
