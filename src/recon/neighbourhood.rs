@@ -27,12 +27,17 @@ impl Neighbourhood {
         self.clear(lo);
         let r2 = radius * radius;
         handlers.for_each_in_box(lo - radius, hi + radius, |cell| {
+            let start = self.x.len();
+            self.x.resize(start + cell.len(), 0.0);
+            self.y.resize(start + cell.len(), 0.0);
+            self.z.resize(start + cell.len(), 0.0);
+            let mut n = start;
             for &p in cell {
-                let d = (p - p.clamp(lo, hi)).length_squared();
-                if d <= r2 {
-                    self.push(p - lo);
-                }
+                let q = p - lo;
+                (self.x[n], self.y[n], self.z[n]) = (q.x, q.y, q.z);
+                n += usize::from((p - p.clamp(lo, hi)).length_squared() <= r2);
             }
+            self.truncate(n);
         });
         self.pad();
     }
@@ -43,12 +48,18 @@ impl Neighbourhood {
         let r2 = radius * radius;
         let shift = from.anchor - lo;
         let (blo, bhi) = (Vec3::ZERO, hi - lo);
-        for i in 0..from.x.len() {
+        let len = from.x.len();
+        self.x.resize(len, 0.0);
+        self.y.resize(len, 0.0);
+        self.z.resize(len, 0.0);
+        // Branch-free compaction: write every particle, advance only past the kept ones.
+        let mut n = 0;
+        for i in 0..len {
             let p = Vec3::new(from.x[i], from.y[i], from.z[i]) + shift;
-            if (p - p.clamp(blo, bhi)).length_squared() <= r2 {
-                self.push(p);
-            }
+            (self.x[n], self.y[n], self.z[n]) = (p.x, p.y, p.z);
+            n += usize::from((p - p.clamp(blo, bhi)).length_squared() <= r2);
         }
+        self.truncate(n);
         self.pad();
     }
 
@@ -66,6 +77,12 @@ impl Neighbourhood {
         self.x.clear();
         self.y.clear();
         self.z.clear();
+    }
+
+    fn truncate(&mut self, n: usize) {
+        self.x.truncate(n);
+        self.y.truncate(n);
+        self.z.truncate(n);
     }
 
     fn push(&mut self, p: Vec3) {
