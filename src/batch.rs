@@ -8,6 +8,7 @@ use anyhow::{Context, Result, anyhow, bail};
 
 use crate::config::{Config, Params};
 use crate::io::{self, InputFormat, MeshFormat};
+use crate::mesh::TriMesh;
 use crate::recon::{Engine, reconstruct};
 use crate::report::FrameStats;
 use crate::spacing::estimate_spacing;
@@ -86,6 +87,13 @@ fn expand_pattern(pattern: &str, stem: &str) -> Result<String> {
     Ok(out)
 }
 
+fn same_file(a: &Path, b: &Path) -> bool {
+    match (a.canonicalize(), b.canonicalize()) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => a == b,
+    }
+}
+
 /// The last run of digits in a file stem: `frame_0042` → 42.
 pub fn frame_number(stem: &str) -> Option<u64> {
     let end = stem.rfind(|c: char| c.is_ascii_digit())? + 1;
@@ -135,6 +143,15 @@ impl Batch {
                 self.inputs.len()
             );
         }
+        for (input, output) in self.inputs.iter().zip(&outputs) {
+            if self.inputs.iter().any(|i| same_file(i, output)) {
+                bail!(
+                    "the mesh of {} would overwrite the input {}: choose another -o or --format",
+                    input.display(),
+                    output.display()
+                );
+            }
+        }
         let mut sorted: Vec<(&PathBuf, &PathBuf)> = outputs.iter().zip(&self.inputs).collect();
         sorted.sort();
         for w in sorted.windows(2) {
@@ -179,14 +196,20 @@ impl Batch {
         let start = Instant::now();
         let particles = io::read_particles(input, self.input_format)?;
         let read = start.elapsed();
+        if particles.is_empty() {
+            // Nothing to reconstruct, and nothing to estimate a spacing from.
+            io::write_mesh_file(output, &TriMesh::default(), self.format)?;
+            let mut stats = FrameStats::default();
+            stats.timings.read = read;
+            return Ok(stats);
+        }
         // One spacing, hence one grid, for the whole sequence.
         let r = match *spacing {
             Some(r) => r,
             None => {
                 let r = estimate_spacing(&particles, SPACING_SAMPLES).ok_or_else(|| {
                     anyhow!(
-                        "{}: cannot estimate the particle spacing from {} particles; give --spacing or --particle-radius",
-                        input.display(),
+                        "cannot estimate the particle spacing from {} particles; give --spacing or --particle-radius",
                         particles.len()
                     )
                 })?;
@@ -196,8 +219,7 @@ impl Batch {
             }
         };
         let params = Params::resolve(&self.config, r);
-        let rec = reconstruct(&particles, &params, self.engine)
-            .with_context(|| format!("{}: reconstruction failed", input.display()))?;
+        let rec = reconstruct(&particles, &params, self.engine).context("reconstruction failed")?;
         drop(particles);
         let start = Instant::now();
         io::write_mesh_file(output, &rec.mesh, self.format)?;

@@ -130,9 +130,18 @@ fn recon(args: Recon) -> Result<ExitCode> {
         .output
         .as_deref()
         .map_or(Output::BesideInput, Output::parse);
-    let format = match &args.format {
-        Some(f) => MeshFormat::parse(f)?,
-        None => output.format_hint().unwrap_or(MeshFormat::Obj),
+    let format = match (&args.format, output.format_hint()) {
+        (Some(f), hint) => {
+            let format = MeshFormat::parse(f)?;
+            if let Some(hint) = hint.filter(|h| h.extension() != format.extension()) {
+                bail!(
+                    "--format {f} does not match the output name's .{} extension",
+                    hint.extension()
+                );
+            }
+            format
+        }
+        (None, hint) => hint.unwrap_or(MeshFormat::Obj),
     };
     let input_format = args
         .input_format
