@@ -49,8 +49,10 @@ pub fn reconstruct(particles: &[Vec3], params: &Params, engine: Engine) -> Resul
         t_low: params.t_low,
         t_high: params.t_high,
     };
-    // The handler array comes first here: the colour field needs the neighbours too.
-    let lookup_cell = params.colour_support;
+    // The handler array comes first here: the colour field needs the neighbours too. Its cells
+    // suit both gathers: the colour support (2r), and half the field's support (2r) so that a
+    // brick's reach spans few cells.
+    let lookup_cell = params.colour_support.max(params.support / 2.0);
     let handlers = timed(&mut t.handler_array, || {
         HandlerArray::new(particles, lookup_cell)
     })?;

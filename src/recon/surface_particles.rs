@@ -20,10 +20,8 @@ pub struct SurfaceCriteria {
     pub min_neighbours: u32,
 }
 
-/// Positions of the surface particles, in handler order. The handler array's lookup cells must
-/// be at least `criteria.support` wide.
+/// Positions of the surface particles, in handler order.
 pub fn surface_particles(handlers: &HandlerArray, criteria: &SurfaceCriteria) -> Vec<Vec3> {
-    assert!(handlers.cell_size() >= criteria.support);
     let h = criteria.support;
     // |∇c|·h for the poly6 kernel W = 315/(64π h⁹)(h² − d²)³ written with q = d/h:
     // ∇c = −V·945/(32π h⁴) Σ (1 − q²)² (x_i − x_j)/h.
