@@ -214,7 +214,7 @@ impl Progress for Console {
     fn spacing_estimated(&mut self, from: &Path, spacing: f32) {
         if !self.quiet {
             self.say(&format!(
-                "estimated particle spacing r = {spacing} from {} (median nearest-neighbour distance); used for every frame",
+                "estimated particle spacing r = {spacing} from {} (from the local particle density); used for every frame",
                 from.display()
             ));
         }
