@@ -4,7 +4,7 @@
 use glam::{DMat3, DVec3, Vec3};
 
 use super::ScalarField;
-use crate::recon::neighbourhood::{LANES, Neighbourhood};
+use crate::recon::neighbourhood::Neighbourhood;
 
 pub struct Ssp07 {
     /// Influence radius R (eq. 4).
@@ -59,66 +59,19 @@ struct Sums {
     wdd: [f32; 6],
 }
 
+crate::lane_sums! {
+    fn ssp07_sums(inv_r2: f32) -> [13] |dx, dy, dz| {
+        let t = (1.0 - (dx * dx + dy * dy + dz * dz) * inv_r2).max(0.0);
+        let w = t * t;
+        let k = w * t;
+        let (wx, wy, wz) = (w * dx, w * dy, w * dz);
+        [k, k * dx, k * dy, k * dz, wx, wy, wz, wx * dx, wy * dy, wz * dz, wx * dy, wx * dz, wy * dz]
+    }
+}
+
 impl Sums {
     fn over(near: &Neighbourhood, x: Vec3, inv_r2: f32) -> Sums {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") {
-            // SAFETY: the CPU has AVX2, checked just above.
-            return unsafe { Sums::over_avx2(near, x, inv_r2) };
-        }
-        Sums::over_lanes(near, x, inv_r2)
-    }
-
-    /// The same loop compiled for 8-wide registers; results are bitwise equal, as every lane
-    /// does the same IEEE operations in the same order.
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx2")]
-    unsafe fn over_avx2(near: &Neighbourhood, x: Vec3, inv_r2: f32) -> Sums {
-        Sums::over_lanes(near, x, inv_r2)
-    }
-
-    #[inline(always)]
-    fn over_lanes(near: &Neighbourhood, x: Vec3, inv_r2: f32) -> Sums {
-        // Fourteen lane-wise running sums: k, k d (3), w d (3), w d dᵀ (6) and a spare lane
-        // block so that every sum is one register of LANES floats.
-        let mut acc = [[0.0f32; LANES]; 13];
-        let n = near.len() / LANES;
-        for i in 0..n {
-            let r = i * LANES..(i + 1) * LANES;
-            let (cx, cy, cz) = (&near.x[r.clone()], &near.y[r.clone()], &near.z[r]);
-            let mut terms = [[0.0f32; LANES]; 13];
-            for l in 0..LANES {
-                let (dx, dy, dz) = (cx[l] - x.x, cy[l] - x.y, cz[l] - x.z);
-                let t = (1.0 - (dx * dx + dy * dy + dz * dz) * inv_r2).max(0.0);
-                let w = t * t;
-                let k = w * t;
-                let (wx, wy, wz) = (w * dx, w * dy, w * dz);
-                let lane = [
-                    k,
-                    k * dx,
-                    k * dy,
-                    k * dz,
-                    wx,
-                    wy,
-                    wz,
-                    wx * dx,
-                    wy * dy,
-                    wz * dz,
-                    wx * dy,
-                    wx * dz,
-                    wy * dz,
-                ];
-                for (term, v) in terms.iter_mut().zip(lane) {
-                    term[l] = v;
-                }
-            }
-            for (a, t) in acc.iter_mut().zip(&terms) {
-                for l in 0..LANES {
-                    a[l] += t[l];
-                }
-            }
-        }
-        let s = acc.map(|a| a.iter().sum::<f32>());
+        let s = ssp07_sums(near, x, inv_r2);
         Sums {
             k: s[0],
             kd: [s[1], s[2], s[3]],

@@ -105,3 +105,67 @@ impl Neighbourhood {
         self.x.is_empty()
     }
 }
+
+/// Defines `fn NAME(near: &Neighbourhood, x: Vec3, PARAM: TYPE) -> [f32; N]`, returning
+/// Σ_j TERM over the particles of `near`, where TERM sees `dx, dy, dz` = x_j − x and gives N
+/// values. The sums run in `LANES` independent lanes so that the loop vectorises, compiled
+/// once more for AVX2 and chosen at run time; every lane does the same IEEE operations in the
+/// same order on both paths, so results do not depend on the CPU or the thread count. TERM
+/// must give 0 for the padding (beyond any kernel's support) and should not branch.
+///
+/// A macro rather than a function taking a closure: a closure is compiled without the AVX2
+/// feature and would not be inlined into the AVX2 loop.
+#[macro_export]
+macro_rules! lane_sums {
+    ($vis:vis fn $name:ident($p:ident: $ty:ty) -> [$n:expr] |$dx:ident, $dy:ident, $dz:ident| $term:block) => {
+        $vis fn $name(
+            near: &$crate::recon::neighbourhood::Neighbourhood,
+            x: glam::Vec3,
+            $p: $ty,
+        ) -> [f32; $n] {
+            use $crate::recon::neighbourhood::LANES;
+            #[inline(always)]
+            fn lanes(
+                near: &$crate::recon::neighbourhood::Neighbourhood,
+                x: glam::Vec3,
+                $p: $ty,
+            ) -> [f32; $n] {
+                let mut acc = [[0.0f32; LANES]; $n];
+                let n = near.len() / LANES;
+                for i in 0..n {
+                    let r = i * LANES..(i + 1) * LANES;
+                    let (cx, cy, cz) = (&near.x[r.clone()], &near.y[r.clone()], &near.z[r]);
+                    let mut terms = [[0.0f32; LANES]; $n];
+                    for l in 0..LANES {
+                        let ($dx, $dy, $dz) = (cx[l] - x.x, cy[l] - x.y, cz[l] - x.z);
+                        let lane = $term;
+                        for (term, v) in terms.iter_mut().zip(lane) {
+                            term[l] = v;
+                        }
+                    }
+                    for (a, t) in acc.iter_mut().zip(&terms) {
+                        for l in 0..LANES {
+                            a[l] += t[l];
+                        }
+                    }
+                }
+                acc.map(|a| a.iter().sum::<f32>())
+            }
+            #[cfg(target_arch = "x86_64")]
+            #[target_feature(enable = "avx2")]
+            unsafe fn lanes_avx2(
+                near: &$crate::recon::neighbourhood::Neighbourhood,
+                x: glam::Vec3,
+                $p: $ty,
+            ) -> [f32; $n] {
+                lanes(near, x, $p)
+            }
+            #[cfg(target_arch = "x86_64")]
+            if std::arch::is_x86_feature_detected!("avx2") {
+                // SAFETY: the CPU has AVX2, checked just above.
+                return unsafe { lanes_avx2(near, x, $p) };
+            }
+            lanes(near, x, $p)
+        }
+    };
+}
