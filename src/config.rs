@@ -9,6 +9,8 @@ use std::path::Path;
 use anyhow::{Context, Result, bail};
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
+use crate::field::FieldConfig;
+
 /// Everything that decides the mesh of a frame; `splash recon` fills it from defaults, the
 /// `--config` file and command-line flags, in that order of precedence (last wins).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -20,6 +22,7 @@ pub struct Config {
     pub cell: Length,
     pub surface_particles: SurfaceParticles,
     pub band: BandConfig,
+    /// The scalar field and its parameters (SSP07 by default).
     pub field: FieldConfig,
 }
 
@@ -41,26 +44,6 @@ pub struct SurfaceParticles {
 #[serde(deny_unknown_fields, default)]
 pub struct BandConfig {
     pub half_width: Length,
-}
-
-/// The scalar field (Sec. 3, eqs. 1–5: Solenthaler et al. 2007).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
-pub struct FieldConfig {
-    pub kind: FieldKind,
-    /// Influence radius R of eq. 4.
-    pub support: Length,
-    /// r̄ of eq. 1.
-    pub radius: Length,
-    /// Eigenvalue thresholds of eqs. 2–3.
-    pub t_low: f32,
-    pub t_high: f32,
-}
-
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "lowercase")]
-pub enum FieldKind {
-    Ssp07,
 }
 
 impl Default for Config {
@@ -89,18 +72,6 @@ impl Default for BandConfig {
     fn default() -> Self {
         BandConfig {
             half_width: Length::Spacings(2.0),
-        }
-    }
-}
-
-impl Default for FieldConfig {
-    fn default() -> Self {
-        FieldConfig {
-            kind: FieldKind::Ssp07,
-            support: Length::Spacings(4.0),
-            radius: Length::Spacings(1.0),
-            t_low: 0.4,
-            t_high: 3.5,
         }
     }
 }
@@ -135,16 +106,7 @@ impl Config {
         if self.band.half_width.value().is_nan() || self.band.half_width.value() < 0.0 {
             bail!("band.half_width must be ≥ 0");
         }
-        positive("field.support", self.field.support.value())?;
-        positive("field.radius", self.field.radius.value())?;
-        let f = &self.field;
-        if !(f.t_low.is_finite() && f.t_high.is_finite() && f.t_low < f.t_high) {
-            bail!(
-                "field.t_low ({}) must be below field.t_high ({})",
-                f.t_low,
-                f.t_high
-            );
-        }
+        self.field.validate()?;
         Ok(())
     }
 }
@@ -170,6 +132,11 @@ impl Length {
             Length::Spacings(k) => k * r,
             Length::World(l) => l,
         }
+    }
+
+    /// Errors unless the length is positive and finite, naming `key`.
+    pub fn check_positive(self, key: &str) -> Result<()> {
+        positive(key, self.value())
     }
 
     fn value(self) -> f32 {
@@ -206,6 +173,7 @@ impl fmt::Display for Length {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match *self {
             Length::Spacings(1.0) => write!(f, "r"),
+            Length::Spacings(0.5) => write!(f, "r/2"),
             Length::Spacings(k) => write!(f, "{k}r"),
             Length::World(l) => write!(f, "{l}"),
         }
@@ -237,7 +205,7 @@ impl<'de> Deserialize<'de> for Length {
 }
 
 /// World-unit parameters of one reconstruction, resolved from a [`Config`] and the spacing r.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct Params {
     pub spacing: f32,
     pub cell: f32,
@@ -246,31 +214,28 @@ pub struct Params {
     pub min_neighbours: u32,
     /// Band half-width after widening for large cells (see [`Params::resolve`]).
     pub band_half_width: f32,
+    pub field: FieldConfig,
+    /// The field's support radius in world units.
     pub support: f32,
-    pub radius: f32,
-    pub t_low: f32,
-    pub t_high: f32,
 }
 
 impl Params {
-    /// The band is widened to r̄ + cell when that exceeds the configured half-width: SSP07 puts
-    /// the surface within r̄ of the particles (f ≤ 1 in eq. 1), and every corner of a cell that
-    /// the surface crosses lies within one cell of it on each axis. At cells r and r/2 the
-    /// paper's 2r already covers this; at 2r the band becomes 3r.
+    /// The band is widened to r + cell when that exceeds the configured half-width: the fields'
+    /// surfaces lie within about r of the particles (SSP07: f ≤ 1 in eq. 1 with r̄ = r), and
+    /// every corner of a cell that the surface crosses lies within one cell of it on each axis.
+    /// At cells r and r/2 the paper's 2r already covers this; at 2r the band becomes 3r.
+    /// Wherever the surface still leaves the band, the band closure follows it.
     pub fn resolve(config: &Config, r: f32) -> Params {
         let cell = config.cell.resolve(r);
-        let radius = config.field.radius.resolve(r);
         Params {
             spacing: r,
             cell,
             colour_support: config.surface_particles.support.resolve(r),
             colour_threshold: config.surface_particles.colour_threshold,
             min_neighbours: config.surface_particles.min_neighbours,
-            band_half_width: config.band.half_width.resolve(r).max(radius + cell),
-            support: config.field.support.resolve(r),
-            radius,
-            t_low: config.field.t_low,
-            t_high: config.field.t_high,
+            band_half_width: config.band.half_width.resolve(r).max(r + cell),
+            support: config.field.build(r).support(),
+            field: config.field.clone(),
         }
     }
 }
@@ -302,7 +267,7 @@ mod tests {
     #[test]
     fn unknown_keys_and_bad_ranges_are_errors() {
         assert!(toml::from_str::<Config>("cel = \"r\"").is_err());
-        let c: Config = toml::from_str("[field]\nt_low = 4.0").unwrap();
+        let c: Config = toml::from_str("[field]\nkind = \"ssp07\"\nt_low = 4.0").unwrap();
         assert!(c.validate().is_err());
         let c: Config = toml::from_str("cell = \"r/2\"\n[band]\nhalf_width = \"3r\"").unwrap();
         assert_eq!(c.cell, Length::Spacings(0.5));

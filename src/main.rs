@@ -10,6 +10,7 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 use splash::batch::{Batch, FrameOutcome, Output, Progress};
 use splash::config::{Config, Length};
+use splash::field::FieldConfig;
 use splash::io::{InputFormat, MeshFormat};
 use splash::recon::Engine;
 
@@ -28,6 +29,67 @@ struct Cli {
 enum Command {
     /// Reconstruct one surface mesh per particle file.
     Recon(Recon),
+    /// Inspect configurations.
+    #[command(subcommand)]
+    Config(ConfigCommand),
+}
+
+#[derive(Subcommand)]
+enum ConfigCommand {
+    /// Print the full configuration that the given file and flags resolve to, as TOML.
+    Show(ConfigArgs),
+}
+
+/// The reconstruction parameters: built-in defaults, overridden by the config file, overridden
+/// by these flags.
+#[derive(Args)]
+struct ConfigArgs {
+    /// TOML file with the reconstruction parameters (see configs/).
+    #[arg(long)]
+    config: Option<PathBuf>,
+
+    /// Scalar field, with its defaults unless the config file sets the same kind: ssp07
+    /// (default), zb05, density, blobby or metaball.
+    #[arg(long)]
+    field: Option<String>,
+
+    /// Particle spacing r (the simulator's equilibrium distance). Estimated from the first
+    /// frame when neither this nor --particle-radius is given.
+    #[arg(long, conflicts_with = "particle_radius")]
+    spacing: Option<f32>,
+
+    /// Particle radius as SPlisHSPlasH and splashsurf give it: r = 2 × radius.
+    #[arg(long)]
+    particle_radius: Option<f32>,
+
+    /// Marching Cubes cell size: 2r, r, r/2 (default), or a length.
+    #[arg(long)]
+    cell: Option<String>,
+}
+
+impl ConfigArgs {
+    fn resolve(&self) -> Result<Config> {
+        let mut config = match &self.config {
+            Some(path) => Config::from_file(path)?,
+            None => Config::default(),
+        };
+        if let Some(kind) = &self.field
+            && config.field.kind() != kind
+        {
+            config.field = FieldConfig::named(kind)?;
+        }
+        if let Some(r) = self.spacing {
+            config.spacing = Some(r);
+        }
+        if let Some(p) = self.particle_radius {
+            config.spacing = Some(2.0 * p);
+        }
+        if let Some(c) = &self.cell {
+            config.cell = Length::parse(c).context("--cell")?;
+        }
+        config.validate()?;
+        Ok(config)
+    }
 }
 
 #[derive(Args)]
@@ -50,18 +112,8 @@ struct Recon {
     #[arg(short, long)]
     output: Option<String>,
 
-    /// Particle spacing r (the simulator's equilibrium distance). Estimated from the first
-    /// frame when neither this nor --particle-radius is given.
-    #[arg(long, conflicts_with = "particle_radius")]
-    spacing: Option<f32>,
-
-    /// Particle radius as SPlisHSPlasH and splashsurf give it: r = 2 × radius.
-    #[arg(long)]
-    particle_radius: Option<f32>,
-
-    /// Marching Cubes cell size: 2r, r, r/2 (default), or a length.
-    #[arg(long)]
-    cell: Option<String>,
+    #[command(flatten)]
+    params: ConfigArgs,
 
     /// Mesh format: obj, ply (binary little-endian) or ply-ascii. Default: from the output
     /// file's extension, else obj.
@@ -71,10 +123,6 @@ struct Recon {
     /// Input format for every file: ply, csv or raw.
     #[arg(long)]
     input_format: Option<String>,
-
-    /// TOML file with the reconstruction parameters (see configs/).
-    #[arg(long)]
-    config: Option<PathBuf>,
 
     /// Worker threads (default: all cores). The mesh does not depend on it.
     #[arg(long)]
@@ -91,15 +139,23 @@ struct Recon {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
-    match cli.command {
-        Command::Recon(args) => match recon(args) {
-            Ok(code) => code,
-            Err(e) => {
-                eprintln!("error: {e:#}");
-                ExitCode::FAILURE
-            }
-        },
-    }
+    let result = match cli.command {
+        Command::Recon(args) => recon(args),
+        Command::Config(ConfigCommand::Show(args)) => show_config(&args),
+    };
+    result.unwrap_or_else(|e| {
+        eprintln!("error: {e:#}");
+        ExitCode::FAILURE
+    })
+}
+
+fn show_config(args: &ConfigArgs) -> Result<ExitCode> {
+    let config = args.resolve()?;
+    print!(
+        "{}",
+        toml::to_string(&config).context("cannot write the configuration as TOML")?
+    );
+    Ok(ExitCode::SUCCESS)
 }
 
 fn recon(args: Recon) -> Result<ExitCode> {
@@ -112,20 +168,7 @@ fn recon(args: Recon) -> Result<ExitCode> {
             .build_global()
             .context("cannot start the worker threads")?;
     }
-    let mut config = match &args.config {
-        Some(path) => Config::from_file(path)?,
-        None => Config::default(),
-    };
-    if let Some(r) = args.spacing {
-        config.spacing = Some(r);
-    }
-    if let Some(p) = args.particle_radius {
-        config.spacing = Some(2.0 * p);
-    }
-    if let Some(c) = &args.cell {
-        config.cell = Length::parse(c).context("--cell")?;
-    }
-    config.validate()?;
+    let config = args.params.resolve()?;
     let output = args
         .output
         .as_deref()

@@ -39,7 +39,7 @@ fn gathered_ssp07_matches_brute_force() {
     let (mut checked, mut inside, mut near_surface) = (0, 0, 0);
     for (b, brick) in band.bricks.iter().enumerate() {
         for i in (0..512).step_by(5) {
-            let l = IVec3::new(i as i32 % 8, i as i32 / 8 % 8, i as i32 / 64);
+            let l = IVec3::new(i % 8, i / 8 % 8, i / 64);
             let got = values[b][local_index(l)];
             if got.is_nan() {
                 // Outside the requested box: not part of the band.

@@ -1,10 +1,61 @@
 //! The improved signed distance of Solenthaler et al. 2007, as used by Akinci et al. 2012
 //! (Sec. 3, eqs. 1–5).
 
+use anyhow::{Result, bail};
 use glam::{DMat3, DVec3, Vec3};
+use serde::{Deserialize, Serialize};
 
 use super::ScalarField;
+use crate::config::Length;
 use crate::recon::neighbourhood::Neighbourhood;
+
+/// `[field] kind = "ssp07"`: the paper's defaults.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Ssp07Config {
+    /// Influence radius R of eq. 4 (Sec. 3: below 4r surfaces get bumpy).
+    pub support: Length,
+    /// r̄ of eq. 1 (the paper uses r).
+    pub radius: Length,
+    /// Eigenvalue thresholds of eqs. 2–3 (SSP07 proposed t_high = 2; Akinci et al. use 3.5).
+    pub t_low: f32,
+    pub t_high: f32,
+}
+
+impl Default for Ssp07Config {
+    fn default() -> Self {
+        Ssp07Config {
+            support: Length::Spacings(4.0),
+            radius: Length::Spacings(1.0),
+            t_low: 0.4,
+            t_high: 3.5,
+        }
+    }
+}
+
+impl Ssp07Config {
+    pub fn validate(&self) -> Result<()> {
+        self.support.check_positive("field.support")?;
+        self.radius.check_positive("field.radius")?;
+        if !(self.t_low.is_finite() && self.t_high.is_finite() && self.t_low < self.t_high) {
+            bail!(
+                "field.t_low ({}) must be below field.t_high ({})",
+                self.t_low,
+                self.t_high
+            );
+        }
+        Ok(())
+    }
+
+    pub fn resolve(&self, r: f32) -> Ssp07 {
+        Ssp07 {
+            support: self.support.resolve(r),
+            radius: self.radius.resolve(r),
+            t_low: self.t_low,
+            t_high: self.t_high,
+        }
+    }
+}
 
 pub struct Ssp07 {
     /// Influence radius R (eq. 4).

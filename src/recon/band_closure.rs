@@ -15,10 +15,40 @@ use super::field_sampling::BrickValues;
 use super::halo::{Halo, offset};
 use crate::mesh::marching_cubes::{case_index, cases};
 
-/// Grid vertices that must join the band, sorted and without repeats.
-pub fn missing_vertices(band: &Band, values: &BrickValues) -> Vec<IVec3> {
-    let mut missing: Vec<IVec3> = band
-        .bricks
+/// Grows the band until no surface cell has an open face; `sample` gives the field on a band
+/// of new vertices. Returns the number of vertices added.
+pub fn close_band(
+    band: &mut Band,
+    values: &mut BrickValues,
+    mut sample: impl FnMut(&Band) -> BrickValues,
+) -> usize {
+    let mut added = 0;
+    let mut scan = band.bricks.clone();
+    loop {
+        let missing = missing_vertices(band, values, &scan);
+        if missing.is_empty() {
+            return added;
+        }
+        added += missing.len();
+        let grown = Band::from_vertices(&missing, band.cell);
+        // Only cells near the new vertices can have new open faces.
+        scan = grown
+            .bricks
+            .iter()
+            .flat_map(|&b| (0..27).map(move |n| b + IVec3::new(n % 3, n / 3 % 3, n / 9) - 1))
+            .collect();
+        let grown_values = sample(&grown);
+        band.merge(values, grown, grown_values);
+        scan.sort_unstable_by_key(|b| (b.z, b.y, b.x));
+        scan.dedup();
+        scan.retain(|&b| band.brick_index(b).is_some());
+    }
+}
+
+/// Grid vertices that must join the band, found in the bricks `scan`, sorted and without
+/// repeats.
+fn missing_vertices(band: &Band, values: &BrickValues, scan: &[IVec3]) -> Vec<IVec3> {
+    let mut missing: Vec<IVec3> = scan
         .par_iter()
         .map_init(Halo::new, |halo, &brick| {
             halo.fill(band, values, brick);

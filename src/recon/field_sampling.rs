@@ -13,7 +13,11 @@ use crate::field::ScalarField;
 /// Field values per brick, NaN at vertices outside the band.
 pub type BrickValues = Vec<[f32; BRICK_VERTICES]>;
 
-pub fn sample_field(band: &Band, handlers: &HandlerArray, field: &impl ScalarField) -> BrickValues {
+pub fn sample_field<F: ScalarField + ?Sized>(
+    band: &Band,
+    handlers: &HandlerArray,
+    field: &F,
+) -> BrickValues {
     let cell = band.cell;
     let reach = field.support();
     band.bricks

@@ -6,13 +6,12 @@ use anyhow::Result;
 use glam::Vec3;
 
 use super::band::{BRICK_VERTICES, Band};
-use super::band_closure::missing_vertices;
+use super::band_closure::close_band;
 use super::field_sampling::sample_field;
 use super::handler_array::HandlerArray;
 use super::surface_particles::{SurfaceCriteria, surface_particles};
 use super::triangulation::triangulate;
 use crate::config::Params;
-use crate::field::ssp07::Ssp07;
 use crate::mesh::TriMesh;
 use crate::report::{FrameStats, timed};
 
@@ -43,12 +42,8 @@ pub fn reconstruct(particles: &[Vec3], params: &Params, engine: Engine) -> Resul
         });
     }
     let t = &mut stats.timings;
-    let field = Ssp07 {
-        support: params.support,
-        radius: params.radius,
-        t_low: params.t_low,
-        t_high: params.t_high,
-    };
+    let field = params.field.build(params.spacing);
+    let field = field.as_ref();
     // The handler array comes first here: the colour field needs the neighbours too. Its cells
     // suit both gathers: the colour support (2r), and half the field's support (2r) so that a
     // brick's reach spans few cells.
@@ -81,20 +76,13 @@ pub fn reconstruct(particles: &[Vec3], params: &Params, engine: Engine) -> Resul
     };
     let mut band = band;
     let mut values = timed(&mut t.scalar_field, || {
-        sample_field(&band, &handlers, &field)
+        sample_field(&band, &handlers, field)
     });
-    loop {
-        let missing = timed(&mut t.band, || missing_vertices(&band, &values));
-        if missing.is_empty() {
-            break;
-        }
-        stats.closure_vertices += missing.len();
-        let grown = Band::from_vertices(&missing, params.cell);
-        let grown_values = timed(&mut t.scalar_field, || {
-            sample_field(&grown, &handlers, &field)
-        });
-        band.merge(&mut values, grown, grown_values);
-    }
+    stats.closure_vertices = timed(&mut t.band, || {
+        close_band(&mut band, &mut values, |grown| {
+            sample_field(grown, &handlers, field)
+        })
+    });
     let values_bytes = values.capacity() * BRICK_VERTICES * size_of::<f32>();
     let held_before_mesh = handlers.heap_bytes() + band.heap_bytes() + values_bytes;
     let triangulation = timed(&mut t.triangulation, || triangulate(&band, &values));
