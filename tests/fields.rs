@@ -35,13 +35,13 @@ fn every_field_wraps_a_lattice_ball_in_one_closed_outward_sphere() {
     let ball = lattice_ball(centre, 6.0 * R, R);
     // Where each field puts the surface of a ball whose outer particle centres lie at 6r
     // (measured, then widened by about r/4 each way for the cell's linear interpolation):
-    // SSP07 and ZB05 just inside the outer centres, as x̄ lags inward; the density at 0.6 of
-    // rest density about the outer centres; blobbies and Triquet metaballs (lone-particle
+    // SSP07 and ZB05 just inside the outer centres, as x̄ lags inward; the colour field at 0.6
+    // about the outer centres, pushed out by the outer particles' larger volumes m/ρ; blobbies and Triquet metaballs (lone-particle
     // radii 0.75r and r/2) outside them, reaching farther where the lattice's corners stick out.
     let expected = [
         ("ssp07", 5.3, 6.15),
         ("zb05", 5.3, 6.15),
-        ("density", 5.25, 6.3),
+        ("density", 5.4, 6.6),
         ("blobby", 5.7, 7.15),
         ("metaball", 5.7, 6.85),
     ];

@@ -1,6 +1,7 @@
-//! The SPH density (colour) field of Müller et al. 2003 with the cubic spline kernel, the
-//! field splashsurf reconstructs: the surface is where the density falls to a fraction `iso`
-//! of the rest density. Every particle carries its rest volume r³.
+//! The SPH colour field of Müller et al. 2003 with the cubic spline kernel, the field
+//! splashsurf reconstructs: c(x) = Σ_j (m_j/ρ_j) W(x − x_j), with each particle's density ρ_j
+//! from SPH summation first; the surface is where c falls to `iso`. Inside the fluid c ≈ 1;
+//! near the surface the particles' smaller densities give them larger volumes.
 
 use std::f32::consts::PI;
 
@@ -8,8 +9,11 @@ use anyhow::{Result, bail};
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
+use rayon::prelude::*;
+
 use super::ScalarField;
 use crate::config::Length;
+use crate::recon::handler_array::HandlerArray;
 use crate::recon::neighbourhood::Neighbourhood;
 
 /// `[field] kind = "density"`: splashsurf's usual settings (smoothing length of two particle
@@ -47,7 +51,6 @@ impl DensityConfig {
     pub fn resolve(&self, r: f32) -> Density {
         Density {
             support: self.support.resolve(r),
-            volume: r.powi(3),
             iso: self.iso,
         }
     }
@@ -55,19 +58,55 @@ impl DensityConfig {
 
 pub struct Density {
     pub support: f32,
-    /// Rest volume of a particle, m/ρ₀.
-    pub volume: f32,
     pub iso: f32,
+}
+
+/// Cubic spline with q = d/h over its compact support h, without the factor 8/(π h³):
+/// 6q³ − 6q² + 1 up to q = ½, 2(1 − q)³ up to 1, written as 2(1 − q)₊³ − 8(½ − q)₊³ so that
+/// it has no branch.
+#[inline(always)]
+fn spline(dx: f32, dy: f32, dz: f32, inv_h: f32) -> f32 {
+    let q = (dx * dx + dy * dy + dz * dz).sqrt() * inv_h;
+    let (a, b) = ((1.0 - q).max(0.0), (0.5 - q).max(0.0));
+    2.0 * a * a * a - 8.0 * b * b * b
+}
+
+fn sigma(h: f32) -> f32 {
+    8.0 / (PI * h.powi(3))
 }
 
 crate::lane_sums! {
     fn spline_sum(inv_h: f32) -> [1] |dx, dy, dz| {
-        // Cubic spline with q = d/h over its compact support h, without the factor 8/(π h³).
-        let q = (dx * dx + dy * dy + dz * dz).sqrt() * inv_h;
-        let a = (1.0 - q).max(0.0);
-        let inner = 6.0 * q * q * (q - 1.0) + 1.0;
-        [if q <= 0.5 { inner } else { 2.0 * a * a * a }]
+        [spline(dx, dy, dz, inv_h)]
     }
+}
+
+crate::lane_sums! {
+    fn weighted_spline_sum(inv_h: f32) -> [1] |dx, dy, dz, volume| {
+        [volume * spline(dx, dy, dz, inv_h)]
+    }
+}
+
+/// Each particle's volume m/ρ = 1/Σ_j W(x_i − x_j) (m = ρ₀·r³ cancels against ρ_i =
+/// Σ_j m W_ij), in handler order.
+pub fn particle_volumes(handlers: &HandlerArray, support: f32) -> Vec<f32> {
+    let (inv_h, sigma) = (1.0 / support, sigma(support));
+    handlers
+        .positions
+        .par_iter()
+        .map_init(
+            || (Neighbourhood::default(), None),
+            |(near, cached), &p| {
+                let cell = handlers.cell_of(p);
+                if *cached != Some(cell) {
+                    near.gather_cell(handlers, cell, support);
+                    *cached = Some(cell);
+                }
+                let [w] = spline_sum(near, p - near.anchor, inv_h);
+                1.0 / (sigma * w)
+            },
+        )
+        .collect()
 }
 
 impl ScalarField for Density {
@@ -75,9 +114,49 @@ impl ScalarField for Density {
         self.support
     }
 
+    fn particle_volume_support(&self) -> Option<f32> {
+        Some(self.support)
+    }
+
     fn value(&self, near: &Neighbourhood, x: Vec3) -> f32 {
-        let [w] = spline_sum(near, x, 1.0 / self.support);
-        let sigma = 8.0 / (PI * self.support.powi(3));
-        self.iso - self.volume * sigma * w
+        let [w] = weighted_spline_sum(near, x, 1.0 / self.support);
+        self.iso - sigma(self.support) * w
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn branch_free_spline_is_the_piecewise_cubic() {
+        for i in 0..=120 {
+            let q = i as f32 / 100.0;
+            let expected = if q <= 0.5 {
+                6.0 * q * q * q - 6.0 * q * q + 1.0
+            } else if q <= 1.0 {
+                2.0 * (1.0 - q).powi(3)
+            } else {
+                0.0
+            };
+            assert!((spline(q, 0.0, 0.0, 1.0) - expected).abs() < 1e-6, "q {q}");
+        }
+    }
+
+    #[test]
+    fn the_kernel_integrates_to_one() {
+        // Σ over a fine lattice of W·volume ≈ 1.
+        let (h, step) = (1.0f32, 0.05f32);
+        let n = (h / step) as i32 + 1;
+        let mut sum = 0.0;
+        for z in -n..=n {
+            for y in -n..=n {
+                for x in -n..=n {
+                    let d = glam::Vec3::new(x as f32, y as f32, z as f32) * step;
+                    sum += spline(d.x, d.y, d.z, 1.0 / h) * sigma(h) * step.powi(3);
+                }
+            }
+        }
+        assert!((sum - 1.0).abs() < 1e-3, "{sum}");
     }
 }

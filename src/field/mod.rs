@@ -21,6 +21,12 @@ pub trait ScalarField: Sync {
     /// inside the fluid, zero on its surface. `near` holds every particle within
     /// [`support`](Self::support) of `x`, and may hold others.
     fn value(&self, near: &Neighbourhood, x: Vec3) -> f32;
+
+    /// For fields that weight each particle by its volume m/ρ: the support of the SPH kernel
+    /// that gives the particles' densities. The engines then fill `Neighbourhood::v`.
+    fn particle_volume_support(&self) -> Option<f32> {
+        None
+    }
 }
 
 /// The `[field]` table of a configuration: `kind` picks the field, the other keys are its own.

@@ -19,6 +19,9 @@ pub struct HandlerArray {
     origin: IVec3,
     /// Particle positions in handler order (sorted by cell id).
     pub positions: Vec<Vec3>,
+    /// Per-particle volumes m/ρ in handler order, for fields that weight particles by them;
+    /// empty otherwise.
+    pub volumes: Vec<f32>,
     /// Non-empty cell id → range of `positions`.
     cells: FxHashMap<u64, (u32, u32)>,
 }
@@ -78,6 +81,7 @@ impl HandlerArray {
             cell_size,
             origin,
             positions,
+            volumes: Vec::new(),
             cells,
         })
     }
@@ -90,27 +94,36 @@ impl HandlerArray {
         (p / self.cell_size).floor().as_ivec3()
     }
 
-    /// The particles of one cell, in handler order.
-    pub fn cell(&self, cell: IVec3) -> &[Vec3] {
+    /// The handler-order range of one cell's particles.
+    pub fn cell_range(&self, cell: IVec3) -> std::ops::Range<usize> {
         let rel = cell - self.origin;
         if rel.min_element() < 0 || rel.max_element() >= 1 << AXIS_BITS {
-            return &[];
+            return 0..0;
         }
         match self.cells.get(&morton(rel)) {
-            Some(&(s, e)) => &self.positions[s as usize..e as usize],
-            None => &[],
+            Some(&(s, e)) => s as usize..e as usize,
+            None => 0..0,
         }
     }
 
-    /// Calls `f` with the particles of every cell overlapping the box `[lo, hi]`.
-    pub fn for_each_in_box(&self, lo: Vec3, hi: Vec3, mut f: impl FnMut(&[Vec3])) {
-        let (a, b) = (self.cell_of(lo), self.cell_of(hi));
+    /// The particles of one cell, in handler order.
+    pub fn cell(&self, cell: IVec3) -> &[Vec3] {
+        &self.positions[self.cell_range(cell)]
+    }
+
+    /// Calls `f` with the handler-order range of every non-empty cell overlapping `[lo, hi]`.
+    pub fn for_each_in_box(&self, lo: Vec3, hi: Vec3, f: impl FnMut(std::ops::Range<usize>)) {
+        self.for_each_in_cells(self.cell_of(lo), self.cell_of(hi), f);
+    }
+
+    /// Calls `f` with the handler-order range of every non-empty cell from `a` to `b`.
+    pub fn for_each_in_cells(&self, a: IVec3, b: IVec3, mut f: impl FnMut(std::ops::Range<usize>)) {
         for z in a.z..=b.z {
             for y in a.y..=b.y {
                 for x in a.x..=b.x {
-                    let ps = self.cell(IVec3::new(x, y, z));
-                    if !ps.is_empty() {
-                        f(ps);
+                    let range = self.cell_range(IVec3::new(x, y, z));
+                    if !range.is_empty() {
+                        f(range);
                     }
                 }
             }
@@ -119,6 +132,7 @@ impl HandlerArray {
 
     pub fn heap_bytes(&self) -> usize {
         self.positions.capacity() * size_of::<Vec3>()
+            + self.volumes.capacity() * size_of::<f32>()
             + self.cells.capacity() * (size_of::<(u64, (u32, u32))>() + 1)
     }
 }

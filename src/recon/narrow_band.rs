@@ -12,6 +12,7 @@ use super::handler_array::HandlerArray;
 use super::surface_particles::{SurfaceCriteria, surface_particles};
 use super::triangulation::triangulate;
 use crate::config::Params;
+use crate::field::density::particle_volumes;
 use crate::mesh::TriMesh;
 use crate::report::{FrameStats, timed};
 
@@ -48,9 +49,15 @@ pub fn reconstruct(particles: &[Vec3], params: &Params, engine: Engine) -> Resul
     // suit both gathers: the colour support (2r), and half the field's support (2r) so that a
     // brick's reach spans few cells.
     let lookup_cell = params.colour_support.max(params.support / 2.0);
-    let handlers = timed(&mut t.handler_array, || {
+    let mut handlers = timed(&mut t.handler_array, || {
         HandlerArray::new(particles, lookup_cell)
     })?;
+    if let Some(support) = field.particle_volume_support() {
+        // Per-particle work, like the colour field: counted with t_sp.
+        handlers.volumes = timed(&mut t.surface_particles, || {
+            particle_volumes(&handlers, support)
+        });
+    }
     let band = match engine {
         Engine::NarrowBand => {
             let criteria = SurfaceCriteria {

@@ -1,7 +1,7 @@
 //! Particles gathered once around a small region and reused by every query point in it: the
 //! "neighbour lists reused across nearby vertices" that keep the hot loops branch-free.
 
-use glam::Vec3;
+use glam::{IVec3, Vec3};
 
 use super::handler_array::HandlerArray;
 
@@ -12,29 +12,57 @@ pub const LANES: usize = 8;
 /// `0 * d²` of a padded lane is 0 rather than NaN.
 const FAR: f32 = 1.0e15;
 
-/// Particle positions relative to an anchor point, as three coordinate arrays.
+/// Particle positions relative to an anchor point, as three coordinate arrays, with the
+/// particles' volumes where the handler array has them (else `v` stays empty).
 #[derive(Default)]
 pub struct Neighbourhood {
     pub anchor: Vec3,
     pub x: Vec<f32>,
     pub y: Vec<f32>,
     pub z: Vec<f32>,
+    pub v: Vec<f32>,
 }
 
 impl Neighbourhood {
     /// Gathers every particle within `radius` of the box `[lo, hi]`, relative to `lo`.
     pub fn gather_box(&mut self, handlers: &HandlerArray, lo: Vec3, hi: Vec3, radius: f32) {
+        let (a, b) = (handlers.cell_of(lo - radius), handlers.cell_of(hi + radius));
+        self.gather(handlers, (a, b), lo, hi, radius);
+    }
+
+    /// Gathers every particle within `radius` of the handler array's lookup cell `cell`,
+    /// relative to its lowest corner.
+    pub fn gather_cell(&mut self, handlers: &HandlerArray, cell: IVec3, radius: f32) {
+        let size = handlers.cell_size();
+        let lo = cell.as_vec3() * size;
+        // The cells within reach; the box's own edges need not round up a cell further.
+        let k = IVec3::splat((radius / size).ceil() as i32);
+        self.gather(handlers, (cell - k, cell + k), lo, lo + size, radius);
+    }
+
+    fn gather(
+        &mut self,
+        handlers: &HandlerArray,
+        cells: (IVec3, IVec3),
+        lo: Vec3,
+        hi: Vec3,
+        radius: f32,
+    ) {
         self.clear(lo);
         let r2 = radius * radius;
-        handlers.for_each_in_box(lo - radius, hi + radius, |cell| {
+        let with_volumes = !handlers.volumes.is_empty();
+        handlers.for_each_in_cells(cells.0, cells.1, |range| {
             let start = self.x.len();
-            self.x.resize(start + cell.len(), 0.0);
-            self.y.resize(start + cell.len(), 0.0);
-            self.z.resize(start + cell.len(), 0.0);
+            self.grow(start + range.len(), with_volumes);
+            // Branch-free compaction: write every particle, advance only past the kept ones.
             let mut n = start;
-            for &p in cell {
+            for i in range {
+                let p = handlers.positions[i];
                 let q = p - lo;
                 (self.x[n], self.y[n], self.z[n]) = (q.x, q.y, q.z);
+                if with_volumes {
+                    self.v[n] = handlers.volumes[i];
+                }
                 n += usize::from((p - p.clamp(lo, hi)).length_squared() <= r2);
             }
             self.truncate(n);
@@ -48,19 +76,28 @@ impl Neighbourhood {
         let r2 = radius * radius;
         let shift = from.anchor - lo;
         let (blo, bhi) = (Vec3::ZERO, hi - lo);
-        let len = from.x.len();
-        self.x.resize(len, 0.0);
-        self.y.resize(len, 0.0);
-        self.z.resize(len, 0.0);
-        // Branch-free compaction: write every particle, advance only past the kept ones.
+        let with_volumes = !from.v.is_empty();
+        self.grow(from.len(), with_volumes);
         let mut n = 0;
-        for i in 0..len {
+        for i in 0..from.len() {
             let p = Vec3::new(from.x[i], from.y[i], from.z[i]) + shift;
             (self.x[n], self.y[n], self.z[n]) = (p.x, p.y, p.z);
+            if with_volumes {
+                self.v[n] = from.v[i];
+            }
             n += usize::from((p - p.clamp(blo, bhi)).length_squared() <= r2);
         }
         self.truncate(n);
         self.pad();
+    }
+
+    fn grow(&mut self, len: usize, with_volumes: bool) {
+        self.x.resize(len, 0.0);
+        self.y.resize(len, 0.0);
+        self.z.resize(len, 0.0);
+        if with_volumes {
+            self.v.resize(len, 0.0);
+        }
     }
 
     /// Holds exactly `points`, relative to `anchor`.
@@ -77,12 +114,14 @@ impl Neighbourhood {
         self.x.clear();
         self.y.clear();
         self.z.clear();
+        self.v.clear();
     }
 
     fn truncate(&mut self, n: usize) {
         self.x.truncate(n);
         self.y.truncate(n);
         self.z.truncate(n);
+        self.v.truncate(n);
     }
 
     fn push(&mut self, p: Vec3) {
@@ -94,6 +133,9 @@ impl Neighbourhood {
     fn pad(&mut self) {
         while !self.x.len().is_multiple_of(LANES) {
             self.push(Vec3::splat(FAR));
+            if !self.v.is_empty() {
+                self.v.push(0.0);
+            }
         }
     }
 
@@ -107,8 +149,8 @@ impl Neighbourhood {
 }
 
 /// Defines `fn NAME(near: &Neighbourhood, x: Vec3, PARAM: TYPE) -> [f32; N]`, returning
-/// Σ_j TERM over the particles of `near`, where TERM sees `dx, dy, dz` = x_j − x and gives N
-/// values. The sums run in `LANES` independent lanes so that the loop vectorises, compiled
+/// Σ_j TERM over the particles of `near`, where TERM sees `dx, dy, dz` = x_j − x (and, when a
+/// fourth name is given, the particle's volume from `near.v`) and gives N values. The sums run in `LANES` independent lanes so that the loop vectorises, compiled
 /// once more for AVX2 and chosen at run time; every lane does the same IEEE operations in the
 /// same order on both paths, so results do not depend on the CPU or the thread count. TERM
 /// must give 0 for the padding (beyond any kernel's support) and should not branch.
@@ -117,7 +159,7 @@ impl Neighbourhood {
 /// feature and would not be inlined into the AVX2 loop.
 #[macro_export]
 macro_rules! lane_sums {
-    ($vis:vis fn $name:ident($p:ident: $ty:ty) -> [$n:expr] |$dx:ident, $dy:ident, $dz:ident| $term:block) => {
+    ($vis:vis fn $name:ident($p:ident: $ty:ty) -> [$n:expr] |$dx:ident, $dy:ident, $dz:ident $(, $v:ident)?| $term:block) => {
         $vis fn $name(
             near: &$crate::recon::neighbourhood::Neighbourhood,
             x: glam::Vec3,
@@ -134,10 +176,12 @@ macro_rules! lane_sums {
                 let n = near.len() / LANES;
                 for i in 0..n {
                     let r = i * LANES..(i + 1) * LANES;
+                    $( let $v = &near.v[r.clone()]; )?
                     let (cx, cy, cz) = (&near.x[r.clone()], &near.y[r.clone()], &near.z[r]);
                     let mut terms = [[0.0f32; LANES]; $n];
                     for l in 0..LANES {
                         let ($dx, $dy, $dz) = (cx[l] - x.x, cy[l] - x.y, cz[l] - x.z);
+                        $( let $v = $v[l]; )?
                         let lane = $term;
                         for (term, v) in terms.iter_mut().zip(lane) {
                             term[l] = v;

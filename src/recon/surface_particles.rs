@@ -35,8 +35,7 @@ pub fn surface_particles(handlers: &HandlerArray, criteria: &SurfaceCriteria) ->
             |(near, cached), &p| {
                 let cell = handlers.cell_of(p);
                 if *cached != Some(cell) {
-                    let lo = cell.as_vec3() * handlers.cell_size();
-                    near.gather_box(handlers, lo, lo + handlers.cell_size(), h);
+                    near.gather_cell(handlers, cell, h);
                     *cached = Some(cell);
                 }
                 let (gradient, neighbours) = colour_gradient(near, p - near.anchor, inv_h2);
