@@ -70,7 +70,25 @@ struct Columns {
     names: [String; 3],
 }
 
+const COORDINATES: [[&str; 3]; 1] = [["x", "y", "z"]];
+/// The velocity columns splash reads, in order of preference.
+const VELOCITIES: [[&str; 3]; 2] = [
+    ["vx", "vy", "vz"],
+    ["velocity_x", "velocity_y", "velocity_z"],
+];
+
 pub(super) fn read(path: &Path) -> Result<Vec<Vec3>> {
+    read_triples(path, &COORDINATES, true)
+}
+
+/// Reads the velocities: the first of [`VELOCITIES`] the header names; a header is required.
+pub(super) fn read_velocities(path: &Path) -> Result<Vec<Vec3>> {
+    read_triples(path, &VELOCITIES, false)
+}
+
+/// Reads three columns per row as a point: the first of `candidates` whose first column the
+/// header names, or the first three columns when there is no header and `headerless` allows.
+fn read_triples(path: &Path, candidates: &[[&str; 3]], headerless: bool) -> Result<Vec<Vec3>> {
     let (file, file_len) = super::open_input(path)?;
     let mut lines = Lines::new(BufReader::with_capacity(1 << 16, file), 0);
     let mut particles = Vec::new();
@@ -86,7 +104,12 @@ pub(super) fn read(path: &Path) -> Result<Vec<Vec3>> {
                 let separator = Separator::detect(text);
                 let is_header = separator.fields(text).any(|f| f.parse::<f32>().is_err());
                 let columns = if is_header {
-                    header_columns(separator, text, line)?
+                    header_columns(separator, text, line, candidates)?
+                } else if !headerless {
+                    bail!(
+                        "line {line}: the table has no header, so it names no {} columns",
+                        candidates[0].join(", ")
+                    );
                 } else {
                     Columns {
                         index: [0, 1, 2],
@@ -108,11 +131,29 @@ pub(super) fn read(path: &Path) -> Result<Vec<Vec3>> {
     Ok(particles)
 }
 
-/// Finds the `x`, `y` and `z` columns in a header line.
-fn header_columns(separator: Separator, text: &str, line: usize) -> Result<Columns> {
+/// Finds the columns of the first of `candidates` whose first column the header line names.
+fn header_columns(
+    separator: Separator,
+    text: &str,
+    line: usize,
+    candidates: &[[&str; 3]],
+) -> Result<Columns> {
     let names: Vec<&str> = separator.fields(text).collect();
+    let has = |wanted: &str| names.iter().any(|n| n.eq_ignore_ascii_case(wanted));
+    let chosen = match candidates.iter().find(|c| has(c[0])) {
+        Some(chosen) => *chosen,
+        None if candidates.len() == 1 => candidates[0],
+        None => {
+            let wanted: Vec<String> = candidates.iter().map(|c| c.join(", ")).collect();
+            bail!(
+                "line {line}: the header has none of the columns {} (its columns: {})",
+                wanted.join(" or "),
+                names.join(", ")
+            );
+        }
+    };
     let mut index = [0; 3];
-    for (slot, wanted) in index.iter_mut().zip(["x", "y", "z"]) {
+    for (slot, wanted) in index.iter_mut().zip(chosen) {
         *slot = names
             .iter()
             .position(|name| name.eq_ignore_ascii_case(wanted))

@@ -21,6 +21,7 @@ mod ply;
 mod ply_ascii;
 mod ply_binary;
 mod ply_write;
+mod pov;
 mod raw;
 mod records;
 
@@ -97,6 +98,40 @@ pub fn read_particles(path: &Path, format: Option<InputFormat>) -> Result<Vec<Ve
     particles.map_err(|e| anyhow!("cannot read particles from '{}': {e:#}", path.display()))
 }
 
+/// Reads the particle positions and velocities of one frame. Velocities are the PLY vertex
+/// properties `vx vy vz` (else `velocity_x velocity_y velocity_z`), or the CSV columns of those
+/// names (a header is then required); raw files have none. A file without them is an error.
+/// The file is read twice, once per triple, which keeps the position readers untouched.
+pub fn read_particles_with_velocities(
+    path: &Path,
+    format: Option<InputFormat>,
+) -> Result<(Vec<Vec3>, Vec<Vec3>)> {
+    let format = match format {
+        Some(format) => format,
+        None => InputFormat::from_path(path)?,
+    };
+    let positions = read_particles(path, Some(format))?;
+    let velocities = match format {
+        InputFormat::Ply => ply::read_velocities(path),
+        InputFormat::Csv => csv::read_velocities(path),
+        InputFormat::Raw => Err(anyhow!(
+            "raw files hold positions only, no velocities (use PLY or CSV with vx, vy, vz)"
+        )),
+    };
+    let velocities = velocities
+        .map_err(|e| anyhow!("cannot read velocities from '{}': {e:#}", path.display()))?;
+    if velocities.len() != positions.len() {
+        // Only if the file changed between the two reads.
+        bail!(
+            "'{}' changed while it was read: {} positions, {} velocities",
+            path.display(),
+            positions.len(),
+            velocities.len()
+        );
+    }
+    Ok((positions, velocities))
+}
+
 /// Opens a particle file, returning it with its length in bytes.
 fn open_input(path: &Path) -> Result<(File, u64)> {
     let file = File::open(path).context("cannot open the file")?;
@@ -113,7 +148,12 @@ pub enum MeshFormat {
     Obj,
     PlyBinary,
     PlyAscii,
+    /// A POV-Ray include file declaring a `mesh2` object (see [`POV_OBJECT`]).
+    Pov,
 }
+
+/// The name a `--format pov` file declares its mesh under: `object { SplashMesh … }`.
+pub const POV_OBJECT: &str = "SplashMesh";
 
 impl MeshFormat {
     /// File extension, without the dot.
@@ -121,40 +161,89 @@ impl MeshFormat {
         match self {
             Self::Obj => "obj",
             Self::PlyBinary | Self::PlyAscii => "ply",
+            Self::Pov => "inc",
         }
     }
 
-    /// Parses a format name as given on the command line: `obj`, `ply` (binary little-endian)
-    /// or `ply-ascii`.
+    /// Whether the format can carry per-vertex velocities (PLY `vx vy vz`).
+    pub fn holds_velocities(self) -> bool {
+        matches!(self, Self::PlyBinary | Self::PlyAscii)
+    }
+
+    /// Parses a format name as given on the command line: `obj`, `ply` (binary little-endian),
+    /// `ply-ascii` or `pov` (POV-Ray `mesh2` include, `.inc`).
     pub fn parse(name: &str) -> Result<Self> {
         match name.trim().to_ascii_lowercase().as_str() {
             "obj" => Ok(Self::Obj),
             "ply" => Ok(Self::PlyBinary),
             "ply-ascii" => Ok(Self::PlyAscii),
-            _ => bail!("unknown mesh format '{name}': expected obj, ply or ply-ascii"),
+            "pov" | "inc" => Ok(Self::Pov),
+            _ => bail!("unknown mesh format '{name}': expected obj, ply, ply-ascii or pov"),
         }
     }
 
-    /// The format implied by the extension (`.obj`, `.ply` as binary), case-insensitively.
+    /// The format implied by the extension (`.obj`, `.ply` as binary, `.inc` as POV-Ray),
+    /// case-insensitively.
     pub fn from_path(path: &Path) -> Option<Self> {
         let extension = path.extension()?.to_str()?.to_ascii_lowercase();
         match extension.as_str() {
             "obj" => Some(Self::Obj),
             "ply" => Some(Self::PlyBinary),
+            "inc" => Some(Self::Pov),
             _ => None,
         }
     }
 }
 
+/// Per-vertex data written beside the mesh, where the format has room for it.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct VertexAttributes<'a> {
+    /// One velocity per vertex, written as the PLY vertex properties `vx vy vz` (float).
+    pub velocities: Option<&'a [Vec3]>,
+}
+
 /// Writes `mesh` in `format`. `normals` must be empty or have one entry per vertex; without
 /// normals, none are written.
 pub fn write_mesh(mesh: &TriMesh, format: MeshFormat, w: &mut impl Write) -> io::Result<()> {
+    write_mesh_with(mesh, &VertexAttributes::default(), format, w)
+}
+
+/// Writes `mesh` with per-vertex `attributes` (one entry per vertex each); formats without
+/// room for an attribute refuse it.
+pub fn write_mesh_with(
+    mesh: &TriMesh,
+    attributes: &VertexAttributes,
+    format: MeshFormat,
+    w: &mut impl Write,
+) -> io::Result<()> {
     check_mesh(mesh)?;
+    if let Some(velocities) = attributes.velocities {
+        if !format.holds_velocities() {
+            return Err(io::Error::new(
+                io::ErrorKind::InvalidInput,
+                format!(
+                    ".{} files cannot hold vertex velocities",
+                    format.extension()
+                ),
+            ));
+        }
+        if velocities.len() != mesh.vertices.len() {
+            return Err(io::Error::new(
+                io::ErrorKind::InvalidInput,
+                format!(
+                    "mesh has {} velocities for {} vertices",
+                    velocities.len(),
+                    mesh.vertices.len()
+                ),
+            ));
+        }
+    }
     let mut out = BufWriter::with_capacity(1 << 16, w);
     match format {
         MeshFormat::Obj => obj::write(mesh, &mut out)?,
-        MeshFormat::PlyBinary => ply_write::write(mesh, false, &mut out)?,
-        MeshFormat::PlyAscii => ply_write::write(mesh, true, &mut out)?,
+        MeshFormat::PlyBinary => ply_write::write(mesh, attributes, false, &mut out)?,
+        MeshFormat::PlyAscii => ply_write::write(mesh, attributes, true, &mut out)?,
+        MeshFormat::Pov => pov::write(mesh, &mut out)?,
     }
     out.flush()
 }
@@ -163,7 +252,46 @@ pub fn write_mesh(mesh: &TriMesh, format: MeshFormat, w: &mut impl Write) -> io:
 /// removes the temporary and leaves an existing `path` untouched. Creates missing parent
 /// directories.
 pub fn write_mesh_file(path: &Path, mesh: &TriMesh, format: MeshFormat) -> Result<()> {
-    atomic::write_file(path, |file| write_mesh(mesh, format, file))
+    write_mesh_file_with(path, mesh, &VertexAttributes::default(), format)
+}
+
+/// [`write_mesh_file`] with per-vertex attributes.
+pub fn write_mesh_file_with(
+    path: &Path,
+    mesh: &TriMesh,
+    attributes: &VertexAttributes,
+    format: MeshFormat,
+) -> Result<()> {
+    atomic::write_file(path, |file| write_mesh_with(mesh, attributes, format, file))
+}
+
+/// Turns a mesh on output so that a simulation's up axis becomes the one a tool expects.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum UpAxis {
+    /// Z-up output from Y-up data: (x, y, z) → (x, −z, y), a quarter turn about +X.
+    Z,
+    /// Y-up output from Z-up data: (x, y, z) → (x, z, −y), the inverse turn.
+    Y,
+}
+
+impl UpAxis {
+    pub fn parse(name: &str) -> Result<Self> {
+        match name.trim().to_ascii_lowercase().as_str() {
+            "z" => Ok(Self::Z),
+            "y" => Ok(Self::Y),
+            _ => bail!("unknown up axis '{name}': expected y or z"),
+        }
+    }
+
+    /// Rotates points or directions in place (a rotation: lengths and winding are kept).
+    pub fn rotate(self, vectors: &mut [Vec3]) {
+        for v in vectors {
+            *v = match self {
+                Self::Z => Vec3::new(v.x, -v.z, v.y),
+                Self::Y => Vec3::new(v.x, v.z, -v.y),
+            };
+        }
+    }
 }
 
 /// Rejects meshes that would make a corrupt file rather than writing them.

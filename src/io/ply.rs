@@ -20,13 +20,29 @@ use super::{ply_ascii, ply_binary};
 
 /// Headers are a few hundred bytes; the cap keeps a non-PLY file from being read whole.
 const MAX_HEADER_BYTES: u64 = 1 << 20;
-const COORDINATES: [&str; 3] = ["x", "y", "z"];
+const COORDINATES: [[&str; 3]; 1] = [["x", "y", "z"]];
+/// The velocity properties splash reads, in order of preference.
+pub(super) const VELOCITIES: [[&str; 3]; 2] = [
+    ["vx", "vy", "vz"],
+    ["velocity_x", "velocity_y", "velocity_z"],
+];
 
 pub(super) fn read(path: &Path) -> Result<Vec<Vec3>> {
+    read_triples(path, &COORDINATES)
+}
+
+/// Reads the vertex velocities: the first of [`VELOCITIES`] the header has.
+pub(super) fn read_velocities(path: &Path) -> Result<Vec<Vec3>> {
+    read_triples(path, &VELOCITIES)
+}
+
+/// Reads three vertex properties per record as a point: the first of `candidates` whose first
+/// property the header declares.
+fn read_triples(path: &Path, candidates: &[[&str; 3]]) -> Result<Vec<Vec3>> {
     let (file, file_len) = super::open_input(path)?;
     let mut reader = BufReader::with_capacity(1 << 16, file);
     let (header, header_len, header_lines) = read_header(&mut reader)?;
-    let layout = Layout::new(&header)?;
+    let layout = Layout::new(&header, candidates)?;
     match header.encoding {
         Encoding::Ascii => {
             let lines = Lines::new(reader, header_lines);
@@ -47,12 +63,12 @@ pub(super) struct Layout {
     /// their layout checked.
     pub before: Vec<Element>,
     pub vertex: Element,
-    /// Index and type of each of the vertex properties `x`, `y`, `z`.
+    /// Index and type of each of the vertex properties read (`x`, `y`, `z`, or the velocity's).
     pub xyz: [(usize, Scalar); 3],
 }
 
 impl Layout {
-    fn new(header: &Header) -> Result<Self> {
+    fn new(header: &Header, candidates: &[[&str; 3]]) -> Result<Self> {
         let Some((vertex_index, _, vertex)) = header.elements.get_full("vertex") else {
             let names: Vec<&str> = header.elements.keys().map(String::as_str).collect();
             bail!(
@@ -67,7 +83,7 @@ impl Layout {
             .take(vertex_index)
             .map(Element::new)
             .collect::<Result<_>>()?;
-        let xyz = coordinate_properties(&vertex)?;
+        let xyz = coordinate_properties(&vertex, candidates)?;
         Ok(Self {
             before,
             vertex,
@@ -304,10 +320,28 @@ impl Element {
     }
 }
 
-/// Index and type of each of the vertex properties `x`, `y`, `z`.
-fn coordinate_properties(vertex: &Element) -> Result<[(usize, Scalar); 3]> {
+/// Index and type of each of three vertex properties: the first of `candidates` whose first
+/// property exists (all three must then exist).
+fn coordinate_properties(
+    vertex: &Element,
+    candidates: &[[&str; 3]],
+) -> Result<[(usize, Scalar); 3]> {
+    let has = |name: &str| vertex.props.iter().any(|p| p.name == name);
+    let names = match candidates.iter().find(|c| has(c[0])) {
+        Some(names) => *names,
+        None if candidates.len() == 1 => candidates[0],
+        None => {
+            let wanted: Vec<String> = candidates.iter().map(|c| c.join(" ")).collect();
+            let names: Vec<&str> = vertex.props.iter().map(|p| p.name.as_str()).collect();
+            bail!(
+                "the 'vertex' element has none of the properties {} (its properties: {})",
+                wanted.join(" or "),
+                names.join(", ")
+            );
+        }
+    };
     let mut xyz = [(0, Scalar::F32); 3];
-    for (slot, name) in xyz.iter_mut().zip(COORDINATES) {
+    for (slot, name) in xyz.iter_mut().zip(names) {
         let Some((index, prop)) = vertex
             .props
             .iter()
