@@ -1,5 +1,6 @@
 //! splash: triangle meshes from SPH particle frames, after Akinci et al. 2012.
 
+pub mod attributes;
 pub mod batch;
 pub mod config;
 pub mod field;
