@@ -8,4 +8,5 @@ pub mod io;
 pub mod mesh;
 pub mod recon;
 pub mod report;
+pub mod sequence;
 pub mod spacing;

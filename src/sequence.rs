@@ -1,0 +1,407 @@
+//! Frame sequences: which particle files a run covers and in what order.
+//!
+//! - Inputs are files, directories (their particle files, not recursively, hidden files
+//!   skipped) or quoted glob patterns (`'sim/frame_*.ply'`, expanded here so that the shell's
+//!   argument limit never bites).
+//! - A frame's number is the last run of digits in its file stem; frames are ordered by it,
+//!   numerically (`f_9` before `f_10`), frames without a number after the numbered ones.
+//! - `--frames` keeps the frames whose number is in a list of ranges ([`FrameSet`]).
+//! - `--shard K/N` keeps every N-th frame of the selection ([`Shard`]), so that N independent
+//!   jobs cover each frame exactly once.
+
+use std::collections::{BTreeSet, HashSet};
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+use anyhow::{Context, Result, anyhow, bail};
+
+use crate::io::InputFormat;
+
+/// The last run of digits in a file stem: `frame_0042` → 42.
+pub fn frame_number(stem: &str) -> Option<u64> {
+    let (start, end) = last_digits(stem)?;
+    stem[start..end].parse().ok()
+}
+
+/// Byte range of the last run of ASCII digits in `s`.
+fn last_digits(s: &str) -> Option<(usize, usize)> {
+    let end = s.rfind(|c: char| c.is_ascii_digit())? + 1;
+    let start = s[..end]
+        .rfind(|c: char| !c.is_ascii_digit())
+        .map_or(0, |i| i + 1);
+    Some((start, end))
+}
+
+/// The frame number of a path, from its file stem.
+pub fn path_frame_number(path: &Path) -> Option<u64> {
+    frame_number(&path.file_stem()?.to_string_lossy())
+}
+
+/// `stem` with its frame number zero-padded to at least `width` digits: `f_9` → `f_0009`.
+/// Longer numbers and stems without digits are returned unchanged.
+pub fn padded_stem(stem: &str, width: usize) -> String {
+    match last_digits(stem) {
+        Some((start, end)) if end - start < width => {
+            let digits = &stem[start..end];
+            format!("{}{digits:0>width$}{}", &stem[..start], &stem[end..])
+        }
+        _ => stem.to_owned(),
+    }
+}
+
+fn is_glob(text: &str) -> bool {
+    text.contains(['*', '?', '['])
+}
+
+/// The particle files named by the command line's inputs, in frame order, each once.
+///
+/// A path that does not exist and is not a pattern is passed through, so that the frame is
+/// reported as unreadable like any other bad frame. A directory without particle files or a
+/// pattern matching nothing is an error.
+pub fn discover(inputs: &[PathBuf]) -> Result<Vec<PathBuf>> {
+    let mut files = Vec::new();
+    for input in inputs {
+        let text = input.to_string_lossy();
+        if input.is_dir() {
+            let before = files.len();
+            let entries = std::fs::read_dir(input)
+                .with_context(|| format!("cannot list the directory '{}'", input.display()))?;
+            for entry in entries {
+                let entry = entry
+                    .with_context(|| format!("cannot list the directory '{}'", input.display()))?;
+                let path = entry.path();
+                let hidden = entry.file_name().to_string_lossy().starts_with('.');
+                if !hidden && path.is_file() && InputFormat::from_path(&path).is_ok() {
+                    files.push(path);
+                }
+            }
+            if files.len() == before {
+                bail!(
+                    "the directory '{}' holds no particle files (.ply, .csv, .txt, .bin, .raw)",
+                    input.display()
+                );
+            }
+            files[before..].sort();
+        } else if !input.exists() && is_glob(&text) {
+            let options = glob::MatchOptions {
+                require_literal_leading_dot: true,
+                ..glob::MatchOptions::new()
+            };
+            let matches = glob::glob_with(&text, options)
+                .map_err(|e| anyhow!("bad input pattern '{text}': {e}"))?;
+            let before = files.len();
+            for path in matches {
+                let path = path.map_err(|e| anyhow!("input pattern '{text}': {e}"))?;
+                if path.is_file() {
+                    files.push(path);
+                }
+            }
+            if files.len() == before {
+                bail!("the input pattern '{text}' matches no file");
+            }
+        } else {
+            files.push(input.clone());
+        }
+    }
+    // The same file named twice (a directory and a pattern, say) is one frame.
+    let mut seen = HashSet::new();
+    files.retain(|f| seen.insert(f.canonicalize().unwrap_or_else(|_| f.clone())));
+    sort_frames(&mut files);
+    Ok(files)
+}
+
+/// Orders paths by frame number, numerically; paths without one go last; ties keep their order.
+pub fn sort_frames(paths: &mut [PathBuf]) {
+    paths.sort_by_key(|p| {
+        let n = path_frame_number(p);
+        (n.is_none(), n)
+    });
+}
+
+/// A set of frame numbers: `1-10,20,30-40x5` (ranges are inclusive; `xS` takes every S-th
+/// number from the range's start).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct FrameSet {
+    ranges: Vec<FrameRange>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct FrameRange {
+    first: u64,
+    last: u64,
+    step: u64,
+}
+
+impl FrameRange {
+    fn contains(&self, n: u64) -> bool {
+        (self.first..=self.last).contains(&n) && (n - self.first) % self.step == 0
+    }
+}
+
+impl FrameSet {
+    pub fn parse(text: &str) -> Result<FrameSet> {
+        let bad = |item: &str, why: &str| {
+            anyhow!(
+                "--frames {text}: {why} in '{item}' (expected a list like 1-10,20,30-40x5: \
+                 numbers, inclusive ranges A-B, and ranges with a step A-BxS)"
+            )
+        };
+        let number = |item: &str, s: &str| {
+            s.trim()
+                .parse::<u64>()
+                .map_err(|_| bad(item, &format!("'{}' is not a frame number", s.trim())))
+        };
+        let mut ranges = Vec::new();
+        for item in text.split(',') {
+            let item = item.trim();
+            if item.is_empty() {
+                return Err(bad(item, "an empty item"));
+            }
+            let (span, step) = match item.split_once(['x', 'X']) {
+                Some((span, step)) => (span, number(item, step)?),
+                None => (item, 1),
+            };
+            if step == 0 {
+                return Err(bad(item, "a step of 0"));
+            }
+            let (first, last) = match span.split_once('-') {
+                Some((a, b)) => (number(item, a)?, number(item, b)?),
+                None => {
+                    let n = number(item, span)?;
+                    (n, n)
+                }
+            };
+            if first > last {
+                return Err(bad(item, "a range that ends before it starts"));
+            }
+            ranges.push(FrameRange { first, last, step });
+        }
+        Ok(FrameSet { ranges })
+    }
+
+    pub fn contains(&self, n: u64) -> bool {
+        self.ranges.iter().any(|r| r.contains(n))
+    }
+
+    /// Numbers in the set that are not in `present`: their count and the first `show` of them.
+    /// Gives up (None) on sets of more than ten million numbers.
+    pub fn missing(&self, present: &BTreeSet<u64>, show: usize) -> Option<(u64, Vec<u64>)> {
+        let total: u64 = self
+            .ranges
+            .iter()
+            .map(|r| (r.last - r.first) / r.step + 1)
+            .sum();
+        if total > 10_000_000 {
+            return None;
+        }
+        let mut wanted = BTreeSet::new();
+        for r in &self.ranges {
+            wanted.extend((r.first..=r.last).step_by(r.step as usize));
+        }
+        let missing: Vec<u64> = wanted.difference(present).copied().collect();
+        Some((
+            missing.len() as u64,
+            missing.into_iter().take(show).collect(),
+        ))
+    }
+
+    /// Keeps the paths whose frame number is in the set; a path without one is an error.
+    pub fn select(&self, paths: Vec<PathBuf>) -> Result<Vec<PathBuf>> {
+        let mut kept = Vec::new();
+        for path in paths {
+            let n = path_frame_number(&path).ok_or_else(|| {
+                anyhow!(
+                    "--frames: '{}' has no frame number (the last digits of its name)",
+                    path.display()
+                )
+            })?;
+            if self.contains(n) {
+                kept.push(path);
+            }
+        }
+        Ok(kept)
+    }
+}
+
+/// One of N jobs that share a sequence: job K (1-based) takes the frames at positions
+/// K-1, K-1+N, K-1+2N, … of the selected frames, so that the jobs' costs stay even while a
+/// simulation grows more detailed, and together they take every frame exactly once.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Shard {
+    /// 0-based.
+    index: usize,
+    count: usize,
+}
+
+impl fmt::Display for Shard {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}/{}", self.index + 1, self.count)
+    }
+}
+
+impl Shard {
+    pub fn new(k: usize, n: usize) -> Result<Shard> {
+        if n == 0 || k == 0 || k > n {
+            bail!("--shard {k}/{n}: K must be between 1 and N (shards are numbered 1 to N)");
+        }
+        Ok(Shard {
+            index: k - 1,
+            count: n,
+        })
+    }
+
+    /// `K/N` (1 ≤ K ≤ N), or `auto/N`: K from a SLURM job array's task id as `var` gives it
+    /// (`SLURM_ARRAY_TASK_ID`, minus `SLURM_ARRAY_TASK_MIN` (default 0), divided by
+    /// `SLURM_ARRAY_TASK_STEP` (default 1), plus 1).
+    pub fn parse(text: &str, var: impl Fn(&str) -> Option<String>) -> Result<Shard> {
+        let usage = || anyhow!("--shard {text}: expected K/N (1 ≤ K ≤ N) or auto/N");
+        let (k, n) = text.split_once('/').ok_or_else(usage)?;
+        let n: usize = n.trim().parse().map_err(|_| usage())?;
+        if k.trim() != "auto" {
+            let k: usize = k.trim().parse().map_err(|_| usage())?;
+            return Shard::new(k, n);
+        }
+        let read = |name: &str, default: Option<i64>| -> Result<i64> {
+            match var(name) {
+                Some(v) => v
+                    .trim()
+                    .parse()
+                    .map_err(|_| anyhow!("--shard auto/{n}: {name}={v} is not a number")),
+                None => default.ok_or_else(|| {
+                    anyhow!(
+                        "--shard auto/{n}: {name} is not set (it is set in SLURM array jobs, \
+                         sbatch --array; with another scheduler pass --shard K/{n} with K from \
+                         its task index, 1 to {n})"
+                    )
+                }),
+            }
+        };
+        let id = read("SLURM_ARRAY_TASK_ID", None)?;
+        let min = read("SLURM_ARRAY_TASK_MIN", Some(0))?;
+        let step = read("SLURM_ARRAY_TASK_STEP", Some(1))?.max(1);
+        let offset = id - min;
+        if offset < 0 || offset % step != 0 || offset / step >= n as i64 {
+            bail!(
+                "--shard auto/{n}: SLURM_ARRAY_TASK_ID={id} (array from {min}, step {step}) is \
+                 not one of the {n} tasks; submit with sbatch --array={min}-{}",
+                min + (n as i64 - 1) * step
+            );
+        }
+        Shard::new((offset / step) as usize + 1, n)
+    }
+
+    /// Whether position `i` of the selected frames belongs to this shard.
+    pub fn takes(&self, i: usize) -> bool {
+        i % self.count == self.index
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn frame_numbers_come_from_the_last_digits() {
+        assert_eq!(frame_number("frame_0042"), Some(42));
+        assert_eq!(frame_number("run2_f_9"), Some(9));
+        assert_eq!(frame_number("f10b"), Some(10));
+        assert_eq!(frame_number("fluid"), None);
+    }
+
+    #[test]
+    fn stems_are_padded() {
+        assert_eq!(padded_stem("f_9", 4), "f_0009");
+        assert_eq!(padded_stem("run2_f10b", 4), "run2_f0010b");
+        assert_eq!(padded_stem("frame_12345", 4), "frame_12345");
+        assert_eq!(padded_stem("fluid", 4), "fluid");
+    }
+
+    #[test]
+    fn frames_sort_numerically() {
+        let mut paths: Vec<PathBuf> = ["f_10.ply", "zzz.ply", "f_9.ply", "f_0011.ply", "a.ply"]
+            .iter()
+            .map(PathBuf::from)
+            .collect();
+        sort_frames(&mut paths);
+        let names: Vec<_> = paths.iter().map(|p| p.to_str().unwrap()).collect();
+        assert_eq!(
+            names,
+            ["f_9.ply", "f_10.ply", "f_0011.ply", "zzz.ply", "a.ply"]
+        );
+    }
+
+    #[test]
+    fn frame_sets_parse_lists_ranges_and_steps() {
+        let set = FrameSet::parse("1-10, 20,30-40x5").unwrap();
+        let kept: Vec<u64> = (0..50).filter(|&n| set.contains(n)).collect();
+        assert_eq!(kept, [1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 20, 30, 35, 40]);
+        let set = FrameSet::parse("100-400x2").unwrap();
+        assert!(set.contains(100) && set.contains(400) && !set.contains(101));
+        for bad in ["", "1-", "5-1", "1-10x0", "a", "1,,2", "1-2-3"] {
+            assert!(FrameSet::parse(bad).is_err(), "{bad}");
+        }
+        let present: BTreeSet<u64> = [1, 3].into();
+        let (count, first) = FrameSet::parse("1-5")
+            .unwrap()
+            .missing(&present, 2)
+            .unwrap();
+        assert_eq!((count, first), (3, vec![2, 4]));
+    }
+
+    #[test]
+    fn shards_cover_every_frame_exactly_once() {
+        for frames in [0, 1, 7, 21, 100] {
+            for n in [1, 2, 3, 4, 16, 150] {
+                let mut seen = vec![0; frames];
+                for k in 1..=n {
+                    let shard = Shard::new(k, n).unwrap();
+                    for (i, s) in seen.iter_mut().enumerate() {
+                        if shard.takes(i) {
+                            *s += 1;
+                        }
+                    }
+                }
+                assert!(seen.iter().all(|&s| s == 1), "{frames} frames, {n} shards");
+            }
+        }
+        assert!(Shard::new(0, 4).is_err());
+        assert!(Shard::new(5, 4).is_err());
+        assert!(Shard::parse("1/0", |_| None).is_err());
+        assert!(Shard::parse("x/4", |_| None).is_err());
+        assert_eq!(
+            Shard::parse(" 2/4", |_| None).unwrap(),
+            Shard::new(2, 4).unwrap()
+        );
+    }
+
+    #[test]
+    fn auto_shards_follow_slurm() {
+        let env = |id: &'static str, min: Option<&'static str>, step: Option<&'static str>| {
+            move |name: &str| match name {
+                "SLURM_ARRAY_TASK_ID" => Some(id.to_owned()),
+                "SLURM_ARRAY_TASK_MIN" => min.map(str::to_owned),
+                "SLURM_ARRAY_TASK_STEP" => step.map(str::to_owned),
+                _ => None,
+            }
+        };
+        let shard = |id, min, step| Shard::parse("auto/16", env(id, min, step));
+        assert_eq!(shard("3", None, None).unwrap(), Shard::new(4, 16).unwrap());
+        assert_eq!(
+            shard("3", Some("1"), None).unwrap(),
+            Shard::new(3, 16).unwrap()
+        );
+        assert_eq!(
+            shard("16", Some("1"), None).unwrap(),
+            Shard::new(16, 16).unwrap()
+        );
+        assert_eq!(
+            shard("4", Some("0"), Some("2")).unwrap(),
+            Shard::new(3, 16).unwrap()
+        );
+        assert!(shard("16", None, None).is_err());
+        assert!(shard("0", Some("1"), None).is_err());
+        assert!(shard("x", None, None).is_err());
+        let unset = Shard::parse("auto/4", |_| None).unwrap_err().to_string();
+        assert!(unset.contains("SLURM_ARRAY_TASK_ID is not set"), "{unset}");
+    }
+}
