@@ -6,12 +6,20 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, anyhow, bail};
 
+use crate::attributes::interpolate_velocities;
 use crate::config::{Config, Params};
-use crate::io::{self, InputFormat, MeshFormat};
+use crate::io::{self, InputFormat, MeshFormat, UpAxis, VertexAttributes};
 use crate::mesh::TriMesh;
 use crate::recon::{Engine, reconstruct};
 use crate::report::FrameStats;
+use crate::sequence::{Shard, padded_stem, path_frame_number};
 use crate::spacing::estimate_spacing;
+
+pub use crate::sequence::frame_number;
+
+/// Frame numbers in directory output names are zero-padded to this many digits, as Blender's
+/// sequence importers expect (`fluid_0001.obj`).
+pub const FRAME_DIGITS: usize = 4;
 
 /// Particles sampled for the spacing estimate.
 const SPACING_SAMPLES: usize = 20_000;
@@ -21,7 +29,8 @@ const SPACING_SAMPLES: usize = 20_000;
 pub enum Output {
     /// Beside each input, as `{stem}_surface.{ext}`.
     BesideInput,
-    /// Into a directory, as `{stem}.{ext}`.
+    /// Into a directory, as `{stem}.{ext}`, the stem's frame number padded to
+    /// [`FRAME_DIGITS`] digits (`f_9.ply` → `f_0009.obj`).
     Directory(PathBuf),
     /// A file name with `{stem}` and/or `{frame}` (`{frame:04}` pads to 4 digits) replaced per
     /// frame; a plain name is allowed for a single input.
@@ -58,7 +67,9 @@ impl Output {
         let ext = format.extension();
         Ok(match self {
             Output::BesideInput => input.with_file_name(format!("{stem}_surface.{ext}")),
-            Output::Directory(dir) => dir.join(format!("{stem}.{ext}")),
+            Output::Directory(dir) => {
+                dir.join(format!("{}.{ext}", padded_stem(&stem, FRAME_DIGITS)))
+            }
             Output::Pattern(p) => PathBuf::from(expand_pattern(p, &stem)?),
         })
     }
@@ -94,33 +105,73 @@ fn same_file(a: &Path, b: &Path) -> bool {
     }
 }
 
-/// The last run of digits in a file stem: `frame_0042` → 42.
-pub fn frame_number(stem: &str) -> Option<u64> {
-    let end = stem.rfind(|c: char| c.is_ascii_digit())? + 1;
-    let start = stem[..end]
-        .rfind(|c: char| !c.is_ascii_digit())
-        .map_or(0, |i| i + 1);
-    stem[start..end].parse().ok()
-}
-
 pub struct Batch {
+    /// The selected frames, in frame order: the whole sequence, before sharding.
     pub inputs: Vec<PathBuf>,
     pub input_format: Option<InputFormat>,
     pub output: Output,
     pub format: MeshFormat,
     pub config: Config,
     pub engine: Engine,
+    /// This job's part of the sequence; None: all of it.
+    pub shard: Option<Shard>,
+    /// Leaves frames whose output exists alone. Outputs are renamed into place whole, so an
+    /// existing output is complete; an interrupted write leaves only a hidden temporary.
+    pub skip_existing: bool,
+    /// Stops at the first failing frame instead of going on with the others.
+    pub fail_fast: bool,
+    /// Rotates the mesh on output.
+    pub up_axis: Option<UpAxis>,
+    /// Interpolates the particles' velocities onto the mesh vertices and writes them.
+    pub velocities: bool,
 }
 
 /// What happened to one frame.
 pub struct FrameOutcome {
     pub input: PathBuf,
     pub output: PathBuf,
+    /// Frame number from the input's name.
+    pub frame: Option<u64>,
     pub result: Result<FrameStats>,
+}
+
+/// This job's share of the sequence, known before any frame is read.
+#[derive(Debug, Clone)]
+pub struct Plan {
+    /// Frames selected (by the inputs and --frames).
+    pub selected: usize,
+    pub shard: Option<Shard>,
+    /// Frames of this shard.
+    pub assigned: usize,
+    /// Frames of this shard whose output exists, left alone.
+    pub skipped: Vec<PathBuf>,
+    /// Frames to reconstruct.
+    pub to_do: usize,
+}
+
+/// The end of a run.
+pub struct RunReport {
+    pub plan: Plan,
+    /// The frames attempted, in frame order.
+    pub outcomes: Vec<FrameOutcome>,
+    /// Frames not attempted because a frame failed with `fail_fast` set.
+    pub not_attempted: usize,
+}
+
+impl RunReport {
+    pub fn failed(&self) -> impl Iterator<Item = &FrameOutcome> {
+        self.outcomes.iter().filter(|o| o.result.is_err())
+    }
+
+    /// Every frame of this job has its mesh: written now or found complete.
+    pub fn complete(&self) -> bool {
+        self.not_attempted == 0 && self.failed().next().is_none()
+    }
 }
 
 /// Messages for the user as the run goes on.
 pub trait Progress {
+    fn started(&mut self, _plan: &Plan) {}
     fn spacing_estimated(&mut self, from: &Path, spacing: f32);
     fn frame_done(&mut self, outcome: &FrameOutcome, done: usize, total: usize);
 }
@@ -167,23 +218,82 @@ impl Batch {
         Ok(outputs)
     }
 
-    /// Reconstructs every frame; returns the outcomes in input order.
-    pub fn run(&self, progress: &mut dyn Progress) -> Result<Vec<FrameOutcome>> {
+    /// Reconstructs this job's frames in frame order.
+    pub fn run(&self, progress: &mut dyn Progress) -> Result<RunReport> {
+        // Every output of the whole sequence is checked, so that all shards agree.
         let outputs = self.outputs()?;
         self.config.validate()?;
+        if self.velocities && !self.format.holds_velocities() {
+            bail!(
+                "--attributes velocity needs PLY output (--format ply or ply-ascii): {} files have no place for them",
+                self.format.extension()
+            );
+        }
+        let assigned: Vec<usize> = (0..self.inputs.len())
+            .filter(|&i| self.shard.is_none_or(|s| s.takes(i)))
+            .collect();
+        let (skipped, to_do): (Vec<usize>, Vec<usize>) = assigned
+            .iter()
+            .partition(|&&i| self.skip_existing && outputs[i].is_file());
+        let plan = Plan {
+            selected: self.inputs.len(),
+            shard: self.shard,
+            assigned: assigned.len(),
+            skipped: skipped.iter().map(|&i| self.inputs[i].clone()).collect(),
+            to_do: to_do.len(),
+        };
+        progress.started(&plan);
         let mut spacing = self.config.spacing;
-        let mut outcomes = Vec::with_capacity(self.inputs.len());
-        for (k, (input, output)) in self.inputs.iter().zip(outputs).enumerate() {
+        if spacing.is_none()
+            && let Some(&first) = to_do.first()
+        {
+            // The spacing comes from the sequence's first frame, whichever frames this job
+            // does, so that every shard and every restart uses the same grid.
+            spacing = self.reference_spacing(&self.inputs[..first], progress);
+        }
+        let mut outcomes = Vec::with_capacity(to_do.len());
+        let mut not_attempted = 0;
+        for (k, &i) in to_do.iter().enumerate() {
+            let input = &self.inputs[i];
+            let output = outputs[i].clone();
             let result = self.frame(input, &output, &mut spacing, progress);
             let outcome = FrameOutcome {
                 input: input.clone(),
                 output,
+                frame: path_frame_number(input),
                 result,
             };
-            progress.frame_done(&outcome, k + 1, self.inputs.len());
+            progress.frame_done(&outcome, k + 1, to_do.len());
+            let failed = outcome.result.is_err();
             outcomes.push(outcome);
+            if failed && self.fail_fast {
+                not_attempted = to_do.len() - k - 1;
+                break;
+            }
         }
-        Ok(outcomes)
+        Ok(RunReport {
+            plan,
+            outcomes,
+            not_attempted,
+        })
+    }
+
+    /// The spacing estimated from the first readable, non-empty frame of `earlier` (frames
+    /// before this job's first one), as a run over the whole sequence would estimate it.
+    fn reference_spacing(&self, earlier: &[PathBuf], progress: &mut dyn Progress) -> Option<f32> {
+        for input in earlier {
+            // A bad frame is reported by the job that owns it.
+            let Ok(particles) = io::read_particles(input, self.input_format) else {
+                continue;
+            };
+            if particles.is_empty() {
+                continue;
+            }
+            let r = estimate_spacing(&particles, SPACING_SAMPLES)?;
+            progress.spacing_estimated(input, r);
+            return Some(r);
+        }
+        None
     }
 
     fn frame(
@@ -194,11 +304,19 @@ impl Batch {
         progress: &mut dyn Progress,
     ) -> Result<FrameStats> {
         let start = Instant::now();
-        let particles = io::read_particles(input, self.input_format)?;
+        let (particles, velocities) = if self.velocities {
+            let (p, v) = io::read_particles_with_velocities(input, self.input_format)?;
+            (p, Some(v))
+        } else {
+            (io::read_particles(input, self.input_format)?, None)
+        };
         let read = start.elapsed();
         if particles.is_empty() {
             // Nothing to reconstruct, and nothing to estimate a spacing from.
-            io::write_mesh_file(output, &TriMesh::default(), self.format)?;
+            let attributes = VertexAttributes {
+                velocities: velocities.as_ref().map(|_| &[][..]),
+            };
+            io::write_mesh_file_with(output, &TriMesh::default(), &attributes, self.format)?;
             let mut stats = FrameStats::default();
             stats.timings.read = read;
             return Ok(stats);
@@ -220,9 +338,22 @@ impl Batch {
         };
         let params = Params::resolve(&self.config, r);
         let rec = reconstruct(&particles, &params, self.engine).context("reconstruction failed")?;
+        let mut mesh = rec.mesh;
+        let mut vertex_velocities = velocities
+            .map(|v| interpolate_velocities(&mesh.vertices, &particles, &v, params.support));
         drop(particles);
         let start = Instant::now();
-        io::write_mesh_file(output, &rec.mesh, self.format)?;
+        if let Some(axis) = self.up_axis {
+            axis.rotate(&mut mesh.vertices);
+            axis.rotate(&mut mesh.normals);
+            if let Some(v) = &mut vertex_velocities {
+                axis.rotate(v);
+            }
+        }
+        let attributes = VertexAttributes {
+            velocities: vertex_velocities.as_deref(),
+        };
+        io::write_mesh_file_with(output, &mesh, &attributes, self.format)?;
         let mut stats = rec.stats;
         stats.timings.read = read;
         stats.timings.write = start.elapsed();
@@ -233,13 +364,6 @@ impl Batch {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn frame_numbers_come_from_the_last_digits() {
-        assert_eq!(frame_number("frame_0042"), Some(42));
-        assert_eq!(frame_number("run2_f_9"), Some(9));
-        assert_eq!(frame_number("fluid"), None);
-    }
 
     #[test]
     fn patterns_expand() {

@@ -5,6 +5,7 @@ pub mod batch;
 pub mod config;
 pub mod field;
 pub mod io;
+pub mod log;
 pub mod mesh;
 pub mod recon;
 pub mod report;

@@ -1,18 +1,20 @@
 //! The `splash` command: parses arguments and hands the work to the library.
 
+use std::collections::BTreeSet;
 use std::io::IsTerminal;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::{Context, Result, bail};
 use clap::{Args, Parser, Subcommand};
-use indicatif::{ProgressBar, ProgressStyle};
 
-use splash::batch::{Batch, FrameOutcome, Output, Progress};
+use splash::batch::{Batch, Output};
 use splash::config::{Config, Length};
 use splash::field::FieldConfig;
-use splash::io::{InputFormat, MeshFormat};
+use splash::io::{InputFormat, MeshFormat, UpAxis};
+use splash::log::{Console, LogFormat, Verbosity};
 use splash::recon::Engine;
+use splash::sequence::{self, FrameSet, Shard};
 
 #[derive(Parser)]
 #[command(
@@ -101,22 +103,62 @@ triples, nothing else). The format comes from the extension unless --input-forma
 Lengths (--cell, band and support in the config) are multiples of the particle spacing r
 (2r, r, r/2, 0.5r) or plain numbers in world units. The band of surface vertices spans 2r
 around each surface particle, widened to r + cell when that is larger (3r at cell 2r), and it
-grows by itself wherever the surface leaves it, so meshes are closed at every cell size.")]
+grows by itself wherever the surface leaves it, so meshes are closed at every cell size.
+
+Sequences: a frame's number is the last run of digits in its file name; frames run in
+number order. Exit status 0 only when every frame of the job has its mesh; a summary lists the
+failed frames. Examples:
+  splash recon 'sim/frame_*.ply' --cell r/2 -o 'mesh/fluid_{frame:04}.obj'
+  splash recon sim/ --frames 100-400x2 --skip-existing -o mesh/
+  SLURM_ARRAY_TASK_ID=3 splash recon sim/ --shard auto/16 -o mesh/")]
 struct Recon {
-    /// Particle files, one per frame.
+    /// Particle files, directories of them, or quoted glob patterns ('sim/frame_*.ply').
     #[arg(required = true)]
     inputs: Vec<PathBuf>,
 
-    /// Output: a directory (ending in /), a file for a single input, or a pattern with {stem}
-    /// or {frame} / {frame:04}. Default: {stem}_surface.obj beside each input.
+    /// Output: a directory (ending in /; frame numbers in names padded to 4 digits), a file
+    /// for a single input, or a pattern with {stem} or {frame} / {frame:04}. Default:
+    /// {stem}_surface.obj beside each input.
     #[arg(short, long)]
     output: Option<String>,
 
     #[command(flatten)]
     params: ConfigArgs,
 
-    /// Mesh format: obj, ply (binary little-endian) or ply-ascii. Default: from the output
-    /// file's extension, else obj.
+    /// Only these frame numbers: A-B ranges, A-BxS every S-th, lists (1-10,20,30-40x5).
+    #[arg(long, value_name = "LIST")]
+    frames: Option<String>,
+
+    /// Job K of N (1 ≤ K ≤ N) takes every N-th selected frame, from the K-th; auto/N takes K
+    /// from SLURM_ARRAY_TASK_ID - SLURM_ARRAY_TASK_MIN + 1.
+    #[arg(long, value_name = "K/N")]
+    shard: Option<String>,
+
+    /// Leave frames whose output exists alone (outputs are renamed into place whole, so an
+    /// existing one is complete): a killed run restarted with this flag finishes the rest.
+    #[arg(long)]
+    skip_existing: bool,
+
+    /// Stop at the first failing frame (default: report it and go on).
+    #[arg(long)]
+    fail_fast: bool,
+
+    /// Log lines: plain, or json (one object per line).
+    #[arg(long, value_name = "FORMAT", default_value = "plain")]
+    log_format: String,
+
+    /// Rotate the mesh on output: z turns Y-up data Z-up, y turns Z-up data Y-up. Default:
+    /// coordinates as they are.
+    #[arg(long, value_name = "AXIS")]
+    up_axis: Option<String>,
+
+    /// Per-vertex attributes to write (PLY only): velocity, interpolated from the particles'
+    /// vx vy vz with the field's kernel, written as vx vy vz.
+    #[arg(long, value_name = "LIST")]
+    attributes: Option<String>,
+
+    /// Mesh format: obj, ply (binary little-endian), ply-ascii, or pov (POV-Ray mesh2 include,
+    /// .inc). Default: from the output file's extension, else obj.
     #[arg(long)]
     format: Option<String>,
 
@@ -191,109 +233,67 @@ fn recon(args: Recon) -> Result<ExitCode> {
         .as_deref()
         .map(InputFormat::parse)
         .transpose()?;
+    let log_format = LogFormat::parse(&args.log_format)?;
+    let up_axis = args.up_axis.as_deref().map(UpAxis::parse).transpose()?;
+    let velocities = match args.attributes.as_deref().map(str::trim) {
+        None | Some("") => false,
+        Some("velocity" | "velocities") => true,
+        Some(other) => bail!("unknown --attributes '{other}': expected velocity"),
+    };
+    let shard = args
+        .shard
+        .as_deref()
+        .map(|s| Shard::parse(s, |name| std::env::var(name).ok()))
+        .transpose()?;
+    let frames = args.frames.as_deref().map(FrameSet::parse).transpose()?;
+    let verbosity = match (args.quiet, args.verbose) {
+        (true, _) => Verbosity::Quiet,
+        (_, true) => Verbosity::Verbose,
+        _ => Verbosity::Normal,
+    };
+
+    let mut inputs = sequence::discover(&args.inputs)?;
+    if let Some(frames) = &frames {
+        inputs = frames.select(inputs)?;
+        let present: BTreeSet<u64> = inputs
+            .iter()
+            .filter_map(|p| sequence::path_frame_number(p))
+            .collect();
+        if let Some((count, first)) = frames.missing(&present, 5)
+            && count > 0
+            && verbosity != Verbosity::Quiet
+        {
+            let first: Vec<String> = first.iter().map(u64::to_string).collect();
+            eprintln!(
+                "warning: {count} frames of --frames have no input (first: {})",
+                first.join(", ")
+            );
+        }
+        if inputs.is_empty() {
+            bail!(
+                "--frames {}: no input has one of these frame numbers",
+                args.frames.unwrap_or_default()
+            );
+        }
+    }
     let batch = Batch {
-        inputs: args.inputs,
+        inputs,
         input_format,
         output,
         format,
         config,
         engine: Engine::NarrowBand,
+        shard,
+        skip_existing: args.skip_existing,
+        fail_fast: args.fail_fast,
+        up_axis,
+        velocities,
     };
-    let mut progress = Console::new(batch.inputs.len(), args.verbose, args.quiet);
-    let outcomes = batch.run(&mut progress)?;
-    progress.finish();
-    let failed: Vec<&FrameOutcome> = outcomes.iter().filter(|o| o.result.is_err()).collect();
-    if failed.is_empty() {
-        return Ok(ExitCode::SUCCESS);
-    }
-    eprintln!("{} of {} frames failed:", failed.len(), outcomes.len());
-    for o in failed {
-        if let Err(e) = &o.result {
-            eprintln!("  {}: {e:#}", o.input.display());
-        }
-    }
-    Ok(ExitCode::FAILURE)
-}
-
-/// A progress bar on a terminal, one plain line per frame elsewhere (farm logs).
-struct Console {
-    bar: Option<ProgressBar>,
-    verbose: bool,
-    quiet: bool,
-}
-
-impl Console {
-    fn new(frames: usize, verbose: bool, quiet: bool) -> Console {
-        let bar = (!quiet && std::io::stderr().is_terminal()).then(|| {
-            let bar = ProgressBar::new(frames as u64);
-            bar.set_style(
-                ProgressStyle::with_template("{bar:40} {pos}/{len} frames {elapsed}<{eta} {msg}")
-                    .expect("the template is valid"),
-            );
-            bar
-        });
-        Console {
-            bar,
-            verbose,
-            quiet,
-        }
-    }
-
-    fn say(&self, line: &str) {
-        match &self.bar {
-            Some(bar) => bar.println(line),
-            None => eprintln!("{line}"),
-        }
-    }
-
-    fn finish(&self) {
-        if let Some(bar) = &self.bar {
-            bar.finish_and_clear();
-        }
-    }
-}
-
-impl Progress for Console {
-    fn spacing_estimated(&mut self, from: &Path, spacing: f32) {
-        if !self.quiet {
-            self.say(&format!(
-                "estimated particle spacing r = {spacing} from {} (from the local particle density); used for every frame",
-                from.display()
-            ));
-        }
-    }
-
-    fn frame_done(&mut self, outcome: &FrameOutcome, done: usize, total: usize) {
-        let name = outcome.input.display();
-        match &outcome.result {
-            Err(e) => self.say(&format!("[{done}/{total}] {name}: error: {e:#}")),
-            Ok(stats) if !self.quiet => {
-                let line = if self.verbose {
-                    format!(
-                        "[{done}/{total}] {name} -> {}: {stats}",
-                        outcome.output.display()
-                    )
-                } else if stats.particles == 0 {
-                    format!(
-                        "[{done}/{total}] {name}: no particles, wrote an empty mesh to {}",
-                        outcome.output.display()
-                    )
-                } else {
-                    let t = stats.timings;
-                    format!(
-                        "[{done}/{total}] {name} -> {}: {} particles, {} triangles, {:.2} s",
-                        outcome.output.display(),
-                        stats.particles,
-                        stats.triangles,
-                        (t.read + t.reconstruction() + t.write).as_secs_f64()
-                    )
-                };
-                self.say(&line);
-            }
-            Ok(_) => {}
-        }
-        if let Some(bar) = &self.bar {
-            bar.set_position(done as u64);
-        }
-    }
+    let mut console = Console::new(log_format, verbosity, std::io::stderr().is_terminal());
+    let report = batch.run(&mut console)?;
+    Ok(if console.finish(&report) {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::FAILURE
+    })
 }

@@ -1,0 +1,299 @@
+//! What a run tells its user: a progress bar on a terminal; one line per frame elsewhere (farm
+//! logs), plain text or JSON; a summary of failed frames at the end. Everything goes to stderr.
+//!
+//! JSON lines (`--log-format json`) are one object per line, each with `"event"`:
+//! - `"start"`: `selected`, `shard` (`"K/N"` or null), `assigned`, `skipped` (outputs found
+//!   complete), `to_do`;
+//! - `"spacing"`: `file`, `spacing`;
+//! - `"frame"`: `time` (UTC, RFC 3339), `frame` (number or null), `input`, `output`, `status`
+//!   (`"ok"` or `"error"`), and `particles`, `triangles`, `vertices`, `seconds` or `error`;
+//! - `"summary"`: `written`, `skipped`, `failed` (a list of `{frame, input, error}`),
+//!   `not_attempted`, `ok` (true when every frame of the job has its mesh).
+
+use std::path::Path;
+use std::time::{SystemTime, UNIX_EPOCH};
+
+use indicatif::{ProgressBar, ProgressStyle};
+use serde_json::json;
+
+use crate::batch::{FrameOutcome, Plan, Progress, RunReport};
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum LogFormat {
+    Plain,
+    Json,
+}
+
+impl LogFormat {
+    pub fn parse(name: &str) -> anyhow::Result<Self> {
+        match name.trim().to_ascii_lowercase().as_str() {
+            "plain" | "text" => Ok(Self::Plain),
+            "json" => Ok(Self::Json),
+            _ => anyhow::bail!("unknown log format '{name}': expected plain or json"),
+        }
+    }
+}
+
+/// How much to say.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Verbosity {
+    /// Errors and the summary of failures only.
+    Quiet,
+    Normal,
+    /// Stage times and counts per frame.
+    Verbose,
+}
+
+pub struct Console {
+    bar: Option<ProgressBar>,
+    format: LogFormat,
+    verbosity: Verbosity,
+}
+
+impl Console {
+    /// `terminal`: stderr is a terminal, so a progress bar replaces the per-frame lines (plain
+    /// format only; errors are still printed above the bar).
+    pub fn new(format: LogFormat, verbosity: Verbosity, terminal: bool) -> Console {
+        let bar = (terminal && format == LogFormat::Plain && verbosity != Verbosity::Quiet)
+            .then(|| {
+                let bar = ProgressBar::hidden();
+                bar.set_style(
+                    ProgressStyle::with_template(
+                        "{bar:40} {pos}/{len} frames, {per_sec}, {elapsed} elapsed, ETA {eta} {msg}",
+                    )
+                    .expect("the template is valid"),
+                );
+                bar
+            });
+        Console {
+            bar,
+            format,
+            verbosity,
+        }
+    }
+
+    fn say(&self, line: &str) {
+        match &self.bar {
+            Some(bar) if !bar.is_hidden() => bar.println(line),
+            _ => eprintln!("{line}"),
+        }
+    }
+
+    /// Ends the bar and prints the summary; returns whether every frame has its mesh.
+    pub fn finish(&self, report: &RunReport) -> bool {
+        if let Some(bar) = &self.bar {
+            bar.finish_and_clear();
+        }
+        let failed: Vec<&FrameOutcome> = report.failed().collect();
+        let written = report.outcomes.len() - failed.len();
+        if self.format == LogFormat::Json {
+            let failed: Vec<_> = failed
+                .iter()
+                .map(|o| {
+                    json!({
+                        "frame": o.frame,
+                        "input": o.input.display().to_string(),
+                        "error": o.result.as_ref().err().map(|e| format!("{e:#}")),
+                    })
+                })
+                .collect();
+            let line = json!({
+                "event": "summary",
+                "written": written,
+                "skipped": report.plan.skipped.len(),
+                "failed": failed,
+                "not_attempted": report.not_attempted,
+                "ok": report.complete(),
+            });
+            eprintln!("{line}");
+            return report.complete();
+        }
+        if failed.is_empty() && report.not_attempted == 0 {
+            if self.verbosity != Verbosity::Quiet {
+                let skipped = match report.plan.skipped.len() {
+                    0 => String::new(),
+                    n => format!(", {n} found complete and skipped"),
+                };
+                eprintln!("done: {written} frames written{skipped}");
+            }
+            return true;
+        }
+        let attempted = report.outcomes.len() + report.not_attempted;
+        eprintln!("{} of {attempted} frames failed:", failed.len());
+        for o in &failed {
+            if let Err(e) = &o.result {
+                eprintln!("  {}: {e:#}", o.input.display());
+            }
+        }
+        if report.not_attempted > 0 {
+            eprintln!(
+                "stopped at the first failure (--fail-fast): {} frames not attempted",
+                report.not_attempted
+            );
+        }
+        false
+    }
+}
+
+impl Progress for Console {
+    fn started(&mut self, plan: &Plan) {
+        if self.format == LogFormat::Json {
+            let line = json!({
+                "event": "start",
+                "selected": plan.selected,
+                "shard": plan.shard.map(|s| s.to_string()),
+                "assigned": plan.assigned,
+                "skipped": plan.skipped.len(),
+                "to_do": plan.to_do,
+            });
+            eprintln!("{line}");
+            return;
+        }
+        if let Some(bar) = &self.bar {
+            bar.set_length(plan.to_do as u64);
+            bar.set_draw_target(indicatif::ProgressDrawTarget::stderr());
+        }
+        if self.verbosity == Verbosity::Quiet {
+            return;
+        }
+        let mut parts = Vec::new();
+        if let Some(shard) = plan.shard {
+            parts.push(format!(
+                "shard {shard}: {} of {} frames",
+                plan.assigned, plan.selected
+            ));
+        }
+        if !plan.skipped.is_empty() {
+            parts.push(format!(
+                "{} found complete and skipped, {} to do",
+                plan.skipped.len(),
+                plan.to_do
+            ));
+        }
+        if !parts.is_empty() {
+            self.say(&parts.join("; "));
+        }
+    }
+
+    fn spacing_estimated(&mut self, from: &Path, spacing: f32) {
+        match self.format {
+            LogFormat::Json => eprintln!(
+                "{}",
+                json!({"event": "spacing", "file": from.display().to_string(), "spacing": spacing})
+            ),
+            LogFormat::Plain if self.verbosity != Verbosity::Quiet => self.say(&format!(
+                "estimated particle spacing r = {spacing} from {} (from the local particle density); used for every frame",
+                from.display()
+            )),
+            LogFormat::Plain => {}
+        }
+    }
+
+    fn frame_done(&mut self, outcome: &FrameOutcome, done: usize, total: usize) {
+        if self.format == LogFormat::Json {
+            eprintln!("{}", frame_json(outcome));
+            return;
+        }
+        let name = outcome.input.display();
+        let time = utc_now();
+        match &outcome.result {
+            Err(e) => self.say(&format!("{time} [{done}/{total}] {name}: error: {e:#}")),
+            Ok(stats) if self.verbosity != Verbosity::Quiet => {
+                let output = outcome.output.display();
+                let line = if self.verbosity == Verbosity::Verbose {
+                    format!("{time} [{done}/{total}] {name} -> {output}: {stats}")
+                } else if stats.particles == 0 {
+                    format!(
+                        "{time} [{done}/{total}] {name}: no particles, wrote an empty mesh to {output}"
+                    )
+                } else {
+                    format!(
+                        "{time} [{done}/{total}] {name} -> {output}: {} particles, {} triangles, {:.2} s",
+                        stats.particles,
+                        stats.triangles,
+                        seconds(outcome)
+                    )
+                };
+                self.say(&line);
+            }
+            Ok(_) => {}
+        }
+        if let Some(bar) = &self.bar {
+            bar.set_position(done as u64);
+        }
+    }
+}
+
+fn seconds(outcome: &FrameOutcome) -> f64 {
+    match &outcome.result {
+        Ok(stats) => {
+            let t = stats.timings;
+            (t.read + t.reconstruction() + t.write).as_secs_f64()
+        }
+        Err(_) => 0.0,
+    }
+}
+
+fn frame_json(outcome: &FrameOutcome) -> serde_json::Value {
+    let mut line = json!({
+        "event": "frame",
+        "time": utc_now(),
+        "frame": outcome.frame,
+        "input": outcome.input.display().to_string(),
+        "output": outcome.output.display().to_string(),
+    });
+    let fields = match &outcome.result {
+        Ok(stats) => json!({
+            "status": "ok",
+            "particles": stats.particles,
+            "triangles": stats.triangles,
+            "vertices": stats.vertices,
+            "seconds": (seconds(outcome) * 1e3).round() / 1e3,
+        }),
+        Err(e) => json!({"status": "error", "error": format!("{e:#}")}),
+    };
+    if let (Some(line), serde_json::Value::Object(fields)) = (line.as_object_mut(), fields) {
+        line.extend(fields);
+    }
+    line
+}
+
+/// The current time as UTC RFC 3339 to the second: `2025-01-31T12:00:00Z`.
+pub fn utc_now() -> String {
+    let secs = SystemTime::now()
+        .duration_since(UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs());
+    utc(secs)
+}
+
+fn utc(secs: u64) -> String {
+    let (days, rem) = (secs / 86_400, secs % 86_400);
+    // Civil date from days since 1970-01-01 (H. Hinnant's algorithm).
+    let z = days as i64 + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097;
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let day = doy - (153 * mp + 2) / 5 + 1;
+    let month = if mp < 10 { mp + 3 } else { mp - 9 };
+    let year = yoe + era * 400 + i64::from(month <= 2);
+    format!(
+        "{year:04}-{month:02}-{day:02}T{:02}:{:02}:{:02}Z",
+        rem / 3600,
+        rem % 3600 / 60,
+        rem % 60
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn utc_dates() {
+        assert_eq!(utc(0), "1970-01-01T00:00:00Z");
+        assert_eq!(utc(951_782_400), "2000-02-29T00:00:00Z");
+        assert_eq!(utc(1_735_689_599), "2024-12-31T23:59:59Z");
+    }
+}
