@@ -44,11 +44,31 @@ fn replace(path: &Path, write: impl FnOnce(&mut File) -> io::Result<()>) -> Resu
         let _ = fs::remove_file(&temporary);
     }
     result?;
+    remove_leftovers(dir, name, &temporary);
     // Persists the rename itself; not every filesystem can sync a directory, hence best effort.
     if let Ok(dir) = File::open(dir) {
         let _ = dir.sync_all();
     }
     Ok(())
+}
+
+/// Removes the temporaries of earlier writes of `name` that were killed before their rename
+/// (`.{name}.tmp-*` other than `ours`, already renamed): now that the file is complete, they are
+/// garbage. Best effort.
+fn remove_leftovers(dir: &Path, name: &std::ffi::OsStr, ours: &Path) {
+    let mut prefix = OsString::from(".");
+    prefix.push(name);
+    prefix.push(".tmp-");
+    let prefix = prefix.to_string_lossy().into_owned();
+    let Ok(entries) = fs::read_dir(dir) else {
+        return;
+    };
+    for entry in entries.flatten() {
+        let path = entry.path();
+        if entry.file_name().to_string_lossy().starts_with(&prefix) && path != ours {
+            let _ = fs::remove_file(path);
+        }
+    }
 }
 
 fn write_temporary(
