@@ -22,7 +22,7 @@ pub fn interpolate_velocities(
         velocities.len(),
         "one velocity per particle"
     );
-    if particles.is_empty() || !(support > 0.0) {
+    if particles.is_empty() || support.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
         return vec![Vec3::ZERO; vertices.len()];
     }
     let grid = Grid::new(particles, velocities, support);

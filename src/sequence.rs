@@ -134,7 +134,7 @@ struct FrameRange {
 
 impl FrameRange {
     fn contains(&self, n: u64) -> bool {
-        (self.first..=self.last).contains(&n) && (n - self.first) % self.step == 0
+        (self.first..=self.last).contains(&n) && (n - self.first).is_multiple_of(self.step)
     }
 }
 

@@ -1,0 +1,925 @@
+//! Render-farm use of the `splash` binary: frame order, ranges, shards, resumed runs, failures
+//! and logs; and the outputs for consumers (POV-Ray, Blender's axes, velocities), read back.
+
+mod common;
+
+use std::collections::BTreeMap;
+use std::ffi::OsString;
+use std::fs;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+use std::sync::atomic::{AtomicU32, Ordering};
+use std::time::{Duration, Instant};
+
+use common::{fixture, lattice_ball, params};
+use glam::Vec3;
+use ply_rs_bw::parser::Parser;
+use ply_rs_bw::ply::{DefaultElement, Property};
+use splash::io::{MeshFormat, VertexAttributes, read_particles, write_mesh_with};
+use splash::recon::{Engine, reconstruct};
+
+const R: f32 = 0.01;
+const FAST: [&str; 4] = ["--spacing", "0.01", "--cell", "r"];
+
+/// A small lattice ball: a few hundred particles, milliseconds per frame.
+fn small_ball() -> Vec<Vec3> {
+    lattice_ball(Vec3::new(0.1, 0.2, -0.1), 0.04, R)
+}
+
+struct TempDir(PathBuf);
+
+impl TempDir {
+    fn new(name: &str) -> Self {
+        static NEXT: AtomicU32 = AtomicU32::new(0);
+        let n = NEXT.fetch_add(1, Ordering::Relaxed);
+        let dir =
+            std::env::temp_dir().join(format!("splash-farm-{}-{n}-{name}", std::process::id()));
+        let _ = fs::remove_dir_all(&dir);
+        fs::create_dir_all(&dir).unwrap();
+        Self(dir)
+    }
+
+    fn path(&self, name: &str) -> PathBuf {
+        self.0.join(name)
+    }
+
+    fn file(&self, name: &str, contents: impl AsRef<[u8]>) -> PathBuf {
+        let path = self.path(name);
+        fs::create_dir_all(path.parent().unwrap()).unwrap();
+        fs::write(&path, contents).unwrap();
+        path
+    }
+}
+
+impl Drop for TempDir {
+    fn drop(&mut self) {
+        let _ = fs::remove_dir_all(&self.0);
+    }
+}
+
+/// Sorted names in `dir`, hidden ones included.
+fn entries(dir: &Path) -> Vec<String> {
+    let Ok(read) = fs::read_dir(dir) else {
+        return Vec::new();
+    };
+    let mut names: Vec<String> = read
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    names
+}
+
+/// A binary PLY of `points`, with `vx vy vz` when `velocities` are given.
+fn ply(points: &[Vec3], velocities: Option<&[Vec3]>) -> Vec<u8> {
+    let extra = if velocities.is_some() {
+        "property float vx\nproperty float vy\nproperty float vz\n"
+    } else {
+        ""
+    };
+    let mut out = format!(
+        "ply\nformat binary_little_endian 1.0\nelement vertex {}\n\
+         property float x\nproperty float y\nproperty float z\n{extra}end_header\n",
+        points.len()
+    )
+    .into_bytes();
+    for (i, p) in points.iter().enumerate() {
+        let mut values = p.to_array().to_vec();
+        if let Some(v) = velocities {
+            values.extend(v[i].to_array());
+        }
+        for x in values {
+            out.extend(x.to_le_bytes());
+        }
+    }
+    out
+}
+
+struct Run {
+    command: String,
+    success: bool,
+    stderr: String,
+}
+
+impl Run {
+    fn ok(self) -> Self {
+        assert!(self.success, "{} failed:\n{}", self.command, self.stderr);
+        self
+    }
+
+    fn failed(self) -> Self {
+        assert!(
+            !self.success,
+            "{} succeeded:\n{}",
+            self.command, self.stderr
+        );
+        self
+    }
+
+    fn has(self, text: &str) -> Self {
+        assert!(
+            self.stderr.contains(text),
+            "{}: no '{text}' in:\n{}",
+            self.command,
+            self.stderr
+        );
+        self
+    }
+
+    /// The JSON log lines of one event kind.
+    fn events(&self, kind: &str) -> Vec<serde_json::Value> {
+        self.stderr
+            .lines()
+            .map(|l| {
+                serde_json::from_str::<serde_json::Value>(l)
+                    .unwrap_or_else(|e| panic!("not JSON ({e}): {l}"))
+            })
+            .filter(|v| v["event"] == kind)
+            .collect()
+    }
+
+    /// Frame numbers of the `frame` events, in log order.
+    fn frames(&self) -> Vec<u64> {
+        self.events("frame")
+            .iter()
+            .map(|v| v["frame"].as_u64().unwrap())
+            .collect()
+    }
+}
+
+fn finish(command: String, output: Output) -> Run {
+    let stderr = String::from_utf8_lossy(&output.stderr).into_owned();
+    assert!(
+        output.status.code().is_some() && !stderr.contains("panicked"),
+        "{command}: {}\n{stderr}",
+        output.status
+    );
+    Run {
+        command,
+        success: output.status.success(),
+        stderr,
+    }
+}
+
+fn splash_env(args: &[OsString], env: &[(&str, &str)]) -> Run {
+    let mut command = Command::new(env!("CARGO_BIN_EXE_splash"));
+    command
+        .arg("recon")
+        .args(args)
+        .env_remove("SLURM_ARRAY_TASK_ID");
+    for (k, v) in env {
+        command.env(k, v);
+    }
+    let output = command.output().expect("cannot start splash");
+    let shown: Vec<_> = args.iter().map(|a| a.to_string_lossy()).collect();
+    finish(format!("splash recon {}", shown.join(" ")), output)
+}
+
+fn args(items: &[&dyn AsRef<std::ffi::OsStr>]) -> Vec<OsString> {
+    items.iter().map(|a| a.as_ref().to_owned()).collect()
+}
+
+/// Frames `numbers` of a small ball (moving by frame) as `dir/in/f_{n}.ply`.
+fn sequence(dir: &TempDir, numbers: impl IntoIterator<Item = u64>) -> Vec<PathBuf> {
+    let ball = small_ball();
+    numbers
+        .into_iter()
+        .map(|n| {
+            let shifted: Vec<Vec3> = ball.iter().map(|p| *p + Vec3::X * n as f32 * R).collect();
+            dir.file(&format!("in/f_{n}.ply"), ply(&shifted, None))
+        })
+        .collect()
+}
+
+#[test]
+fn frames_run_in_number_order_from_directories_and_patterns() {
+    let dir = TempDir::new("order");
+    sequence(&dir, [9, 10, 100, 2]);
+    dir.file("in/notes.md", "not a frame");
+    dir.file("in/.f_3.ply.tmp-1-0", "a hidden temporary");
+    let input = dir.path("in");
+    let out = format!("{}/", dir.path("out").display());
+    let run = splash_env(
+        &args(&[
+            &input,
+            &"-o",
+            &out,
+            &"--log-format",
+            &"json",
+            &FAST[0],
+            &FAST[1],
+            &FAST[2],
+            &FAST[3],
+        ]),
+        &[],
+    )
+    .ok();
+    assert_eq!(run.frames(), [2, 9, 10, 100]);
+    // Directory outputs pad frame numbers to 4 digits, for Blender's sequence importers.
+    assert_eq!(
+        entries(&dir.path("out")),
+        ["f_0002.obj", "f_0009.obj", "f_0010.obj", "f_0100.obj"]
+    );
+    let pattern = format!("{}/f_*.ply", input.display());
+    let named = format!("{}/fluid_{{frame:04}}.ply", dir.path("pattern").display());
+    let run = splash_env(
+        &args(&[
+            &pattern,
+            &"-o",
+            &named,
+            &"--log-format",
+            &"json",
+            &FAST[0],
+            &FAST[1],
+            &FAST[2],
+            &FAST[3],
+        ]),
+        &[],
+    )
+    .ok();
+    assert_eq!(run.frames(), [2, 9, 10, 100]);
+    assert_eq!(
+        entries(&dir.path("pattern")),
+        [
+            "fluid_0002.ply",
+            "fluid_0009.ply",
+            "fluid_0010.ply",
+            "fluid_0100.ply"
+        ]
+    );
+    let nothing = format!("{}/g_*.ply", input.display());
+    splash_env(
+        &args(&[&nothing, &FAST[0], &FAST[1], &FAST[2], &FAST[3]]),
+        &[],
+    )
+    .failed()
+    .has("matches no file");
+    // f_9 and f_0009 would both be f_0009.obj: refused before any work.
+    dir.file("in/f_0009.ply", ply(&small_ball(), None));
+    let run = splash_env(
+        &args(&[
+            &input,
+            &"-o",
+            &dir.path("clash/"),
+            &FAST[0],
+            &FAST[1],
+            &FAST[2],
+            &FAST[3],
+        ]),
+        &[],
+    )
+    .failed()
+    .has("would both be written to");
+    assert!(!run.stderr.contains("[1/"), "{}", run.stderr);
+    assert!(!dir.path("clash").exists());
+}
+
+#[test]
+fn ranges_and_shards_cover_every_frame_exactly_once() {
+    let dir = TempDir::new("shards");
+    sequence(&dir, 1..=12);
+    let input = dir.path("in");
+    let run = splash_env(
+        &args(&[
+            &input,
+            &"--frames",
+            &"2-8x3,11",
+            &"-o",
+            &dir.path("range/"),
+            &"--log-format",
+            &"json",
+            &FAST[0],
+            &FAST[1],
+            &FAST[2],
+            &FAST[3],
+        ]),
+        &[],
+    )
+    .ok();
+    assert_eq!(run.frames(), [2, 5, 8, 11]);
+    for n in [1, 2, 3, 5, 12, 13] {
+        let mut seen: BTreeMap<u64, usize> = BTreeMap::new();
+        for k in 1..=n {
+            let shard = format!("{k}/{n}");
+            let run = splash_env(
+                &args(&[
+                    &input,
+                    &"--shard",
+                    &shard,
+                    &"-o",
+                    &dir.path(&format!("n{n}/")),
+                    &"--log-format",
+                    &"json",
+                    &FAST[0],
+                    &FAST[1],
+                    &FAST[2],
+                    &FAST[3],
+                ]),
+                &[],
+            )
+            .ok();
+            for f in run.frames() {
+                *seen.entry(f).or_default() += 1;
+            }
+        }
+        let expected: BTreeMap<u64, usize> = (1..=12).map(|f| (f, 1)).collect();
+        assert_eq!(seen, expected, "{n} shards");
+        assert_eq!(entries(&dir.path(&format!("n{n}"))).len(), 12);
+    }
+    // auto/N: SLURM array tasks 1..=4 (SLURM_ARRAY_TASK_MIN=1); task 3 is shard 3/4.
+    let run = splash_env(
+        &args(&[
+            &input,
+            &"--shard",
+            &"auto/4",
+            &"-o",
+            &dir.path("auto/"),
+            &"--log-format",
+            &"json",
+            &FAST[0],
+            &FAST[1],
+            &FAST[2],
+            &FAST[3],
+        ]),
+        &[("SLURM_ARRAY_TASK_ID", "3"), ("SLURM_ARRAY_TASK_MIN", "1")],
+    )
+    .ok();
+    assert_eq!(run.frames(), [3, 7, 11]);
+    assert_eq!(run.events("start")[0]["shard"], "3/4");
+    splash_env(
+        &args(&[
+            &input, &"--shard", &"auto/4", &FAST[0], &FAST[1], &FAST[2], &FAST[3],
+        ]),
+        &[],
+    )
+    .failed()
+    .has("SLURM_ARRAY_TASK_ID is not set");
+}
+
+/// A frame the reconstruction takes a while on: the real fixture, cell r/2.
+fn slow_sequence(dir: &TempDir, frames: u64) -> Vec<PathBuf> {
+    let bytes = fs::read(fixture("frame_0040.ply")).unwrap();
+    (1..=frames)
+        .map(|n| dir.file(&format!("in/frame_{n:04}.ply"), &bytes))
+        .collect()
+}
+
+#[test]
+fn a_killed_run_restarted_with_skip_existing_finishes_the_sequence() {
+    let dir = TempDir::new("resume");
+    slow_sequence(&dir, 5);
+    let input = dir.path("in");
+    let out = dir.path("out");
+    let common = ["--spacing", "0.014", "--cell", "r/2", "--skip-existing"];
+    let mut child = Command::new(env!("CARGO_BIN_EXE_splash"))
+        .arg("recon")
+        .arg(&input)
+        .arg("-o")
+        .arg(format!("{}/", out.display()))
+        .args(common)
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    // Kill it once the first mesh is there, most likely in the middle of the second frame.
+    let start = Instant::now();
+    while !out.join("frame_0001.obj").exists() && start.elapsed() < Duration::from_secs(60) {
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    child.kill().unwrap();
+    child.wait().unwrap();
+    let done_before = entries(&out).iter().filter(|n| !n.starts_with('.')).count();
+    if done_before == 5 {
+        eprintln!("notice: the run finished before it was killed; only the restart is tested");
+    }
+    // What a kill during a write leaves: a hidden temporary, never the final name.
+    fs::write(out.join(".frame_0003.obj.tmp-999999-0"), b"v 1 2").unwrap();
+    let first = fs::read(out.join("frame_0001.obj")).unwrap();
+
+    let run = splash_env(
+        &args(&[
+            &input,
+            &"-o",
+            &format!("{}/", out.display()),
+            &common[0],
+            &common[1],
+            &common[2],
+            &common[3],
+            &common[4],
+            &"--log-format",
+            &"json",
+        ]),
+        &[],
+    )
+    .ok();
+    let start = &run.events("start")[0];
+    assert_eq!(start["skipped"], done_before, "{}", run.stderr);
+    assert_eq!(run.frames().len(), 5 - done_before);
+    assert!(!run.frames().contains(&1));
+    assert_eq!(
+        entries(&out),
+        (1..=5)
+            .map(|n| format!("frame_{n:04}.obj"))
+            .collect::<Vec<_>>(),
+        "the temporaries are gone, every frame is there"
+    );
+    assert!(fs::read(out.join("frame_0001.obj")).unwrap() == first);
+    // Every frame is the same input, so a complete sequence has five equal meshes.
+    for n in 2..=5 {
+        let mesh = fs::read(out.join(format!("frame_{n:04}.obj"))).unwrap();
+        assert!(mesh == first, "frame {n} differs from frame 1");
+    }
+}
+
+#[test]
+fn a_bad_frame_is_summarised_and_fail_fast_stops() {
+    let dir = TempDir::new("bad");
+    sequence(&dir, [1, 2, 4]);
+    dir.file(
+        "in/f_3.ply",
+        "ply\nformat ascii 1.0\nelement vertex 1\nend_header\n1 2 3\n",
+    );
+    let input = dir.path("in");
+    let run = splash_env(
+        &args(&[
+            &input,
+            &"-o",
+            &dir.path("out/"),
+            &FAST[0],
+            &FAST[1],
+            &FAST[2],
+            &FAST[3],
+        ]),
+        &[],
+    )
+    .failed()
+    .has("1 of 4 frames failed:")
+    .has("f_3.ply: cannot read particles");
+    assert!(run.stderr.contains("[4/4]"), "{}", run.stderr);
+    assert_eq!(
+        entries(&dir.path("out")),
+        ["f_0001.obj", "f_0002.obj", "f_0004.obj"]
+    );
+    let run = splash_env(
+        &args(&[
+            &input,
+            &"-o",
+            &dir.path("json/"),
+            &"--log-format",
+            &"json",
+            &FAST[0],
+            &FAST[1],
+            &FAST[2],
+            &FAST[3],
+        ]),
+        &[],
+    )
+    .failed();
+    let summary = &run.events("summary")[0];
+    assert_eq!(summary["ok"], false);
+    assert_eq!(summary["written"], 3);
+    assert_eq!(summary["failed"][0]["frame"], 3);
+    assert!(
+        summary["failed"][0]["error"]
+            .as_str()
+            .unwrap()
+            .contains("no property 'x'"),
+        "{summary}"
+    );
+    splash_env(
+        &args(&[
+            &input,
+            &"-o",
+            &dir.path("ff/"),
+            &"--fail-fast",
+            &FAST[0],
+            &FAST[1],
+            &FAST[2],
+            &FAST[3],
+        ]),
+        &[],
+    )
+    .failed()
+    .has("1 of 4 frames failed")
+    .has("1 frames not attempted");
+    assert_eq!(entries(&dir.path("ff")), ["f_0001.obj", "f_0002.obj"]);
+    // Quiet: only the failure.
+    let run = splash_env(
+        &args(&[
+            &input,
+            &"-o",
+            &dir.path("q/"),
+            &"-q",
+            &FAST[0],
+            &FAST[1],
+            &FAST[2],
+            &FAST[3],
+        ]),
+        &[],
+    )
+    .failed();
+    assert_eq!(run.stderr.lines().count(), 3, "{}", run.stderr);
+}
+
+#[test]
+fn plain_log_lines_have_time_and_counts() {
+    let dir = TempDir::new("plain");
+    sequence(&dir, [5]);
+    let run = splash_env(
+        &args(&[
+            &dir.path("in"),
+            &"-o",
+            &dir.path("out/"),
+            &FAST[0],
+            &FAST[1],
+            &FAST[2],
+            &FAST[3],
+        ]),
+        &[],
+    )
+    .ok();
+    let line = run.stderr.lines().find(|l| l.contains("[1/1]")).unwrap();
+    // 2025-01-31T12:00:00Z [1/1] …/f_5.ply -> …/f_0005.obj: 257 particles, 1234 triangles, 0.01 s
+    let (time, rest) = line.split_once(' ').unwrap();
+    assert!(
+        time.len() == 20 && time.ends_with('Z') && time.as_bytes()[10] == b'T',
+        "{line}"
+    );
+    assert!(
+        rest.contains(" particles, ") && rest.contains(" triangles, ") && rest.ends_with(" s"),
+        "{line}"
+    );
+}
+
+/// Vertices, normals, extra vertex properties and faces of a PLY file.
+type PlyMesh = (Vec<Vec3>, Vec<Vec3>, Vec<Vec3>, Vec<[u32; 3]>);
+
+fn read_ply(bytes: &[u8], extra: [&str; 3]) -> PlyMesh {
+    let ply = Parser::<DefaultElement>::new()
+        .read_ply(&mut &bytes[..])
+        .unwrap();
+    let f = |p: &Property| match p {
+        Property::Float(v) => *v,
+        other => panic!("not a float: {other:?}"),
+    };
+    let triple = |e: &DefaultElement, names: [&str; 3]| {
+        Vec3::from_array(names.map(|n| e.get(n).map_or(f32::NAN, f)))
+    };
+    let vertex = &ply.payload["vertex"];
+    let faces = ply.payload["face"]
+        .iter()
+        .map(|e| match &e["vertex_indices"] {
+            Property::ListInt(l) => [l[0], l[1], l[2]].map(|i| i as u32),
+            other => panic!("{other:?}"),
+        })
+        .collect();
+    (
+        vertex.iter().map(|e| triple(e, ["x", "y", "z"])).collect(),
+        vertex
+            .iter()
+            .map(|e| triple(e, ["nx", "ny", "nz"]))
+            .collect(),
+        vertex.iter().map(|e| triple(e, extra)).collect(),
+        faces,
+    )
+}
+
+#[test]
+fn meshes_read_back_equal_with_velocities_and_axes() {
+    let dir = TempDir::new("readback");
+    let particles = small_ball();
+    let velocity = Vec3::new(0.5, -1.0, 2.0);
+    let velocities = vec![velocity; particles.len()];
+    let input = dir.file("in/f_1.ply", ply(&particles, Some(&velocities)));
+    let mesh = reconstruct(&particles, &params(R, "r"), Engine::NarrowBand)
+        .unwrap()
+        .mesh;
+    assert!(mesh.triangles.len() > 100);
+
+    // OBJ through tobj: the same floats (shortest round-trip text) and faces.
+    splash_env(
+        &args(&[
+            &input,
+            &"-o",
+            &dir.path("obj/"),
+            &FAST[0],
+            &FAST[1],
+            &FAST[2],
+            &FAST[3],
+        ]),
+        &[],
+    )
+    .ok();
+    let options = tobj::LoadOptions {
+        single_index: true,
+        ..Default::default()
+    };
+    let (models, _) = tobj::load_obj(dir.path("obj/f_0001.obj"), &options).unwrap();
+    let read = &models[0].mesh;
+    let corners: Vec<u32> = mesh.triangles.iter().flatten().copied().collect();
+    assert_eq!(read.indices.len(), corners.len());
+    for (&i, &j) in corners.iter().zip(&read.indices) {
+        let (i, j) = (i as usize, j as usize);
+        assert_eq!(Vec3::from_slice(&read.positions[3 * j..]), mesh.vertices[i]);
+        assert_eq!(Vec3::from_slice(&read.normals[3 * j..]), mesh.normals[i]);
+    }
+
+    // PLY with velocities: positions, normals and faces as in memory; every vertex moves with
+    // the particles' uniform velocity.
+    let run = splash_env(
+        &args(&[
+            &input,
+            &"-o",
+            &dir.path("ply/"),
+            &"--format",
+            &"ply",
+            &"--attributes",
+            &"velocity",
+            &FAST[0],
+            &FAST[1],
+            &FAST[2],
+            &FAST[3],
+        ]),
+        &[],
+    )
+    .ok();
+    let bytes = fs::read(dir.path("ply/f_0001.ply")).unwrap();
+    let (v, n, u, faces) = read_ply(&bytes, ["vx", "vy", "vz"]);
+    assert_eq!(
+        (v, n, faces),
+        (
+            mesh.vertices.clone(),
+            mesh.normals.clone(),
+            mesh.triangles.clone()
+        )
+    );
+    assert!(
+        u.iter().all(|u| (*u - velocity).length() < 1e-5),
+        "{}",
+        run.stderr
+    );
+    // The library writes the same bytes.
+    let mut direct = Vec::new();
+    let vertex_velocities = vec![velocity; mesh.vertices.len()];
+    let attributes = VertexAttributes {
+        velocities: Some(&vertex_velocities),
+    };
+    write_mesh_with(&mesh, &attributes, MeshFormat::PlyBinary, &mut direct).unwrap();
+    assert_eq!(
+        read_ply(&direct, ["vx", "vy", "vz"]).2,
+        read_ply(&bytes, ["vx", "vy", "vz"]).2
+    );
+
+    // --up-axis z: (x, y, z) → (x, −z, y) for positions, normals and velocities.
+    splash_env(
+        &args(&[
+            &input,
+            &"-o",
+            &dir.path("up/"),
+            &"--format",
+            &"ply",
+            &"--attributes",
+            &"velocity",
+            &"--up-axis",
+            &"z",
+            &FAST[0],
+            &FAST[1],
+            &FAST[2],
+            &FAST[3],
+        ]),
+        &[],
+    )
+    .ok();
+    let (v, n, u, faces) = read_ply(
+        &fs::read(dir.path("up/f_0001.ply")).unwrap(),
+        ["vx", "vy", "vz"],
+    );
+    let turn = |a: &Vec3| Vec3::new(a.x, -a.z, a.y);
+    assert_eq!(v, mesh.vertices.iter().map(turn).collect::<Vec<_>>());
+    assert_eq!(n, mesh.normals.iter().map(turn).collect::<Vec<_>>());
+    assert!(u.iter().all(|u| (*u - turn(&velocity)).length() < 1e-5));
+    assert_eq!(faces, mesh.triangles);
+
+    // Velocities need an input that has them, and a PLY output.
+    let plain = dir.file("plain/f_1.ply", ply(&particles, None));
+    splash_env(
+        &args(&[
+            &plain,
+            &"-o",
+            &dir.path("p/"),
+            &"--format",
+            &"ply",
+            &"--attributes",
+            &"velocity",
+            &FAST[0],
+            &FAST[1],
+            &FAST[2],
+            &FAST[3],
+        ]),
+        &[],
+    )
+    .failed()
+    .has("none of the properties vx vy vz or velocity_x velocity_y velocity_z");
+    splash_env(
+        &args(&[
+            &input,
+            &"-o",
+            &dir.path("o/"),
+            &"--attributes",
+            &"velocity",
+            &FAST[0],
+            &FAST[1],
+            &FAST[2],
+            &FAST[3],
+        ]),
+        &[],
+    )
+    .failed()
+    .has("needs PLY output");
+    assert!(!dir.path("o").exists() && !dir.path("p").exists());
+}
+
+#[test]
+fn real_velocities_are_interpolated_onto_the_mesh() {
+    let frame = fixture("frame_0010.ply");
+    let dir = TempDir::new("real-velocity");
+    splash_env(
+        &args(&[
+            &frame,
+            &"-o",
+            &dir.path("out/"),
+            &"--format",
+            &"ply",
+            &"--attributes",
+            &"velocity",
+            &"--spacing",
+            &"0.014",
+            &"--cell",
+            &"r",
+        ]),
+        &[],
+    )
+    .ok();
+    let (v, _, u, _) = read_ply(
+        &fs::read(dir.path("out/frame_0010.ply")).unwrap(),
+        ["vx", "vy", "vz"],
+    );
+    assert_eq!(u.len(), v.len());
+    let fastest = u.iter().map(|u| u.length()).fold(0.0, f32::max);
+    let mean = u.iter().map(|u| u.length()).sum::<f32>() / u.len() as f32;
+    // A breaking dam a few tenths of a second in: metres per second, some surface moving.
+    assert!(u.iter().all(|u| u.is_finite()));
+    assert!(
+        mean > 0.05 && fastest < 20.0,
+        "mean {mean}, fastest {fastest}"
+    );
+}
+
+/// Vertex and face counts declared in a mesh2 include, after checking its blocks' sizes and
+/// every index.
+fn pov_counts(text: &str) -> (usize, usize) {
+    let block = |name: &str| -> (usize, Vec<String>) {
+        let start = text.find(name).unwrap_or_else(|| panic!("no {name}"));
+        let body = &text[start + name.len()..];
+        let body = &body[body.find('{').unwrap() + 1..body.find('}').unwrap()];
+        let (count, items) = body.split_once(',').unwrap();
+        let items: Vec<String> = items
+            .split('>')
+            .map(|s| {
+                s.trim()
+                    .trim_start_matches(',')
+                    .trim()
+                    .trim_start_matches('<')
+                    .to_owned()
+            })
+            .filter(|s| !s.is_empty())
+            .collect();
+        (count.trim().parse().unwrap(), items)
+    };
+    let (vertices, vs) = block("vertex_vectors");
+    let (normals, ns) = block("normal_vectors");
+    let (faces, fs) = block("face_indices");
+    assert_eq!(
+        (vs.len(), normals, ns.len(), fs.len()),
+        (vertices, vertices, vertices, faces)
+    );
+    for v in vs.iter().chain(&ns) {
+        let xyz: Vec<f32> = v.split(',').map(|x| x.parse().unwrap()).collect();
+        assert!(xyz.len() == 3 && xyz.iter().all(|x| x.is_finite()), "<{v}>");
+    }
+    for f in &fs {
+        let abc: Vec<usize> = f.split(',').map(|x| x.parse().unwrap()).collect();
+        assert!(abc.len() == 3 && abc.iter().all(|&i| i < vertices), "<{f}>");
+    }
+    (vertices, faces)
+}
+
+#[test]
+fn pov_ray_includes_parse_and_render() {
+    let dir = TempDir::new("pov");
+    let frame = fixture("frame_0040.ply");
+    let empty = dir.file("in/frame_0041.ply", ply(&[], None));
+    let run = splash_env(
+        &args(&[
+            &frame,
+            &empty,
+            &"--format",
+            &"pov",
+            &"-o",
+            &dir.path("pov/"),
+            &"--spacing",
+            &"0.014",
+            &"--cell",
+            &"r",
+        ]),
+        &[],
+    )
+    .ok();
+    let text = fs::read_to_string(dir.path("pov/frame_0040.inc")).unwrap();
+    assert!(
+        text.contains("#declare SplashMesh = mesh2 {"),
+        "{}",
+        &text[..200]
+    );
+    let (vertices, faces) = pov_counts(&text);
+    assert!(faces > 10_000 && vertices > 5_000, "{}", run.stderr);
+    let empty_text = fs::read_to_string(dir.path("pov/frame_0041.inc")).unwrap();
+    assert!(
+        empty_text.contains("#declare SplashMesh = union {}"),
+        "{empty_text}"
+    );
+
+    if Command::new("povray").arg("--version").output().is_err() {
+        eprintln!("notice: povray is not installed; checked the include's structure only");
+        return;
+    }
+    // The README's scene, rendered small for frames 40 (the fixture) and 41 (empty).
+    let scene = include_str!("../examples/scene.pov");
+    fs::write(dir.path("scene.pov"), scene).unwrap();
+    for (frame, water) in [(40, true), (41, false)] {
+        let output = Command::new("povray")
+            .current_dir(&dir.0)
+            .args([
+                "+Iscene.pov",
+                "+Oframe.ppm",
+                "+FP",
+                "+W96",
+                "+H54",
+                "-D",
+                "-V",
+                "-GA",
+            ])
+            .arg(format!("+KFI{frame}"))
+            .arg(format!("+KFF{frame}"))
+            .output()
+            .unwrap();
+        let image = dir.path(&format!("frame{frame}.ppm"));
+        assert!(
+            output.status.success() && image.exists(),
+            "povray failed on frame {frame}:\n{}",
+            String::from_utf8_lossy(&output.stderr)
+        );
+        let blue = blue_pixels(&fs::read(&image).unwrap());
+        // The fluid is blue; the ground is grey and the sky pale.
+        if water {
+            assert!(blue > 200, "{blue} fluid pixels in frame {frame}");
+        } else {
+            assert_eq!(blue, 0, "frame {frame} is empty");
+        }
+    }
+}
+
+/// Pixels of a binary PPM (P6, 8 bit) that are clearly blue.
+fn blue_pixels(ppm: &[u8]) -> usize {
+    let mut fields = Vec::new();
+    let mut at = 0;
+    while fields.len() < 4 {
+        while ppm[at].is_ascii_whitespace() {
+            at += 1;
+        }
+        if ppm[at] == b'#' {
+            while ppm[at] != b'\n' {
+                at += 1;
+            }
+            continue;
+        }
+        let start = at;
+        while !ppm[at].is_ascii_whitespace() {
+            at += 1;
+        }
+        fields.push(String::from_utf8_lossy(&ppm[start..at]).into_owned());
+    }
+    assert_eq!((fields[0].as_str(), fields[3].as_str()), ("P6", "255"));
+    let pixels = &ppm[at + 1..];
+    pixels
+        .chunks_exact(3)
+        .filter(|p| u16::from(p[2]) > u16::from(p[0]) + 60)
+        .count()
+}
+
+#[test]
+fn read_particles_still_reads_positions_only() {
+    // The velocity reader is a separate entry point; the plain one ignores vx vy vz.
+    let dir = TempDir::new("positions");
+    let points = small_ball();
+    let with = dir.file("v.ply", ply(&points, Some(&vec![Vec3::ONE; points.len()])));
+    assert_eq!(read_particles(&with, None).unwrap(), points);
+}
