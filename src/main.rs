@@ -30,7 +30,7 @@ struct Cli {
 #[derive(Subcommand)]
 enum Command {
     /// Reconstruct one surface mesh per particle file.
-    Recon(Recon),
+    Recon(Box<Recon>),
     /// Inspect configurations.
     #[command(subcommand)]
     Config(ConfigCommand),
@@ -182,7 +182,7 @@ struct Recon {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Recon(args) => recon(args),
+        Command::Recon(args) => recon(*args),
         Command::Config(ConfigCommand::Show(args)) => show_config(&args),
     };
     result.unwrap_or_else(|e| {
