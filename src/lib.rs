@@ -2,10 +2,12 @@
 
 pub mod attributes;
 pub mod batch;
+pub mod bench;
 pub mod config;
 pub mod field;
 pub mod io;
 pub mod log;
+pub mod memory;
 pub mod mesh;
 pub mod recon;
 pub mod report;

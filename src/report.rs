@@ -1,10 +1,19 @@
-//! Per-frame figures: stage times, counts and the memory held by the reconstruction.
+//! Per-frame figures: stage times, counts and the memory held by the reconstruction; and the
+//! reports made of them (`records`: per-frame records, averages, machine and build; `tables`:
+//! the paper's Tables 1, 3/4 and 5/6).
+
+pub mod records;
+pub mod tables;
 
 use std::fmt;
 use std::time::{Duration, Instant};
 
+use serde::Serialize;
+
+use crate::memory::HeapScope;
+
 /// Times of the stages of Algorithm 1 (Akinci et al. 2012), plus I/O.
-#[derive(Debug, Clone, Copy, Default)]
+#[derive(Debug, Clone, Copy, Default, Serialize)]
 pub struct Timings {
     pub read: Duration,
     /// Sorting the handler array (Sec. 4.1, "Identification of the contributing particles").
@@ -37,6 +46,46 @@ pub fn timed<T>(slot: &mut Duration, f: impl FnOnce() -> T) -> T {
     out
 }
 
+/// Like [`timed`], and also records in `heap` the peak heap above `scope`'s start during `f`
+/// (the largest of the calls, when a stage runs more than once).
+pub fn staged<T>(
+    slot: &mut Duration,
+    heap: &mut usize,
+    scope: &HeapScope,
+    f: impl FnOnce() -> T,
+) -> T {
+    scope.restart_peak();
+    let out = timed(slot, f);
+    *heap = (*heap).max(scope.peak());
+    out
+}
+
+/// Peak heap bytes per stage, above the heap held when the reconstruction started (the input
+/// particles are not counted). Each includes what earlier stages still hold.
+#[derive(Debug, Clone, Copy, Default, Serialize)]
+pub struct StageHeap {
+    pub handler_array: usize,
+    pub surface_particles: usize,
+    pub band: usize,
+    pub scalar_field: usize,
+    pub triangulation: usize,
+}
+
+impl StageHeap {
+    pub fn max(&self) -> usize {
+        [
+            self.handler_array,
+            self.surface_particles,
+            self.band,
+            self.scalar_field,
+            self.triangulation,
+        ]
+        .into_iter()
+        .max()
+        .unwrap_or(0)
+    }
+}
+
 /// Counts and memory of one reconstructed frame.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct FrameStats {
@@ -53,7 +102,22 @@ pub struct FrameStats {
     /// Largest sum of the bytes held at once by the reconstruction's own arrays (handler array,
     /// band, field values, mesh), measured from their capacities.
     pub peak_bytes: usize,
+    /// Exact peak heap of the reconstruction, from the counting allocator (0 without it).
+    pub heap_peak: usize,
+    pub stage_heap: StageHeap,
+    /// Peak resident set size of the process after the frame (VmHWM), 0 where unknown.
+    pub peak_rss: u64,
+    /// Vertices per axis of the full grid: the particles' box widened by the support.
+    pub grid: [u64; 3],
+    /// Worker threads of the pool that reconstructed the frame.
+    pub threads: usize,
     pub timings: Timings,
+}
+
+impl FrameStats {
+    pub fn grid_vertices(&self) -> u64 {
+        self.grid.iter().product()
+    }
 }
 
 impl fmt::Display for FrameStats {
@@ -64,7 +128,7 @@ impl fmt::Display for FrameStats {
             f,
             "{} particles ({} surface), {} surface vertices, {} triangles; \
              read {:.0} ms, sort {:.0} ms, t_sp {:.0} ms, band {:.0} ms, t_sf {:.0} ms, \
-             t_tri {:.0} ms, write {:.0} ms; {:.1} MB",
+             t_tri {:.0} ms, write {:.0} ms; {:.1} MB arrays, {:.1} MB peak heap, {:.1} MB peak RSS",
             self.particles,
             self.surface_particles,
             self.surface_vertices,
@@ -76,7 +140,9 @@ impl fmt::Display for FrameStats {
             ms(t.scalar_field),
             ms(t.triangulation),
             ms(t.write),
-            self.peak_bytes as f64 / 1e6
+            self.peak_bytes as f64 / 1e6,
+            self.heap_peak as f64 / 1e6,
+            self.peak_rss as f64 / 1e6
         )
     }
 }

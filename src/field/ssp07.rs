@@ -72,7 +72,14 @@ impl ScalarField for Ssp07 {
     }
 
     fn value(&self, near: &Neighbourhood, x: Vec3) -> f32 {
-        let s = Sums::over(near, x, 1.0 / (self.support * self.support));
+        self.value_of_sums(&Sums::over(near, x, 1.0 / (self.support * self.support)))
+    }
+}
+
+impl Ssp07 {
+    /// eq. 1 from the kernel sums at a point, however they were accumulated (the gather above,
+    /// or the scatter engine adding one particle at a time with [`Sums::add`]).
+    pub fn value_of_sums(&self, s: &Sums) -> f32 {
         if s.k <= 0.0 {
             // No particle in reach: the limit of eq. 1 as the last particle leaves the support
             // (x̄ at distance R, ∇x̄ = 0, f = 1).
@@ -84,9 +91,7 @@ impl ScalarField for Ssp07 {
         let f = self.f(largest_eigenvalue_real_part(&s.jacobian(m, self.support)));
         (m.length() - f64::from(self.radius) * f) as f32
     }
-}
 
-impl Ssp07 {
     /// eqs. 2–3. γ is clamped to [0, 1] so that f falls smoothly from 1 to 0 between t_low and
     /// t_high and stays 0 beyond: the paper leaves EV_max > t_high unstated, where the cubic
     /// would turn negative.
@@ -102,7 +107,8 @@ impl Ssp07 {
 
 /// Kernel sums over the neighbours, with s_j = |d_j|/R, t_j = 1 − s_j² clamped at 0,
 /// k_j = t_j³ (eq. 5) and w_j = t_j².
-struct Sums {
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Sums {
     k: f32,
     kd: [f32; 3],
     wd: [f32; 3],
@@ -121,6 +127,28 @@ crate::lane_sums! {
 }
 
 impl Sums {
+    /// Adds the particle at offset `d = x_j − x` from the point: one step of a scatter.
+    #[inline(always)]
+    pub fn add(&mut self, d: Vec3, inv_r2: f32) {
+        let t = (1.0 - d.length_squared() * inv_r2).max(0.0);
+        let w = t * t;
+        let k = w * t;
+        let (wx, wy, wz) = (w * d.x, w * d.y, w * d.z);
+        self.k += k;
+        self.kd[0] += k * d.x;
+        self.kd[1] += k * d.y;
+        self.kd[2] += k * d.z;
+        self.wd[0] += wx;
+        self.wd[1] += wy;
+        self.wd[2] += wz;
+        self.wdd[0] += wx * d.x;
+        self.wdd[1] += wy * d.y;
+        self.wdd[2] += wz * d.z;
+        self.wdd[3] += wx * d.y;
+        self.wdd[4] += wx * d.z;
+        self.wdd[5] += wy * d.z;
+    }
+
     fn over(near: &Neighbourhood, x: Vec3, inv_r2: f32) -> Sums {
         let s = ssp07_sums(near, x, inv_r2);
         Sums {
@@ -222,6 +250,30 @@ mod tests {
             assert!((v - (d - 1.0)).abs() < 1e-5, "d {d}: {v}");
         }
         assert_eq!(f.value(&n, Vec3::new(5.0, 0.0, 0.0)), 3.0);
+    }
+
+    #[test]
+    fn scattered_sums_give_the_gathered_value() {
+        let f = field();
+        let pts: Vec<Vec3> = (0..60)
+            .map(|i| {
+                let a = i as f32 * 2.399;
+                Vec3::new(a.cos() * 2.3, a.sin() * 2.1, (i as f32 * 0.37).sin() * 2.5)
+            })
+            .collect();
+        let n = near(&pts);
+        for x in [
+            Vec3::ZERO,
+            Vec3::new(1.5, -0.5, 2.0),
+            Vec3::new(3.0, 3.0, 0.0),
+        ] {
+            let mut s = Sums::default();
+            for &p in &pts {
+                s.add(p - x, 1.0 / 16.0);
+            }
+            let (a, b) = (f.value_of_sums(&s), f.value(&n, x));
+            assert!((a - b).abs() < 1e-5, "at {x}: scatter {a}, gather {b}");
+        }
     }
 
     #[test]

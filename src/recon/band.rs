@@ -81,8 +81,7 @@ impl Band {
     /// Every vertex of the box `[lo, hi]` widened by `margin`: the full grid, for engines and
     /// checks that process the whole volume.
     pub fn full(lo: Vec3, hi: Vec3, cell: f32, margin: f32) -> Result<Band> {
-        let (vlo, _) = vertex_box(lo, cell, margin)?;
-        let (_, vhi) = vertex_box(hi, cell, margin)?;
+        let (vlo, vhi) = Band::full_extent(lo, hi, cell, margin)?;
         let (a, b) = (brick_of(vlo), brick_of(vhi));
         let mut bricks = Vec::new();
         let mut masks = Vec::new();
@@ -98,6 +97,13 @@ impl Band {
             }
         }
         Ok(Band::from_parts(cell, bricks, masks))
+    }
+
+    /// First and last grid vertex of [`Band::full`]'s box, without building it.
+    pub fn full_extent(lo: Vec3, hi: Vec3, cell: f32, margin: f32) -> Result<(IVec3, IVec3)> {
+        let (vlo, _) = vertex_box(lo, cell, margin)?;
+        let (_, vhi) = vertex_box(hi, cell, margin)?;
+        Ok((vlo, vhi))
     }
 
     /// A band of exactly `vertices`, which must be sorted by (z, y, x).

@@ -3,11 +3,13 @@
 pub mod band;
 pub mod band_closure;
 pub mod field_sampling;
+pub mod full_grid;
 pub mod halo;
 pub mod handler_array;
 pub mod narrow_band;
 pub mod neighbourhood;
+pub mod scatter;
 pub mod surface_particles;
 pub mod triangulation;
 
-pub use narrow_band::{Engine, Reconstruction, reconstruct};
+pub use narrow_band::{Engine, Limits, Reconstruction, reconstruct, reconstruct_with};

@@ -1,0 +1,114 @@
+//! The full grid of the engines without a narrow band (`full-gather`, `scatter`): its extent,
+//! the memory those engines need for it, and the `--max-memory` check made before allocating.
+//! The narrow-band engine reports the same grid (Table 1's "grid res." and total vertices)
+//! without ever allocating it.
+
+use anyhow::{Result, bail};
+use glam::{IVec3, Vec3};
+
+use super::band::{BRICK_VERTICES, Band, brick_of};
+use super::narrow_band::Engine;
+use crate::field::ssp07::Sums;
+use crate::memory::human;
+
+/// The vertices of the particles' bounding box widened by the field's support.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Grid {
+    pub lo: IVec3,
+    pub hi: IVec3,
+}
+
+impl Grid {
+    pub fn around(particles: &[Vec3], cell: f32, support: f32) -> Result<Grid> {
+        let (lo, hi) = bounds(particles);
+        let (lo, hi) = Band::full_extent(lo, hi, cell, support)?;
+        Ok(Grid { lo, hi })
+    }
+
+    /// Vertices per axis (the paper's "grid res.": 243 × 204 × 243 at r becomes
+    /// 485 × 409 × 486 at r/2, i.e. n → 2n − 1).
+    pub fn resolution(&self) -> [u64; 3] {
+        (self.hi - self.lo + 1).to_array().map(|n| n.max(0) as u64)
+    }
+
+    pub fn vertices(&self) -> u64 {
+        self.resolution().iter().product()
+    }
+
+    /// Bricks of 8³ vertices covering the grid, as [`Band::full`] allocates them.
+    pub fn bricks(&self) -> u64 {
+        let n = brick_of(self.hi) - brick_of(self.lo) + 1;
+        n.to_array().iter().map(|&k| k.max(0) as u64).product()
+    }
+}
+
+/// Heap bytes per brick of a full band, besides its values: mask, coordinates, index entry
+/// and the triangulation's per-brick edge table (measured, rounded up).
+const BRICK_OVERHEAD: u64 = 64 + 12 + 40 + 480;
+/// Heap bytes per particle: the handler array (sort pairs, positions, cell starts).
+const PER_PARTICLE: u64 = 48;
+
+/// Peak heap an engine needs on `grid` before its mesh, in bytes; None for the narrow band,
+/// whose memory follows the surface and cannot be known before the band is built.
+pub fn needed_bytes(engine: Engine, grid: &Grid, particles: usize) -> Option<u64> {
+    let band = grid.bricks() * (BRICK_VERTICES as u64 * 4 + BRICK_OVERHEAD);
+    match engine {
+        Engine::NarrowBand => None,
+        Engine::FullGather => Some(band + particles as u64 * PER_PARTICLE),
+        // One set of kernel sums per vertex, then the values per brick.
+        Engine::Scatter => Some(band + grid.vertices() * size_of::<Sums>() as u64),
+    }
+}
+
+/// Refuses a full-grid engine whose grid needs more than `limit` bytes.
+pub fn check(engine: Engine, grid: &Grid, particles: usize, limit: u64) -> Result<()> {
+    let Some(need) = needed_bytes(engine, grid, particles) else {
+        return Ok(());
+    };
+    if need > limit {
+        let [x, y, z] = grid.resolution();
+        bail!(
+            "the {} engine would need about {} for its full grid of {x} × {y} × {z} = {} vertices, \
+             above the limit of {} (--max-memory); use the narrow-band engine, a larger cell, or \
+             raise --max-memory",
+            engine.name(),
+            human(need),
+            grid.vertices(),
+            human(limit)
+        );
+    }
+    Ok(())
+}
+
+pub fn bounds(particles: &[Vec3]) -> (Vec3, Vec3) {
+    particles
+        .iter()
+        .fold((Vec3::MAX, Vec3::MIN), |(lo, hi), &p| {
+            (lo.min(p), hi.max(p))
+        })
+}
+
+impl Engine {
+    pub const ALL: [Engine; 3] = [Engine::NarrowBand, Engine::FullGather, Engine::Scatter];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Engine::NarrowBand => "narrow-band",
+            Engine::FullGather => "full-gather",
+            Engine::Scatter => "scatter",
+        }
+    }
+
+    pub fn parse(text: &str) -> Result<Engine> {
+        match Engine::ALL.into_iter().find(|e| e.name() == text) {
+            Some(e) => Ok(e),
+            None => bail!("unknown engine '{text}': use narrow-band, full-gather or scatter"),
+        }
+    }
+
+    /// Whether the engine processes every vertex of the grid (and is subject to
+    /// `--max-memory`).
+    pub fn is_full_grid(self) -> bool {
+        self != Engine::NarrowBand
+    }
+}
