@@ -10,7 +10,7 @@ use crate::attributes::interpolate_velocities;
 use crate::config::{Config, Params};
 use crate::io::{self, InputFormat, MeshFormat, UpAxis, VertexAttributes};
 use crate::mesh::TriMesh;
-use crate::recon::{Engine, reconstruct};
+use crate::recon::{Engine, Limits, reconstruct_with};
 use crate::report::FrameStats;
 use crate::sequence::{Shard, padded_stem, path_frame_number};
 use crate::spacing::estimate_spacing;
@@ -124,6 +124,8 @@ pub struct Batch {
     pub up_axis: Option<UpAxis>,
     /// Interpolates the particles' velocities onto the mesh vertices and writes them.
     pub velocities: bool,
+    /// `--max-memory` for the full-grid engines.
+    pub limits: Limits,
 }
 
 /// What happened to one frame.
@@ -337,7 +339,8 @@ impl Batch {
             }
         };
         let params = Params::resolve(&self.config, r);
-        let rec = reconstruct(&particles, &params, self.engine).context("reconstruction failed")?;
+        let rec = reconstruct_with(&particles, &params, self.engine, &self.limits)
+            .context("reconstruction failed")?;
         let mut mesh = rec.mesh;
         let mut vertex_velocities = velocities
             .map(|v| interpolate_velocities(&mesh.vertices, &particles, &v, params.support));

@@ -34,6 +34,9 @@ enum Command {
     /// Inspect configurations.
     #[command(subcommand)]
     Config(ConfigCommand),
+    /// Compare the engines on scenes at several cell sizes and thread counts; print the paper's
+    /// Tables 1, 3/4 and 5/6 and write the raw records as JSON.
+    Bench(bench_cli::BenchArgs),
 }
 
 #[derive(Subcommand)]
@@ -177,12 +180,29 @@ struct Recon {
     /// Print only errors.
     #[arg(short, long, conflicts_with = "verbose")]
     quiet: bool,
+
+    /// Reconstruction engine: narrow-band (default), or the paper's baselines full-gather
+    /// (Z-index gather on every grid vertex) and scatter (serial, SSP07 only). All three give
+    /// the same mesh.
+    #[arg(long, default_value = "narrow-band")]
+    engine: String,
+
+    /// Memory a full-grid engine may use, e.g. 8G or 512M; it refuses larger grids before
+    /// allocating. Default: half the machine's memory.
+    #[arg(long)]
+    max_memory: Option<String>,
+
+    /// Write per-frame figures and their averages (times, counts, memory, machine, build,
+    /// configuration) to this file: .json, .csv or .md.
+    #[arg(long)]
+    report: Option<PathBuf>,
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Recon(args) => recon(*args),
+        Command::Bench(args) => bench_cli::bench(args),
         Command::Config(ConfigCommand::Show(args)) => show_config(&args),
     };
     result.unwrap_or_else(|e| {
@@ -199,6 +219,8 @@ fn show_config(args: &ConfigArgs) -> Result<ExitCode> {
     );
     Ok(ExitCode::SUCCESS)
 }
+
+mod bench_cli;
 
 fn recon(args: Recon) -> Result<ExitCode> {
     if let Some(n) = args.threads {
@@ -276,13 +298,20 @@ fn recon(args: Recon) -> Result<ExitCode> {
             );
         }
     }
+    let engine = Engine::parse(&args.engine).context("--engine")?;
+    let limits = bench_cli::limits(args.max_memory.as_deref())?;
+    let report_config = serde_json::to_value(&config)?;
+    if let Some(path) = &args.report {
+        splash::report::records::check_report_path(path)?;
+    }
     let batch = Batch {
         inputs,
         input_format,
         output,
         format,
         config,
-        engine: Engine::NarrowBand,
+        engine,
+        limits,
         shard,
         skip_existing: args.skip_existing,
         fail_fast: args.fail_fast,
@@ -291,6 +320,15 @@ fn recon(args: Recon) -> Result<ExitCode> {
     };
     let mut console = Console::new(log_format, verbosity, std::io::stderr().is_terminal());
     let report = batch.run(&mut console)?;
+    if let Some(path) = &args.report {
+        bench_cli::write_recon_report(
+            path,
+            &report.outcomes,
+            engine,
+            &batch.config,
+            report_config,
+        )?;
+    }
     Ok(if console.finish(&report) {
         ExitCode::SUCCESS
     } else {

@@ -89,6 +89,9 @@ impl StageHeap {
 /// Counts and memory of one reconstructed frame.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct FrameStats {
+    /// Particle spacing r and cell size of the frame, in world units.
+    pub spacing: f32,
+    pub cell: f32,
     pub particles: usize,
     pub surface_particles: usize,
     /// Bricks of 8³ vertices holding surface vertices.

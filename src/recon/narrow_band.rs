@@ -66,6 +66,8 @@ pub fn reconstruct_with(
 ) -> Result<Reconstruction> {
     let heap = HeapScope::start();
     let mut stats = FrameStats {
+        spacing: params.spacing,
+        cell: params.cell,
         particles: particles.len(),
         threads: rayon::current_num_threads(),
         ..FrameStats::default()

@@ -1,0 +1,182 @@
+//! The command-line side of `splash bench` and of `splash recon --report`.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+
+use anyhow::{Context, Result, bail};
+use clap::Args;
+
+use splash::batch::FrameOutcome;
+use splash::bench::{self, Options};
+use splash::config::{Config, Length};
+use splash::memory;
+use splash::recon::{Engine, Limits};
+use splash::report::records::{FrameRecord, Report};
+use splash::report::tables;
+
+#[derive(Args)]
+#[command(after_help = "\
+Each scene is a directory of particle frames (or frame files, grouped by their directory). Every
+frame is reconstructed at every --cell by the scatter (serial), the full gather and the narrow
+band (at every --threads count), each run in its own thread pool. Runs whose full grid would
+need more than --max-memory are not attempted and read NA in the tables, with the reason.
+
+Example:
+  splash bench ../shared/data/cbd-small --frames-per-scene 3 --spacing 0.014 --cell r --cell r/2 --threads 1,2")]
+pub struct BenchArgs {
+    /// Scene directories or particle files.
+    #[arg(required = true)]
+    inputs: Vec<PathBuf>,
+
+    /// Cell sizes (repeat): 2r, r, r/2 or lengths. Default: r and r/2, as the paper.
+    #[arg(long)]
+    cell: Vec<String>,
+
+    /// Thread counts, comma-separated. Default: 1 and all cores.
+    #[arg(long, value_delimiter = ',')]
+    threads: Vec<usize>,
+
+    /// Particle spacing r: one for all scenes, or repeated once per scene in order. Estimated
+    /// from each scene's first frame when absent.
+    #[arg(long)]
+    spacing: Vec<f32>,
+
+    /// Frames per scene, spread evenly over its files. Default: all.
+    #[arg(long)]
+    frames_per_scene: Option<usize>,
+
+    /// Engines to compare, comma-separated. Default: scatter,full-gather,narrow-band.
+    #[arg(long, value_delimiter = ',')]
+    engines: Vec<String>,
+
+    /// Memory a full-grid engine may use (e.g. 8G); larger runs read NA. Default: half the
+    /// machine's memory.
+    #[arg(long)]
+    max_memory: Option<String>,
+
+    /// TOML file with the reconstruction parameters (see configs/).
+    #[arg(long)]
+    config: Option<PathBuf>,
+
+    /// Where the raw records go (JSON).
+    #[arg(long, default_value = "bench.json")]
+    json: PathBuf,
+
+    /// Also write the tables to this Markdown file.
+    #[arg(long)]
+    markdown: Option<PathBuf>,
+
+    /// Print only the tables.
+    #[arg(short, long)]
+    quiet: bool,
+}
+
+pub fn limits(max_memory: Option<&str>) -> Result<Limits> {
+    Ok(match max_memory {
+        Some(m) => Limits {
+            max_memory: memory::parse_bytes(m).context("--max-memory")?,
+        },
+        None => Limits::default(),
+    })
+}
+
+pub fn bench(args: BenchArgs) -> Result<ExitCode> {
+    let config = match &args.config {
+        Some(path) => Config::from_file(path)?,
+        None => Config::default(),
+    };
+    let cells = if args.cell.is_empty() {
+        vec![Length::Spacings(1.0), Length::Spacings(0.5)]
+    } else {
+        args.cell
+            .iter()
+            .map(|c| Length::parse(c).context("--cell"))
+            .collect::<Result<_>>()?
+    };
+    let threads = if args.threads.is_empty() {
+        let all = std::thread::available_parallelism().map_or(1, |n| n.get());
+        if all > 1 { vec![1, all] } else { vec![1] }
+    } else {
+        args.threads.clone()
+    };
+    let engines = if args.engines.is_empty() {
+        Engine::ALL.to_vec()
+    } else {
+        args.engines
+            .iter()
+            .map(|e| Engine::parse(e).context("--engines"))
+            .collect::<Result<_>>()?
+    };
+    if args.spacing.iter().any(|r| !(r.is_finite() && *r > 0.0)) {
+        bail!("--spacing must be positive");
+    }
+    let opts = Options {
+        inputs: args.inputs,
+        cells,
+        threads,
+        spacings: args.spacing,
+        frames_per_scene: args.frames_per_scene,
+        engines,
+        limits: limits(args.max_memory.as_deref())?,
+        config,
+    };
+    let quiet = args.quiet;
+    let report = bench::run(&opts, |line| {
+        if !quiet {
+            eprintln!("{line}");
+        }
+    })?;
+    let text = serde_json::to_string_pretty(&report)? + "\n";
+    std::fs::write(&args.json, text)
+        .with_context(|| format!("{}: cannot write the records", args.json.display()))?;
+    let tables = tables::markdown(&report);
+    if let Some(path) = &args.markdown {
+        std::fs::write(path, &tables)
+            .with_context(|| format!("{}: cannot write the tables", path.display()))?;
+    }
+    print!("{tables}");
+    if !quiet {
+        eprintln!("raw records: {}", args.json.display());
+    }
+    Ok(ExitCode::SUCCESS)
+}
+
+/// `splash recon --report`: one record per reconstructed frame, failed frames left out.
+pub fn write_recon_report(
+    path: &Path,
+    outcomes: &[FrameOutcome],
+    engine: Engine,
+    config: &Config,
+    resolved: serde_json::Value,
+) -> Result<()> {
+    let records: Vec<FrameRecord> = outcomes
+        .iter()
+        .filter_map(|o| {
+            let stats = o.result.as_ref().ok()?;
+            let scene = o
+                .input
+                .parent()
+                .and_then(|p| p.file_name())
+                .map_or(String::new(), |n| n.to_string_lossy().into_owned());
+            let frame = o
+                .input
+                .file_name()
+                .map_or(String::new(), |n| n.to_string_lossy().into_owned());
+            Some(FrameRecord::new(
+                &scene,
+                &frame,
+                engine.name(),
+                &splash::bench::cell_label(config.cell),
+                stats,
+            ))
+        })
+        .collect();
+    let mut resolved = resolved;
+    if let (Some(obj), Some(first)) = (resolved.as_object_mut(), records.first()) {
+        // The spacing used (given or estimated) and the world cell, besides the config.
+        obj.insert("spacing_used".into(), first.spacing.into());
+        obj.insert("cell_world".into(), first.cell_world.into());
+        obj.insert("engine".into(), engine.name().into());
+    }
+    Report::new(resolved, rayon::current_num_threads(), records).write(path)
+}
