@@ -48,16 +48,48 @@ pub fn timed<T>(slot: &mut Duration, f: impl FnOnce() -> T) -> T {
 
 /// Like [`timed`], and also records in `heap` the peak heap above `scope`'s start during `f`
 /// (the largest of the calls, when a stage runs more than once).
-pub fn staged<T>(
-    slot: &mut Duration,
-    heap: &mut usize,
-    scope: &HeapScope,
-    f: impl FnOnce() -> T,
-) -> T {
+fn staged<T>(slot: &mut Duration, heap: &mut usize, scope: &HeapScope, f: impl FnOnce() -> T) -> T {
     scope.restart_peak();
     let out = timed(slot, f);
     *heap = (*heap).max(scope.peak());
     out
+}
+
+/// A stage of Algorithm 1, for its time and peak heap.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Stage {
+    HandlerArray,
+    SurfaceParticles,
+    Band,
+    ScalarField,
+    Triangulation,
+}
+
+/// Runs the stages of one reconstruction, recording each one's time and peak heap in `stats`.
+pub struct Stages {
+    pub stats: FrameStats,
+    heap: HeapScope,
+}
+
+impl Stages {
+    pub fn start(stats: FrameStats) -> Stages {
+        Stages {
+            stats,
+            heap: HeapScope::start(),
+        }
+    }
+
+    pub fn run<T>(&mut self, stage: Stage, f: impl FnOnce() -> T) -> T {
+        let (t, h) = (&mut self.stats.timings, &mut self.stats.stage_heap);
+        let (time, heap) = match stage {
+            Stage::HandlerArray => (&mut t.handler_array, &mut h.handler_array),
+            Stage::SurfaceParticles => (&mut t.surface_particles, &mut h.surface_particles),
+            Stage::Band => (&mut t.band, &mut h.band),
+            Stage::ScalarField => (&mut t.scalar_field, &mut h.scalar_field),
+            Stage::Triangulation => (&mut t.triangulation, &mut h.triangulation),
+        };
+        staged(time, heap, &self.heap, f)
+    }
 }
 
 /// Peak heap bytes per stage, above the heap held when the reconstruction started (the input

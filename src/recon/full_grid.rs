@@ -3,6 +3,7 @@
 //! The narrow-band engine reports the same grid (Table 1's "grid res." and total vertices)
 //! without ever allocating it.
 
+use crate::config::Params;
 use anyhow::{Result, bail};
 use glam::{IVec3, Vec3};
 
@@ -80,6 +81,12 @@ pub fn check(engine: Engine, grid: &Grid, particles: usize, limit: u64) -> Resul
         );
     }
     Ok(())
+}
+
+/// Every vertex of the particles' bounding box widened by the field's support.
+pub fn band(particles: &[Vec3], params: &Params) -> Result<Band> {
+    let (lo, hi) = bounds(particles);
+    Band::full(lo, hi, params.cell, params.support)
 }
 
 pub fn bounds(particles: &[Vec3]) -> (Vec3, Vec3) {

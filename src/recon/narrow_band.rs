@@ -2,23 +2,22 @@
 //! vertices around them, the handler array for the gather, the scalar field on the band, and
 //! the triangulation of the surface cells.
 
-use anyhow::{Result, bail};
+use anyhow::Result;
 use glam::Vec3;
 
 use super::band::{BRICK_VERTICES, Band};
 use super::band_closure::close_band;
-use super::field_sampling::sample_field;
+use super::field_sampling::{BrickValues, sample_field};
 use super::full_grid::{self, Grid};
 use super::handler_array::HandlerArray;
-use super::scatter::scatter_field;
+use super::scatter;
 use super::surface_particles::{SurfaceCriteria, surface_particles};
 use super::triangulation::{Triangulation, triangulate};
 use crate::config::Params;
-use crate::field::FieldConfig;
 use crate::field::density::particle_volumes;
-use crate::memory::{self, HeapScope};
+use crate::memory;
 use crate::mesh::TriMesh;
-use crate::report::{FrameStats, staged};
+use crate::report::{FrameStats, Stage, Stages};
 
 /// Which grid vertices get a field value.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -64,18 +63,17 @@ pub fn reconstruct_with(
     engine: Engine,
     limits: &Limits,
 ) -> Result<Reconstruction> {
-    let heap = HeapScope::start();
-    let mut stats = FrameStats {
+    let mut stages = Stages::start(FrameStats {
         spacing: params.spacing,
         cell: params.cell,
         particles: particles.len(),
         threads: rayon::current_num_threads(),
         ..FrameStats::default()
-    };
+    });
     if particles.is_empty() {
         return Ok(Reconstruction {
             mesh: TriMesh::default(),
-            stats,
+            stats: stages.stats,
         });
     }
     // The grid of the full-grid engines; the narrow band reports it without allocating it.
@@ -85,108 +83,77 @@ pub fn reconstruct_with(
         full_grid::check(engine, grid, particles.len(), limits.max_memory)?;
     }
     if let Ok(g) = &grid {
-        stats.grid = g.resolution();
+        stages.stats.grid = g.resolution();
     }
-    let t = &mut stats.timings;
-    let h = &mut stats.stage_heap;
+    match engine {
+        Engine::Scatter => scatter::reconstruct(particles, params, &grid?, stages),
+        Engine::NarrowBand | Engine::FullGather => gather(particles, params, engine, stages),
+    }
+}
+
+/// Algorithm 1; with [`Engine::FullGather`], the same gather on every vertex of the grid.
+fn gather(
+    particles: &[Vec3],
+    params: &Params,
+    engine: Engine,
+    mut stages: Stages,
+) -> Result<Reconstruction> {
     let field = params.field.build(params.spacing);
     let field = field.as_ref();
-    // The handler array comes first here: the colour field needs the neighbours too. Its cells
-    // suit both gathers: the colour support (2r), and half the field's support (2r) so that a
-    // brick's reach spans few cells.
-    if engine == Engine::Scatter {
-        // Only SSP07's value is a function of sums a particle can add to, so far.
-        let FieldConfig::Ssp07(ssp07) = &params.field else {
-            bail!(
-                "the scatter engine supports the ssp07 field only, not {}: use the narrow-band or full-gather engine",
-                params.field.kind()
-            );
-        };
-        let field = ssp07.resolve(params.spacing);
-        // No handler array: the scatter needs no neighbour search.
-        let grid = grid?;
-        let (lo, hi) = full_grid::bounds(particles);
-        let band = staged(&mut t.band, &mut h.band, &heap, || {
-            Band::full(lo, hi, params.cell, params.support)
-        })?;
-        let values = staged(&mut t.scalar_field, &mut h.scalar_field, &heap, || {
-            scatter_field(particles, &band, &grid, &field)
-        })?;
-        let triangulation = staged(&mut t.triangulation, &mut h.triangulation, &heap, || {
-            triangulate(&band, &values)
-        });
-        let values_bytes = values.capacity() * BRICK_VERTICES * size_of::<f32>();
-        return Ok(finish(stats, &band, values_bytes, 0, triangulation));
-    }
-    let lookup_cell = params.colour_support.max(params.support / 2.0);
-    let mut handlers = staged(&mut t.handler_array, &mut h.handler_array, &heap, || {
-        HandlerArray::new(particles, lookup_cell)
+    // The handler array comes first here, as the colour field needs the neighbours too.
+    let mut handlers = stages.run(Stage::HandlerArray, || {
+        HandlerArray::new(particles, lookup_cell(params))
     })?;
     if let Some(support) = field.particle_volume_support() {
-        // Per-particle work, like the colour field: counted with t_sp.
-        handlers.volumes = staged(
-            &mut t.surface_particles,
-            &mut h.surface_particles,
-            &heap,
-            || particle_volumes(&handlers, support),
-        );
+        handlers.volumes = stages.run(Stage::SurfaceParticles, || {
+            particle_volumes(&handlers, support)
+        });
     }
-    let band = match engine {
+    let mut band = match engine {
         Engine::NarrowBand => {
-            let criteria = SurfaceCriteria {
-                support: params.colour_support,
-                volume: params.spacing.powi(3),
-                colour_threshold: params.colour_threshold,
-                min_neighbours: params.min_neighbours,
-            };
-            let surface = staged(
-                &mut t.surface_particles,
-                &mut h.surface_particles,
-                &heap,
-                || surface_particles(&handlers, &criteria),
-            );
-            stats.surface_particles = surface.len();
-            staged(&mut t.band, &mut h.band, &heap, || {
+            let surface = stages.run(Stage::SurfaceParticles, || {
+                surface_particles(&handlers, &SurfaceCriteria::of(params))
+            });
+            stages.stats.surface_particles = surface.len();
+            stages.run(Stage::Band, || {
                 Band::around(&surface, params.cell, params.band_half_width)
             })?
         }
         Engine::FullGather | Engine::Scatter => {
-            let (lo, hi) = full_grid::bounds(particles);
-            staged(&mut t.band, &mut h.band, &heap, || {
-                Band::full(lo, hi, params.cell, params.support)
-            })?
+            stages.run(Stage::Band, || full_grid::band(particles, params))?
         }
     };
-    let mut band = band;
-    let mut values = staged(&mut t.scalar_field, &mut h.scalar_field, &heap, || {
-        sample_field(&band, &handlers, field)
-    });
-    stats.closure_vertices = staged(&mut t.band, &mut h.band, &heap, || {
+    let mut values = stages.run(Stage::ScalarField, || sample_field(&band, &handlers, field));
+    stages.stats.closure_vertices = stages.run(Stage::Band, || {
         close_band(&mut band, &mut values, |grown| {
             sample_field(grown, &handlers, field)
         })
     });
-    let values_bytes = values.capacity() * BRICK_VERTICES * size_of::<f32>();
-    let triangulation = staged(&mut t.triangulation, &mut h.triangulation, &heap, || {
-        triangulate(&band, &values)
-    });
+    let triangulation = stages.run(Stage::Triangulation, || triangulate(&band, &values));
     Ok(finish(
-        stats,
+        stages.stats,
         &band,
-        values_bytes,
+        &values,
         handlers.heap_bytes(),
         triangulation,
     ))
 }
 
+/// Lookup cells that suit both gathers: the colour support (2r), and half the field's support
+/// (2r for SSP07) so that a brick's reach spans few cells.
+fn lookup_cell(params: &Params) -> f32 {
+    params.colour_support.max(params.support / 2.0)
+}
+
 /// Counts and memory figures once the mesh exists.
-fn finish(
+pub(super) fn finish(
     mut stats: FrameStats,
     band: &Band,
-    values_bytes: usize,
+    values: &BrickValues,
     handler_bytes: usize,
     triangulation: Triangulation,
 ) -> Reconstruction {
+    let values_bytes = values.capacity() * BRICK_VERTICES * size_of::<f32>();
     let mesh = triangulation.mesh;
     stats.bricks = band.bricks.len();
     stats.surface_vertices = band.surface_vertices();

@@ -11,8 +11,37 @@ use glam::{IVec3, Vec3};
 
 use super::band::{BRICK, BRICK_VERTICES, Band, local_index};
 use super::field_sampling::BrickValues;
-use super::full_grid::Grid;
+use super::full_grid::{self, Grid};
+use super::narrow_band::{Reconstruction, finish};
+use super::triangulation::triangulate;
+use crate::config::Params;
+use crate::field::FieldConfig;
 use crate::field::ssp07::{Ssp07, Sums};
+use crate::report::{Stage, Stages};
+
+/// The scatter engine's reconstruction: no handler array, as the scatter needs no neighbour
+/// search.
+pub fn reconstruct(
+    particles: &[Vec3],
+    params: &Params,
+    grid: &Grid,
+    mut stages: Stages,
+) -> Result<Reconstruction> {
+    // Only SSP07's value is a function of sums a particle can add to, so far.
+    let FieldConfig::Ssp07(ssp07) = &params.field else {
+        bail!(
+            "the scatter engine supports the ssp07 field only, not {}: use the narrow-band or full-gather engine",
+            params.field.kind()
+        );
+    };
+    let field = ssp07.resolve(params.spacing);
+    let band = stages.run(Stage::Band, || full_grid::band(particles, params))?;
+    let values = stages.run(Stage::ScalarField, || {
+        scatter_field(particles, &band, grid, &field)
+    })?;
+    let triangulation = stages.run(Stage::Triangulation, || triangulate(&band, &values));
+    Ok(finish(stages.stats, &band, &values, 0, triangulation))
+}
 
 /// Field values on every vertex of `band` (the full band of `grid`), by scattering.
 pub fn scatter_field(

@@ -9,6 +9,7 @@ use rayon::prelude::*;
 
 use super::handler_array::HandlerArray;
 use super::neighbourhood::{LANES, Neighbourhood};
+use crate::config::Params;
 
 pub struct SurfaceCriteria {
     /// Colour field support h; also the neighbour count radius.
@@ -18,6 +19,17 @@ pub struct SurfaceCriteria {
     /// Threshold on the dimensionless |∇c|·h.
     pub colour_threshold: f32,
     pub min_neighbours: u32,
+}
+
+impl SurfaceCriteria {
+    pub fn of(params: &Params) -> SurfaceCriteria {
+        SurfaceCriteria {
+            support: params.colour_support,
+            volume: params.spacing.powi(3),
+            colour_threshold: params.colour_threshold,
+            min_neighbours: params.min_neighbours,
+        }
+    }
 }
 
 /// Positions of the surface particles, in handler order.
