@@ -9,12 +9,10 @@ use anyhow::{Result, bail};
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
-use rayon::prelude::*;
-
 use super::ScalarField;
 use crate::config::Length;
 use crate::recon::handler_array::HandlerArray;
-use crate::recon::neighbourhood::Neighbourhood;
+use crate::recon::neighbourhood::{Neighbourhood, map_particles};
 
 /// `[field] kind = "density"`: splashsurf's usual settings (smoothing length of two particle
 /// radii, i.e. compact support 2r, and iso 0.6).
@@ -91,22 +89,10 @@ crate::lane_sums! {
 /// Σ_j m W_ij), in handler order.
 pub fn particle_volumes(handlers: &HandlerArray, support: f32) -> Vec<f32> {
     let (inv_h, sigma) = (1.0 / support, sigma(support));
-    handlers
-        .positions
-        .par_iter()
-        .map_init(
-            || (Neighbourhood::default(), None),
-            |(near, cached), &p| {
-                let cell = handlers.cell_of(p);
-                if *cached != Some(cell) {
-                    near.gather_cell(handlers, cell, support);
-                    *cached = Some(cell);
-                }
-                let [w] = spline_sum(near, p - near.anchor, inv_h);
-                1.0 / (sigma * w)
-            },
-        )
-        .collect()
+    map_particles(handlers, support, |near, x| {
+        let [w] = spline_sum(near, x, inv_h);
+        1.0 / (sigma * w)
+    })
 }
 
 impl ScalarField for Density {

@@ -2,6 +2,7 @@
 //! "neighbour lists reused across nearby vertices" that keep the hot loops branch-free.
 
 use glam::{IVec3, Vec3};
+use rayon::prelude::*;
 
 use super::handler_array::HandlerArray;
 
@@ -146,6 +147,31 @@ impl Neighbourhood {
     pub fn is_empty(&self) -> bool {
         self.x.is_empty()
     }
+}
+
+/// Maps every particle, in handler order, to `f(near, x)`: `near` holds the particles within
+/// `radius` of the particle's lookup cell, gathered once per cell and reused by all its
+/// particles, and `x` is the particle's position relative to `near.anchor`.
+pub fn map_particles<T: Send>(
+    handlers: &HandlerArray,
+    radius: f32,
+    f: impl Fn(&Neighbourhood, Vec3) -> T + Sync,
+) -> Vec<T> {
+    handlers
+        .positions
+        .par_iter()
+        .map_init(
+            || (Neighbourhood::default(), None),
+            |(near, cached), &p| {
+                let cell = handlers.cell_of(p);
+                if *cached != Some(cell) {
+                    near.gather_cell(handlers, cell, radius);
+                    *cached = Some(cell);
+                }
+                f(near, p - near.anchor)
+            },
+        )
+        .collect()
 }
 
 /// Defines `fn NAME(near: &Neighbourhood, x: Vec3, PARAM: TYPE) -> [f32; N]`, returning

@@ -5,10 +5,9 @@
 use std::f32::consts::PI;
 
 use glam::Vec3;
-use rayon::prelude::*;
 
 use super::handler_array::HandlerArray;
-use super::neighbourhood::{LANES, Neighbourhood};
+use super::neighbourhood::{LANES, Neighbourhood, map_particles};
 use crate::config::Params;
 
 pub struct SurfaceCriteria {
@@ -39,25 +38,14 @@ pub fn surface_particles(handlers: &HandlerArray, criteria: &SurfaceCriteria) ->
     // ∇c = −V·945/(32π h⁴) Σ (1 − q²)² (x_i − x_j)/h.
     let scale = criteria.volume * 945.0 / (32.0 * PI * h.powi(3));
     let inv_h2 = 1.0 / (h * h);
-    let positions = &handlers.positions;
-    let flags: Vec<bool> = positions
-        .par_iter()
-        .map_init(
-            || (Neighbourhood::default(), None),
-            |(near, cached), &p| {
-                let cell = handlers.cell_of(p);
-                if *cached != Some(cell) {
-                    near.gather_cell(handlers, cell, h);
-                    *cached = Some(cell);
-                }
-                let (gradient, neighbours) = colour_gradient(near, p - near.anchor, inv_h2);
-                // The particle itself is among its neighbours.
-                neighbours - 1.0 < criteria.min_neighbours as f32
-                    || gradient.length() * scale > criteria.colour_threshold
-            },
-        )
-        .collect();
-    positions
+    let flags = map_particles(handlers, h, |near, x| {
+        let (gradient, neighbours) = colour_gradient(near, x, inv_h2);
+        // The particle itself is among its neighbours.
+        neighbours - 1.0 < criteria.min_neighbours as f32
+            || gradient.length() * scale > criteria.colour_threshold
+    });
+    handlers
+        .positions
         .iter()
         .zip(&flags)
         .filter_map(|(&p, &s)| s.then_some(p))
