@@ -9,9 +9,8 @@ use std::fmt::Write as _;
 use std::fs;
 use std::path::{Path, PathBuf};
 use std::process::Command;
-use std::sync::atomic::{AtomicU32, Ordering};
 
-use common::{fixture, lattice_ball};
+use common::{TempDir, entries, fixture, lattice_ball};
 use glam::Vec3;
 
 /// Particle spacing of the test balls.
@@ -20,56 +19,6 @@ const R: f32 = 0.01;
 /// A lattice ball of about 2 100 particles, off the origin so that coordinates have many digits.
 fn ball() -> Vec<Vec3> {
     lattice_ball(Vec3::new(0.31, -0.2, 0.45), 0.08, R)
-}
-
-/// A fresh directory under the system temp dir, removed when dropped.
-struct TempDir(PathBuf);
-
-impl TempDir {
-    fn new(name: &str) -> Self {
-        static NEXT: AtomicU32 = AtomicU32::new(0);
-        let n = NEXT.fetch_add(1, Ordering::Relaxed);
-        let dir =
-            std::env::temp_dir().join(format!("splash-cli-{}-{n}-{name}", std::process::id()));
-        let _ = fs::remove_dir_all(&dir);
-        fs::create_dir_all(&dir).unwrap();
-        Self(dir)
-    }
-
-    fn path(&self, name: &str) -> PathBuf {
-        self.0.join(name)
-    }
-
-    /// Writes `name` (creating parent directories) and returns its path.
-    fn file(&self, name: &str, contents: impl AsRef<[u8]>) -> PathBuf {
-        let path = self.path(name);
-        fs::create_dir_all(path.parent().unwrap()).unwrap();
-        fs::write(&path, contents).unwrap();
-        path
-    }
-
-    /// `name/` as `-o` takes a directory.
-    fn out_dir(&self, name: &str) -> String {
-        format!("{}/", self.path(name).display())
-    }
-}
-
-impl Drop for TempDir {
-    fn drop(&mut self) {
-        let _ = fs::remove_dir_all(&self.0);
-    }
-}
-
-/// Sorted names in `dir`; none if it does not exist.
-fn entries(dir: &Path) -> Vec<String> {
-    let Ok(read) = fs::read_dir(dir) else {
-        return Vec::new();
-    };
-    let mut names: Vec<String> = read
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .collect();
-    names.sort();
-    names
 }
 
 fn ply_binary(points: &[Vec3]) -> Vec<u8> {
