@@ -23,7 +23,8 @@ pub trait ScalarField: Sync {
     fn value(&self, near: &Neighbourhood, x: Vec3) -> f32;
 
     /// For fields that weight each particle by its volume m/ρ: the support of the SPH kernel
-    /// that gives the particles' densities. The engines then fill `Neighbourhood::v`.
+    /// that gives the particles' densities. The engines then put them in channel 0 of
+    /// `Neighbourhood::channels`.
     fn particle_volume_support(&self) -> Option<f32> {
         None
     }

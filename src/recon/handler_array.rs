@@ -19,15 +19,39 @@ pub struct HandlerArray {
     origin: IVec3,
     /// Particle positions in handler order (sorted by cell id).
     pub positions: Vec<Vec3>,
-    /// Per-particle volumes m/ρ in handler order, for fields that weight particles by them;
-    /// empty otherwise.
-    pub volumes: Vec<f32>,
+    /// Per-particle attribute channels, each in handler order, for fields whose kernels carry
+    /// per-particle data (the density field's volumes m/ρ in channel 0; the anisotropic
+    /// field's matrices); empty for the others, whose gathers then copy positions only.
+    pub channels: Vec<Vec<f32>>,
     /// Non-empty cell id → range of `positions`.
     cells: FxHashMap<u64, (u32, u32)>,
 }
 
 impl HandlerArray {
     pub fn new(particles: &[Vec3], cell_size: f32) -> Result<HandlerArray> {
+        Ok(Self::sorted(particles, cell_size)?.0)
+    }
+
+    /// A handler array over `particles` with per-particle `channels` given in the order of
+    /// `particles`, reordered with them into handler order.
+    pub fn with_channels(
+        particles: &[Vec3],
+        cell_size: f32,
+        channels: Vec<Vec<f32>>,
+    ) -> Result<HandlerArray> {
+        let (mut handlers, order) = Self::sorted(particles, cell_size)?;
+        handlers.channels = channels
+            .into_iter()
+            .map(|c| {
+                assert_eq!(c.len(), particles.len(), "one value per particle");
+                order.par_iter().map(|&(_, i)| c[i as usize]).collect()
+            })
+            .collect();
+        Ok(handlers)
+    }
+
+    /// The handler array and its handlers (cell id, index into `particles`), in handler order.
+    fn sorted(particles: &[Vec3], cell_size: f32) -> Result<(HandlerArray, Vec<(u64, u32)>)> {
         if particles.len() >= u32::MAX as usize {
             bail!(
                 "{} particles are more than one frame can hold",
@@ -77,13 +101,14 @@ impl HandlerArray {
         if let Some(last) = handlers.last() {
             cells.insert(last.0, (start as u32, handlers.len() as u32));
         }
-        Ok(HandlerArray {
+        let handlers_array = HandlerArray {
             cell_size,
             origin,
             positions,
-            volumes: Vec::new(),
+            channels: Vec::new(),
             cells,
-        })
+        };
+        Ok((handlers_array, handlers))
     }
 
     pub fn cell_size(&self) -> f32 {
@@ -132,7 +157,11 @@ impl HandlerArray {
 
     pub fn heap_bytes(&self) -> usize {
         self.positions.capacity() * size_of::<Vec3>()
-            + self.volumes.capacity() * size_of::<f32>()
+            + self
+                .channels
+                .iter()
+                .map(|c| c.capacity() * size_of::<f32>())
+                .sum::<usize>()
             + self.cells.capacity() * (size_of::<(u64, (u32, u32))>() + 1)
     }
 }

@@ -105,9 +105,9 @@ fn gather(
         HandlerArray::new(particles, lookup_cell(params))
     })?;
     if let Some(support) = field.particle_volume_support() {
-        handlers.volumes = stages.run(Stage::SurfaceParticles, || {
+        handlers.channels = vec![stages.run(Stage::SurfaceParticles, || {
             particle_volumes(&handlers, support)
-        });
+        })];
     }
     let mut band = match engine {
         Engine::NarrowBand => {

@@ -14,14 +14,16 @@ pub const LANES: usize = 8;
 const FAR: f32 = 1.0e15;
 
 /// Particle positions relative to an anchor point, as three coordinate arrays, with the
-/// particles' volumes where the handler array has them (else `v` stays empty).
+/// particles' attribute channels where the handler array has them (else `channels` stays
+/// empty, and gathering costs nothing more than the positions).
 #[derive(Default)]
 pub struct Neighbourhood {
     pub anchor: Vec3,
     pub x: Vec<f32>,
     pub y: Vec<f32>,
     pub z: Vec<f32>,
-    pub v: Vec<f32>,
+    /// As `HandlerArray::channels`, for the gathered particles; padding holds 0.
+    pub channels: Vec<Vec<f32>>,
 }
 
 impl Neighbourhood {
@@ -51,18 +53,18 @@ impl Neighbourhood {
     ) {
         self.clear(lo);
         let r2 = radius * radius;
-        let with_volumes = !handlers.volumes.is_empty();
+        self.channels.resize_with(handlers.channels.len(), Vec::new);
         handlers.for_each_in_cells(cells.0, cells.1, |range| {
             let start = self.x.len();
-            self.grow(start + range.len(), with_volumes);
+            self.grow(start + range.len());
             // Branch-free compaction: write every particle, advance only past the kept ones.
             let mut n = start;
             for i in range {
                 let p = handlers.positions[i];
                 let q = p - lo;
                 (self.x[n], self.y[n], self.z[n]) = (q.x, q.y, q.z);
-                if with_volumes {
-                    self.v[n] = handlers.volumes[i];
+                for (c, from) in self.channels.iter_mut().zip(&handlers.channels) {
+                    c[n] = from[i];
                 }
                 n += usize::from((p - p.clamp(lo, hi)).length_squared() <= r2);
             }
@@ -77,14 +79,14 @@ impl Neighbourhood {
         let r2 = radius * radius;
         let shift = from.anchor - lo;
         let (blo, bhi) = (Vec3::ZERO, hi - lo);
-        let with_volumes = !from.v.is_empty();
-        self.grow(from.len(), with_volumes);
+        self.channels.resize_with(from.channels.len(), Vec::new);
+        self.grow(from.len());
         let mut n = 0;
         for i in 0..from.len() {
             let p = Vec3::new(from.x[i], from.y[i], from.z[i]) + shift;
             (self.x[n], self.y[n], self.z[n]) = (p.x, p.y, p.z);
-            if with_volumes {
-                self.v[n] = from.v[i];
+            for (c, from) in self.channels.iter_mut().zip(&from.channels) {
+                c[n] = from[i];
             }
             n += usize::from((p - p.clamp(blo, bhi)).length_squared() <= r2);
         }
@@ -92,18 +94,19 @@ impl Neighbourhood {
         self.pad();
     }
 
-    fn grow(&mut self, len: usize, with_volumes: bool) {
+    fn grow(&mut self, len: usize) {
         self.x.resize(len, 0.0);
         self.y.resize(len, 0.0);
         self.z.resize(len, 0.0);
-        if with_volumes {
-            self.v.resize(len, 0.0);
+        for c in &mut self.channels {
+            c.resize(len, 0.0);
         }
     }
 
-    /// Holds exactly `points`, relative to `anchor`.
+    /// Holds exactly `points`, relative to `anchor`, without channels.
     pub fn set(&mut self, anchor: Vec3, points: &[Vec3]) {
         self.clear(anchor);
+        self.channels.clear();
         for &p in points {
             self.push(p - anchor);
         }
@@ -115,14 +118,18 @@ impl Neighbourhood {
         self.x.clear();
         self.y.clear();
         self.z.clear();
-        self.v.clear();
+        for c in &mut self.channels {
+            c.clear();
+        }
     }
 
     fn truncate(&mut self, n: usize) {
         self.x.truncate(n);
         self.y.truncate(n);
         self.z.truncate(n);
-        self.v.truncate(n);
+        for c in &mut self.channels {
+            c.truncate(n);
+        }
     }
 
     fn push(&mut self, p: Vec3) {
@@ -134,8 +141,8 @@ impl Neighbourhood {
     fn pad(&mut self) {
         while !self.x.len().is_multiple_of(LANES) {
             self.push(Vec3::splat(FAR));
-            if !self.v.is_empty() {
-                self.v.push(0.0);
+            for c in &mut self.channels {
+                c.push(0.0);
             }
         }
     }
@@ -176,7 +183,7 @@ pub fn map_particles<T: Send>(
 
 /// Defines `fn NAME(near: &Neighbourhood, x: Vec3, PARAM: TYPE) -> [f32; N]`, returning
 /// Σ_j TERM over the particles of `near`, where TERM sees `dx, dy, dz` = x_j − x (and, when a
-/// fourth name is given, the particle's volume from `near.v`) and gives N values. The sums run in `LANES` independent lanes so that the loop vectorises, compiled
+/// fourth name is given, the particle's channel 0, e.g. its volume) and gives N values. The sums run in `LANES` independent lanes so that the loop vectorises, compiled
 /// once more for AVX2 and chosen at run time; every lane does the same IEEE operations in the
 /// same order on both paths, so results do not depend on the CPU or the thread count. TERM
 /// must give 0 for the padding (beyond any kernel's support) and should not branch.
@@ -202,7 +209,7 @@ macro_rules! lane_sums {
                 let n = near.len() / LANES;
                 for i in 0..n {
                     let r = i * LANES..(i + 1) * LANES;
-                    $( let $v = &near.v[r.clone()]; )?
+                    $( let $v = &near.channels[0][r.clone()]; )?
                     let (cx, cy, cz) = (&near.x[r.clone()], &near.y[r.clone()], &near.z[r]);
                     let mut terms = [[0.0f32; LANES]; $n];
                     for l in 0..LANES {
