@@ -54,7 +54,7 @@ struct ConfigArgs {
     config: Option<PathBuf>,
 
     /// Scalar field, with its defaults unless the config file sets the same kind: ssp07
-    /// (default), zb05, density, blobby or metaball.
+    /// (default), zb05, density, blobby, metaball or anisotropic.
     #[arg(long)]
     field: Option<String>,
 

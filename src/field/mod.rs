@@ -1,6 +1,7 @@
 //! Scalar fields whose zero level set is the fluid surface. Every engine samples a field through
 //! [`ScalarField`], and the Marching Cubes code never asks which one it is.
 
+pub mod anisotropic;
 pub mod blobby;
 pub mod density;
 pub mod metaball;
@@ -11,6 +12,7 @@ use anyhow::{Result, bail};
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
+use crate::recon::handler_array::HandlerArray;
 use crate::recon::neighbourhood::Neighbourhood;
 
 pub trait ScalarField: Sync {
@@ -28,6 +30,20 @@ pub trait ScalarField: Sync {
     fn particle_volume_support(&self) -> Option<f32> {
         None
     }
+
+    /// For fields whose kernels adapt to the particles around them (the anisotropic field):
+    /// the field fitted to the frame in `handlers`, to be sampled instead of `self` and
+    /// gathered from the handler array it comes with. `None` for the others.
+    fn fit(&self, _handlers: &HandlerArray) -> Option<Result<Fitted>> {
+        None
+    }
+}
+
+/// A field fitted to one frame, with the particles its kernels sit on: their handler array,
+/// with the per-particle data the field reads in its channels.
+pub struct Fitted {
+    pub field: Box<dyn ScalarField>,
+    pub handlers: HandlerArray,
 }
 
 /// The `[field]` table of a configuration: `kind` picks the field, the other keys are its own.
@@ -39,6 +55,7 @@ pub enum FieldConfig {
     Density(density::DensityConfig),
     Blobby(blobby::BlobbyConfig),
     Metaball(metaball::MetaballConfig),
+    Anisotropic(anisotropic::AnisotropicConfig),
 }
 
 impl Default for FieldConfig {
@@ -48,7 +65,14 @@ impl Default for FieldConfig {
 }
 
 impl FieldConfig {
-    pub const KINDS: [&str; 5] = ["ssp07", "zb05", "density", "blobby", "metaball"];
+    pub const KINDS: [&str; 6] = [
+        "ssp07",
+        "zb05",
+        "density",
+        "blobby",
+        "metaball",
+        "anisotropic",
+    ];
 
     /// A field of the named kind with its defaults (`--field NAME`).
     pub fn named(kind: &str) -> Result<FieldConfig> {
@@ -58,6 +82,7 @@ impl FieldConfig {
             "density" => FieldConfig::Density(Default::default()),
             "blobby" => FieldConfig::Blobby(Default::default()),
             "metaball" => FieldConfig::Metaball(Default::default()),
+            "anisotropic" => FieldConfig::Anisotropic(Default::default()),
             _ => bail!(
                 "unknown field '{kind}': use one of {}",
                 Self::KINDS.join(", ")
@@ -72,6 +97,7 @@ impl FieldConfig {
             FieldConfig::Density(_) => "density",
             FieldConfig::Blobby(_) => "blobby",
             FieldConfig::Metaball(_) => "metaball",
+            FieldConfig::Anisotropic(_) => "anisotropic",
         }
     }
 
@@ -82,6 +108,7 @@ impl FieldConfig {
             FieldConfig::Density(c) => c.validate(),
             FieldConfig::Blobby(c) => c.validate(),
             FieldConfig::Metaball(c) => c.validate(),
+            FieldConfig::Anisotropic(c) => c.validate(),
         }
     }
 
@@ -93,6 +120,7 @@ impl FieldConfig {
             FieldConfig::Density(c) => Box::new(c.resolve(r)),
             FieldConfig::Blobby(c) => Box::new(c.resolve(r)),
             FieldConfig::Metaball(c) => Box::new(c.resolve(r)),
+            FieldConfig::Anisotropic(c) => Box::new(c.resolve(r)),
         }
     }
 }

@@ -109,6 +109,19 @@ fn gather(
             particle_volumes(&handlers, support)
         })];
     }
+    // Fields with adaptive kernels fit them now, and sample from their own handler array.
+    let fitted = stages
+        .run(Stage::ScalarField, || field.fit(&handlers))
+        .transpose()?;
+    let (field, samples) = match &fitted {
+        Some(f) => (f.field.as_ref(), &f.handlers),
+        None => (field, &handlers),
+    };
+    // The full grid reaches as far as the fitted kernels do.
+    let params = &Params {
+        support: field.support(),
+        ..params.clone()
+    };
     let mut band = match engine {
         Engine::NarrowBand => {
             let surface = stages.run(Stage::SurfaceParticles, || {
@@ -123,10 +136,10 @@ fn gather(
             stages.run(Stage::Band, || full_grid::band(particles, params))?
         }
     };
-    let mut values = stages.run(Stage::ScalarField, || sample_field(&band, &handlers, field));
+    let mut values = stages.run(Stage::ScalarField, || sample_field(&band, samples, field));
     stages.stats.closure_vertices = stages.run(Stage::Band, || {
         close_band(&mut band, &mut values, |grown| {
-            sample_field(grown, &handlers, field)
+            sample_field(grown, samples, field)
         })
     });
     let triangulation = stages.run(Stage::Triangulation, || triangulate(&band, &values));
@@ -134,7 +147,7 @@ fn gather(
         stages.stats,
         &band,
         &values,
-        handlers.heap_bytes(),
+        handlers.heap_bytes() + fitted.as_ref().map_or(0, |f| f.handlers.heap_bytes()),
         triangulation,
     ))
 }
