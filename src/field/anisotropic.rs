@@ -151,26 +151,10 @@ impl Anisotropic {
     /// The kernel of the particle at `p`, from its neighbours in `near` (which holds all
     /// within h, `p` itself included).
     pub fn kernel(&self, near: &Neighbourhood, p: Vec3) -> Kernel {
-        let x = p - near.anchor;
         let inv_h = 1.0 / self.h;
-        let (mut sw, mut count) = (0.0f32, 0u32);
-        let mut m = Vec3::ZERO;
-        let mut s = [0.0f32; 6];
-        for i in 0..near.len() {
-            // Offsets in units of h.
-            let d = (Vec3::new(near.x[i], near.y[i], near.z[i]) - x) * inv_h;
-            let q = d.length();
-            let w = (1.0 - q * q * q).max(0.0);
-            count += u32::from(w > 0.0);
-            sw += w;
-            m += w * d;
-            s[0] += w * d.x * d.x;
-            s[1] += w * d.y * d.y;
-            s[2] += w * d.z * d.z;
-            s[3] += w * d.x * d.y;
-            s[4] += w * d.x * d.z;
-            s[5] += w * d.y * d.z;
-        }
+        let [sw, mx, my, mz, sxx, syy, szz, sxy, sxz, syz, count] =
+            moments(near, p - near.anchor, inv_h);
+        let (m, s) = (Vec3::new(mx, my, mz), [sxx, syy, szz, sxy, sxz, syz]);
         // `p` itself is in `near`, so sw ≥ 1.
         let m = m / sw;
         let c = [
@@ -182,7 +166,7 @@ impl Anisotropic {
             s[5] / sw - m.y * m.z,
         ];
         let centre = p + self.smoothing * m * self.h;
-        let neighbours = count.saturating_sub(1);
+        let neighbours = count as u32 - 1;
         let (axes, sigma) = symmetric_eigen(c);
         // Σ̃ in units of h², largest first.
         let stretch = if neighbours > self.n_eps && sigma[0] > 0.0 {
@@ -221,6 +205,30 @@ impl Anisotropic {
                 },
             )
             .collect()
+    }
+}
+
+// Σ w, Σ w d, Σ w d dᵀ (xx, yy, zz, xy, xz, yz) and the count of particles within h, with
+// d = (x_j − x)/h and w = 1 − |d|³ inside h.
+crate::lane_sums! {
+    fn moments(inv_h: f32) -> [11] |dx, dy, dz| {
+        let (dx, dy, dz) = (dx * inv_h, dy * inv_h, dz * inv_h);
+        let q = (dx * dx + dy * dy + dz * dz).sqrt();
+        let w = (1.0 - q * q * q).max(0.0);
+        let (wx, wy, wz) = (w * dx, w * dy, w * dz);
+        [
+            w,
+            wx,
+            wy,
+            wz,
+            wx * dx,
+            wy * dy,
+            wz * dz,
+            wx * dy,
+            wx * dz,
+            wy * dz,
+            f32::from(u8::from(w > 0.0)),
+        ]
     }
 }
 
