@@ -89,7 +89,7 @@ fn gathered_anisotropic_matches_brute_force() {
     let values = sample_field(&band, handlers, field);
     // Every particle, with its channels.
     let mut all = Neighbourhood::default();
-    all.gather_box(handlers, Vec3::splat(-0.1), Vec3::splat(0.1), 0.0);
+    all.gather_box(handlers, Vec3::splat(-0.1), Vec3::splat(0.1), 0.0, None);
     assert_eq!(all.len().div_ceil(8), ps.len().div_ceil(8));
     let (mut checked, mut inside) = (0, 0);
     for (b, brick) in band.bricks.iter().enumerate() {

@@ -136,8 +136,10 @@ pub struct Anisotropic {
     pub support: f32,
 }
 
-/// The channels of a fitted kernel: G's entries xx, yy, zz, xy, xz, yz, then V σ det G.
-const CHANNELS: usize = 7;
+/// The channels of a fitted kernel: G's entries xx, yy, zz, xy, xz, yz, V σ det G, and its
+/// reach.
+const CHANNELS: usize = 8;
+const REACH: usize = 7;
 
 /// One particle's kernel: smoothed centre, G, and how far it reaches.
 pub struct Kernel {
@@ -310,6 +312,7 @@ impl ScalarField for Anisotropic {
                 g.z_axis.x,
                 g.z_axis.y,
                 v * 8.0 / PI * k.det,
+                k.reach,
             ];
             for (c, v) in channels.iter_mut().zip(values) {
                 c.push(v);
@@ -327,9 +330,13 @@ impl ScalarField for Anisotropic {
         )
     }
 
+    fn reach_channel(&self) -> Option<usize> {
+        Some(REACH)
+    }
+
     /// Needs the channels of [`fit`](ScalarField::fit) in `near`.
     fn value(&self, near: &Neighbourhood, x: Vec3) -> f32 {
-        let [gxx, gyy, gzz, gxy, gxz, gyz, w] =
+        let [gxx, gyy, gzz, gxy, gxz, gyz, w, _] =
             <&[Vec<f32>; CHANNELS]>::try_from(near.channels.as_slice())
                 .expect("the anisotropic field samples fitted kernels only");
         let mut sum = 0.0;

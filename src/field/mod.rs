@@ -37,6 +37,13 @@ pub trait ScalarField: Sync {
     fn fit(&self, _handlers: &HandlerArray) -> Option<Result<Fitted>> {
         None
     }
+
+    /// For fields whose particles reach different distances: the channel that holds each
+    /// particle's own reach (at most [`support`](Self::support)). The sampling then narrows
+    /// each vertex's list to the particles that reach it.
+    fn reach_channel(&self) -> Option<usize> {
+        None
+    }
 }
 
 /// A field fitted to one frame, with the particles its kernels sit on: their handler array,

@@ -20,6 +20,7 @@ pub fn sample_field<F: ScalarField + ?Sized>(
 ) -> BrickValues {
     let cell = band.cell;
     let reach = field.support();
+    let own_reach = field.reach_channel();
     band.bricks
         .par_iter()
         .zip(&band.masks)
@@ -34,6 +35,7 @@ pub fn sample_field<F: ScalarField + ?Sized>(
                     corner(IVec3::ZERO),
                     corner(IVec3::splat(BRICK - 1)),
                     reach,
+                    own_reach,
                 );
                 // Two levels of narrowing, 4³ then 2³ vertices, keep each list within a few
                 // percent of the particles really in reach.
@@ -41,13 +43,19 @@ pub fn sample_field<F: ScalarField + ?Sized>(
                     if !has_vertices(mask, block, 4) {
                         continue;
                     }
-                    block_near.filter_box(brick_near, corner(block), corner(block + 3), reach);
+                    block_near.filter_box(
+                        brick_near,
+                        corner(block),
+                        corner(block + 3),
+                        reach,
+                        own_reach,
+                    );
                     for group in cubes(block, 4, 2) {
                         if !has_vertices(mask, group, 2) {
                             continue;
                         }
                         let glo = corner(group);
-                        group_near.filter_box(block_near, glo, corner(group + 1), reach);
+                        group_near.filter_box(block_near, glo, corner(group + 1), reach, own_reach);
                         for l in cubes(group, 2, 1) {
                             let i = local_index(l);
                             if mask[l.z as usize] >> (i % 64) & 1 == 1 {

@@ -27,10 +27,18 @@ pub struct Neighbourhood {
 }
 
 impl Neighbourhood {
-    /// Gathers every particle within `radius` of the box `[lo, hi]`, relative to `lo`.
-    pub fn gather_box(&mut self, handlers: &HandlerArray, lo: Vec3, hi: Vec3, radius: f32) {
+    /// Gathers every particle within `radius` of the box `[lo, hi]`, relative to `lo`; with
+    /// `own_reach`, within the smaller of `radius` and each particle's value in that channel.
+    pub fn gather_box(
+        &mut self,
+        handlers: &HandlerArray,
+        lo: Vec3,
+        hi: Vec3,
+        radius: f32,
+        own_reach: Option<usize>,
+    ) {
         let (a, b) = (handlers.cell_of(lo - radius), handlers.cell_of(hi + radius));
-        self.gather(handlers, (a, b), lo, hi, radius);
+        self.gather(handlers, (a, b), lo, hi, radius, own_reach);
     }
 
     /// Gathers every particle within `radius` of the handler array's lookup cell `cell`,
@@ -40,7 +48,7 @@ impl Neighbourhood {
         let lo = cell.as_vec3() * size;
         // The cells within reach; the box's own edges need not round up a cell further.
         let k = IVec3::splat((radius / size).ceil() as i32);
-        self.gather(handlers, (cell - k, cell + k), lo, lo + size, radius);
+        self.gather(handlers, (cell - k, cell + k), lo, lo + size, radius, None);
     }
 
     fn gather(
@@ -50,9 +58,13 @@ impl Neighbourhood {
         lo: Vec3,
         hi: Vec3,
         radius: f32,
+        own_reach: Option<usize>,
     ) {
         self.clear(lo);
-        let r2 = radius * radius;
+        let reach = |i: usize| match own_reach {
+            Some(c) => handlers.channels[c][i].min(radius),
+            None => radius,
+        };
         self.channels.resize_with(handlers.channels.len(), Vec::new);
         handlers.for_each_in_cells(cells.0, cells.1, |range| {
             let start = self.x.len();
@@ -66,17 +78,30 @@ impl Neighbourhood {
                 for (c, from) in self.channels.iter_mut().zip(&handlers.channels) {
                     c[n] = from[i];
                 }
-                n += usize::from((p - p.clamp(lo, hi)).length_squared() <= r2);
+                let r = reach(i);
+                n += usize::from((p - p.clamp(lo, hi)).length_squared() <= r * r);
             }
             self.truncate(n);
         });
         self.pad();
     }
 
-    /// Keeps from `from` the particles within `radius` of the box `[lo, hi]`, relative to `lo`.
-    pub fn filter_box(&mut self, from: &Neighbourhood, lo: Vec3, hi: Vec3, radius: f32) {
+    /// Keeps from `from` the particles within `radius` of the box `[lo, hi]`, relative to `lo`;
+    /// with `own_reach`, within the smaller of `radius` and each particle's value in that
+    /// channel.
+    pub fn filter_box(
+        &mut self,
+        from: &Neighbourhood,
+        lo: Vec3,
+        hi: Vec3,
+        radius: f32,
+        own_reach: Option<usize>,
+    ) {
         self.clear(lo);
-        let r2 = radius * radius;
+        let reach = |i: usize| match own_reach {
+            Some(c) => from.channels[c][i].min(radius),
+            None => radius,
+        };
         let shift = from.anchor - lo;
         let (blo, bhi) = (Vec3::ZERO, hi - lo);
         self.channels.resize_with(from.channels.len(), Vec::new);
@@ -88,7 +113,8 @@ impl Neighbourhood {
             for (c, from) in self.channels.iter_mut().zip(&from.channels) {
                 c[n] = from[i];
             }
-            n += usize::from((p - p.clamp(blo, bhi)).length_squared() <= r2);
+            let r = reach(i);
+            n += usize::from((p - p.clamp(blo, bhi)).length_squared() <= r * r);
         }
         self.truncate(n);
         self.pad();
