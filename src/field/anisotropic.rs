@@ -32,14 +32,13 @@ use std::f32::consts::PI;
 
 use anyhow::{Result, bail};
 use glam::{Mat3, Vec3};
-use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::density::particle_volumes;
 use super::{Fitted, ScalarField};
 use crate::config::Length;
 use crate::recon::handler_array::HandlerArray;
-use crate::recon::neighbourhood::Neighbourhood;
+use crate::recon::neighbourhood::{Neighbourhood, map_particles};
 
 /// `[field] kind = "anisotropic"`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -150,12 +149,11 @@ pub struct Kernel {
 }
 
 impl Anisotropic {
-    /// The kernel of the particle at `p`, from its neighbours in `near` (which holds all
-    /// within h, `p` itself included).
-    pub fn kernel(&self, near: &Neighbourhood, p: Vec3) -> Kernel {
+    /// The kernel of the particle at `x` (relative to `near.anchor`), from its neighbours in
+    /// `near` (which holds all within h, the particle itself included).
+    pub fn kernel(&self, near: &Neighbourhood, x: Vec3) -> Kernel {
         let inv_h = 1.0 / self.h;
-        let [sw, mx, my, mz, sxx, syy, szz, sxy, sxz, syz, count] =
-            moments(near, p - near.anchor, inv_h);
+        let [sw, mx, my, mz, sxx, syy, szz, sxy, sxz, syz, count] = moments(near, x, inv_h);
         let (m, s) = (Vec3::new(mx, my, mz), [sxx, syy, szz, sxy, sxz, syz]);
         // `p` itself is in `near`, so sw ≥ 1.
         let m = m / sw;
@@ -167,7 +165,7 @@ impl Anisotropic {
             s[4] / sw - m.x * m.z,
             s[5] / sw - m.y * m.z,
         ];
-        let centre = p + self.smoothing * m * self.h;
+        let centre = near.anchor + x + self.smoothing * m * self.h;
         let neighbours = count as u32 - 1;
         let (axes, sigma) = symmetric_eigen(c);
         // Σ̃ in units of h², largest first.
@@ -192,21 +190,7 @@ impl Anisotropic {
 
     /// Every particle's kernel, in handler order.
     pub fn kernels(&self, handlers: &HandlerArray) -> Vec<Kernel> {
-        handlers
-            .positions
-            .par_iter()
-            .map_init(
-                || (Neighbourhood::default(), None),
-                |(near, cached), &p| {
-                    let cell = handlers.cell_of(p);
-                    if *cached != Some(cell) {
-                        near.gather_cell(handlers, cell, self.h);
-                        *cached = Some(cell);
-                    }
-                    self.kernel(near, p)
-                },
-            )
-            .collect()
+        map_particles(handlers, self.h, |near, x| self.kernel(near, x))
     }
 }
 
