@@ -343,7 +343,8 @@ impl Batch {
             .context("reconstruction failed")?;
         let mut mesh = rec.mesh;
         let mut vertex_velocities = velocities
-            .map(|v| interpolate_velocities(&mesh.vertices, &particles, &v, params.support));
+            .map(|v| interpolate_velocities(&mesh.vertices, &particles, &v, params.support))
+            .transpose()?;
         drop(particles);
         let start = Instant::now();
         if let Some(axis) = self.up_axis {
