@@ -69,17 +69,12 @@ impl Neighbourhood {
         handlers.for_each_in_cells(cells.0, cells.1, |range| {
             let start = self.x.len();
             self.grow(start + range.len());
-            // Branch-free compaction: write every particle, advance only past the kept ones.
             let mut n = start;
             for i in range {
                 let p = handlers.positions[i];
-                let q = p - lo;
-                (self.x[n], self.y[n], self.z[n]) = (q.x, q.y, q.z);
-                for (c, from) in self.channels.iter_mut().zip(&handlers.channels) {
-                    c[n] = from[i];
-                }
                 let r = reach(i);
-                n += usize::from((p - p.clamp(lo, hi)).length_squared() <= r * r);
+                let kept = (p - p.clamp(lo, hi)).length_squared() <= r * r;
+                n = self.put(n, p - lo, kept, |c| handlers.channels[c][i]);
             }
             self.truncate(n);
         });
@@ -109,15 +104,24 @@ impl Neighbourhood {
         let mut n = 0;
         for i in 0..from.len() {
             let p = Vec3::new(from.x[i], from.y[i], from.z[i]) + shift;
-            (self.x[n], self.y[n], self.z[n]) = (p.x, p.y, p.z);
-            for (c, from) in self.channels.iter_mut().zip(&from.channels) {
-                c[n] = from[i];
-            }
             let r = reach(i);
-            n += usize::from((p - p.clamp(blo, bhi)).length_squared() <= r * r);
+            let kept = (p - p.clamp(blo, bhi)).length_squared() <= r * r;
+            n = self.put(n, p, kept, |c| from.channels[c][i]);
         }
         self.truncate(n);
         self.pad();
+    }
+
+    /// Branch-free compaction: writes a particle (position `q`, channel values `channel(c)`)
+    /// into slot `n` and returns the next free slot, which stays `n` unless it is `kept`, so
+    /// that the next particle overwrites a rejected one.
+    #[inline(always)]
+    fn put(&mut self, n: usize, q: Vec3, kept: bool, channel: impl Fn(usize) -> f32) -> usize {
+        (self.x[n], self.y[n], self.z[n]) = (q.x, q.y, q.z);
+        for (c, values) in self.channels.iter_mut().enumerate() {
+            values[n] = channel(c);
+        }
+        n + usize::from(kept)
     }
 
     fn grow(&mut self, len: usize) {
