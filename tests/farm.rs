@@ -165,6 +165,13 @@ fn args(items: &[&dyn AsRef<std::ffi::OsStr>]) -> Vec<OsString> {
     items.iter().map(|a| a.as_ref().to_owned()).collect()
 }
 
+/// `args` followed by the quick reconstruction flags.
+fn fast(items: &[&dyn AsRef<std::ffi::OsStr>]) -> Vec<OsString> {
+    let mut all = args(items);
+    all.extend(FAST.iter().map(OsString::from));
+    all
+}
+
 /// Frames `numbers` of a small ball (moving by frame) as `dir/in/f_{n}.ply`.
 fn sequence(dir: &TempDir, numbers: impl IntoIterator<Item = u64>) -> Vec<PathBuf> {
     let ball = small_ball();
@@ -185,21 +192,7 @@ fn frames_run_in_number_order_from_directories_and_patterns() {
     dir.file("in/.f_3.ply.tmp-1-0", "a hidden temporary");
     let input = dir.path("in");
     let out = format!("{}/", dir.path("out").display());
-    let run = splash_env(
-        &args(&[
-            &input,
-            &"-o",
-            &out,
-            &"--log-format",
-            &"json",
-            &FAST[0],
-            &FAST[1],
-            &FAST[2],
-            &FAST[3],
-        ]),
-        &[],
-    )
-    .ok();
+    let run = splash_env(&fast(&[&input, &"-o", &out, &"--log-format", &"json"]), &[]).ok();
     assert_eq!(run.frames(), [2, 9, 10, 100]);
     // Directory outputs pad frame numbers to 4 digits, for Blender's sequence importers.
     assert_eq!(
@@ -209,17 +202,7 @@ fn frames_run_in_number_order_from_directories_and_patterns() {
     let pattern = format!("{}/f_*.ply", input.display());
     let named = format!("{}/fluid_{{frame:04}}.ply", dir.path("pattern").display());
     let run = splash_env(
-        &args(&[
-            &pattern,
-            &"-o",
-            &named,
-            &"--log-format",
-            &"json",
-            &FAST[0],
-            &FAST[1],
-            &FAST[2],
-            &FAST[3],
-        ]),
+        &fast(&[&pattern, &"-o", &named, &"--log-format", &"json"]),
         &[],
     )
     .ok();
@@ -234,28 +217,14 @@ fn frames_run_in_number_order_from_directories_and_patterns() {
         ]
     );
     let nothing = format!("{}/g_*.ply", input.display());
-    splash_env(
-        &args(&[&nothing, &FAST[0], &FAST[1], &FAST[2], &FAST[3]]),
-        &[],
-    )
-    .failed()
-    .has("matches no file");
+    splash_env(&fast(&[&nothing]), &[])
+        .failed()
+        .has("matches no file");
     // f_9 and f_0009 would both be f_0009.obj: refused before any work.
     dir.file("in/f_0009.ply", ply(&small_ball(), None));
-    let run = splash_env(
-        &args(&[
-            &input,
-            &"-o",
-            &dir.path("clash/"),
-            &FAST[0],
-            &FAST[1],
-            &FAST[2],
-            &FAST[3],
-        ]),
-        &[],
-    )
-    .failed()
-    .has("would both be written to");
+    let run = splash_env(&fast(&[&input, &"-o", &dir.path("clash/")]), &[])
+        .failed()
+        .has("would both be written to");
     assert!(!run.stderr.contains("[1/"), "{}", run.stderr);
     assert!(!dir.path("clash").exists());
 }
@@ -266,7 +235,7 @@ fn ranges_and_shards_cover_every_frame_exactly_once() {
     sequence(&dir, 1..=12);
     let input = dir.path("in");
     let run = splash_env(
-        &args(&[
+        &fast(&[
             &input,
             &"--frames",
             &"2-8x3,11",
@@ -274,10 +243,6 @@ fn ranges_and_shards_cover_every_frame_exactly_once() {
             &dir.path("range/"),
             &"--log-format",
             &"json",
-            &FAST[0],
-            &FAST[1],
-            &FAST[2],
-            &FAST[3],
         ]),
         &[],
     )
@@ -288,7 +253,7 @@ fn ranges_and_shards_cover_every_frame_exactly_once() {
         for k in 1..=n {
             let shard = format!("{k}/{n}");
             let run = splash_env(
-                &args(&[
+                &fast(&[
                     &input,
                     &"--shard",
                     &shard,
@@ -296,10 +261,6 @@ fn ranges_and_shards_cover_every_frame_exactly_once() {
                     &dir.path(&format!("n{n}/")),
                     &"--log-format",
                     &"json",
-                    &FAST[0],
-                    &FAST[1],
-                    &FAST[2],
-                    &FAST[3],
                 ]),
                 &[],
             )
@@ -314,7 +275,7 @@ fn ranges_and_shards_cover_every_frame_exactly_once() {
     }
     // auto/N: SLURM array tasks 1..=4 (SLURM_ARRAY_TASK_MIN=1); task 3 is shard 3/4.
     let run = splash_env(
-        &args(&[
+        &fast(&[
             &input,
             &"--shard",
             &"auto/4",
@@ -322,24 +283,15 @@ fn ranges_and_shards_cover_every_frame_exactly_once() {
             &dir.path("auto/"),
             &"--log-format",
             &"json",
-            &FAST[0],
-            &FAST[1],
-            &FAST[2],
-            &FAST[3],
         ]),
         &[("SLURM_ARRAY_TASK_ID", "3"), ("SLURM_ARRAY_TASK_MIN", "1")],
     )
     .ok();
     assert_eq!(run.frames(), [3, 7, 11]);
     assert_eq!(run.events("start")[0].get("shard"), "\"3/4\"");
-    splash_env(
-        &args(&[
-            &input, &"--shard", &"auto/4", &FAST[0], &FAST[1], &FAST[2], &FAST[3],
-        ]),
-        &[],
-    )
-    .failed()
-    .has("SLURM_ARRAY_TASK_ID is not set");
+    splash_env(&fast(&[&input, &"--shard", &"auto/4"]), &[])
+        .failed()
+        .has("SLURM_ARRAY_TASK_ID is not set");
 }
 
 /// A frame the reconstruction takes a while on: the real fixture, cell r/2.
@@ -430,38 +382,17 @@ fn a_bad_frame_is_summarised_and_fail_fast_stops() {
         "ply\nformat ascii 1.0\nelement vertex 1\nend_header\n1 2 3\n",
     );
     let input = dir.path("in");
-    let run = splash_env(
-        &args(&[
-            &input,
-            &"-o",
-            &dir.path("out/"),
-            &FAST[0],
-            &FAST[1],
-            &FAST[2],
-            &FAST[3],
-        ]),
-        &[],
-    )
-    .failed()
-    .has("1 of 4 frames failed:")
-    .has("f_3.ply: cannot read particles");
+    let run = splash_env(&fast(&[&input, &"-o", &dir.path("out/")]), &[])
+        .failed()
+        .has("1 of 4 frames failed:")
+        .has("f_3.ply: cannot read particles");
     assert!(run.stderr.contains("[4/4]"), "{}", run.stderr);
     assert_eq!(
         entries(&dir.path("out")),
         ["f_0001.obj", "f_0002.obj", "f_0004.obj"]
     );
     let run = splash_env(
-        &args(&[
-            &input,
-            &"-o",
-            &dir.path("json/"),
-            &"--log-format",
-            &"json",
-            &FAST[0],
-            &FAST[1],
-            &FAST[2],
-            &FAST[3],
-        ]),
+        &fast(&[&input, &"-o", &dir.path("json/"), &"--log-format", &"json"]),
         &[],
     )
     .failed();
@@ -474,16 +405,7 @@ fn a_bad_frame_is_summarised_and_fail_fast_stops() {
         "{failed}"
     );
     splash_env(
-        &args(&[
-            &input,
-            &"-o",
-            &dir.path("ff/"),
-            &"--fail-fast",
-            &FAST[0],
-            &FAST[1],
-            &FAST[2],
-            &FAST[3],
-        ]),
+        &fast(&[&input, &"-o", &dir.path("ff/"), &"--fail-fast"]),
         &[],
     )
     .failed()
@@ -491,20 +413,7 @@ fn a_bad_frame_is_summarised_and_fail_fast_stops() {
     .has("1 frames not attempted");
     assert_eq!(entries(&dir.path("ff")), ["f_0001.obj", "f_0002.obj"]);
     // Quiet: only the failure.
-    let run = splash_env(
-        &args(&[
-            &input,
-            &"-o",
-            &dir.path("q/"),
-            &"-q",
-            &FAST[0],
-            &FAST[1],
-            &FAST[2],
-            &FAST[3],
-        ]),
-        &[],
-    )
-    .failed();
+    let run = splash_env(&fast(&[&input, &"-o", &dir.path("q/"), &"-q"]), &[]).failed();
     assert_eq!(run.stderr.lines().count(), 3, "{}", run.stderr);
 }
 
@@ -512,19 +421,7 @@ fn a_bad_frame_is_summarised_and_fail_fast_stops() {
 fn plain_log_lines_have_time_and_counts() {
     let dir = TempDir::new("plain");
     sequence(&dir, [5]);
-    let run = splash_env(
-        &args(&[
-            &dir.path("in"),
-            &"-o",
-            &dir.path("out/"),
-            &FAST[0],
-            &FAST[1],
-            &FAST[2],
-            &FAST[3],
-        ]),
-        &[],
-    )
-    .ok();
+    let run = splash_env(&fast(&[&dir.path("in"), &"-o", &dir.path("out/")]), &[]).ok();
     let line = run.stderr.lines().find(|l| l.contains("[1/1]")).unwrap();
     // 2025-01-31T12:00:00Z [1/1] …/f_5.ply -> …/f_0005.obj: 257 particles, 1234 triangles, 0.01 s
     let (time, rest) = line.split_once(' ').unwrap();
@@ -584,19 +481,7 @@ fn meshes_read_back_equal_with_velocities_and_axes() {
     assert!(mesh.triangles.len() > 100);
 
     // OBJ through tobj: the same floats (shortest round-trip text) and faces.
-    splash_env(
-        &args(&[
-            &input,
-            &"-o",
-            &dir.path("obj/"),
-            &FAST[0],
-            &FAST[1],
-            &FAST[2],
-            &FAST[3],
-        ]),
-        &[],
-    )
-    .ok();
+    splash_env(&fast(&[&input, &"-o", &dir.path("obj/")]), &[]).ok();
     let options = tobj::LoadOptions {
         single_index: true,
         ..Default::default()
@@ -614,7 +499,7 @@ fn meshes_read_back_equal_with_velocities_and_axes() {
     // PLY with velocities: positions, normals and faces as in memory; every vertex moves with
     // the particles' uniform velocity.
     let run = splash_env(
-        &args(&[
+        &fast(&[
             &input,
             &"-o",
             &dir.path("ply/"),
@@ -622,10 +507,6 @@ fn meshes_read_back_equal_with_velocities_and_axes() {
             &"ply",
             &"--attributes",
             &"velocity",
-            &FAST[0],
-            &FAST[1],
-            &FAST[2],
-            &FAST[3],
         ]),
         &[],
     )
@@ -659,7 +540,7 @@ fn meshes_read_back_equal_with_velocities_and_axes() {
 
     // --up-axis z: (x, y, z) → (x, −z, y) for positions, normals and velocities.
     splash_env(
-        &args(&[
+        &fast(&[
             &input,
             &"-o",
             &dir.path("up/"),
@@ -669,10 +550,6 @@ fn meshes_read_back_equal_with_velocities_and_axes() {
             &"velocity",
             &"--up-axis",
             &"z",
-            &FAST[0],
-            &FAST[1],
-            &FAST[2],
-            &FAST[3],
         ]),
         &[],
     )
@@ -690,7 +567,7 @@ fn meshes_read_back_equal_with_velocities_and_axes() {
     // Velocities need an input that has them, and a PLY output.
     let plain = dir.file("plain/f_1.ply", ply(&particles, None));
     splash_env(
-        &args(&[
+        &fast(&[
             &plain,
             &"-o",
             &dir.path("p/"),
@@ -698,27 +575,13 @@ fn meshes_read_back_equal_with_velocities_and_axes() {
             &"ply",
             &"--attributes",
             &"velocity",
-            &FAST[0],
-            &FAST[1],
-            &FAST[2],
-            &FAST[3],
         ]),
         &[],
     )
     .failed()
     .has("none of the properties vx vy vz or velocity_x velocity_y velocity_z");
     splash_env(
-        &args(&[
-            &input,
-            &"-o",
-            &dir.path("o/"),
-            &"--attributes",
-            &"velocity",
-            &FAST[0],
-            &FAST[1],
-            &FAST[2],
-            &FAST[3],
-        ]),
+        &fast(&[&input, &"-o", &dir.path("o/"), &"--attributes", &"velocity"]),
         &[],
     )
     .failed()
