@@ -100,8 +100,8 @@ impl ScalarField for Density {
         self.support
     }
 
-    fn particle_volume_support(&self) -> Option<f32> {
-        Some(self.support)
+    fn particle_channels(&self, handlers: &HandlerArray) -> Vec<Vec<f32>> {
+        vec![particle_volumes(handlers, self.support)]
     }
 
     fn value(&self, near: &Neighbourhood, x: Vec3) -> f32 {

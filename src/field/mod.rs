@@ -24,11 +24,11 @@ pub trait ScalarField: Sync {
     /// [`support`](Self::support) of `x`, and may hold others.
     fn value(&self, near: &Neighbourhood, x: Vec3) -> f32;
 
-    /// For fields that weight each particle by its volume m/ρ: the support of the SPH kernel
-    /// that gives the particles' densities. The engines then put them in channel 0 of
-    /// `Neighbourhood::channels`.
-    fn particle_volume_support(&self) -> Option<f32> {
-        None
+    /// Per-particle values the field needs beside the positions (the density field: each
+    /// particle's volume m/ρ), computed once per frame in `handlers`' order. The engines store
+    /// them as the handler array's channels, gathered into `Neighbourhood::channels`.
+    fn particle_channels(&self, _handlers: &HandlerArray) -> Vec<Vec<f32>> {
+        Vec::new()
     }
 
     /// For fields whose kernels adapt to the particles around them (the anisotropic field):

@@ -14,7 +14,6 @@ use super::scatter;
 use super::surface_particles::{SurfaceCriteria, surface_particles};
 use super::triangulation::{Triangulation, triangulate};
 use crate::config::Params;
-use crate::field::density::particle_volumes;
 use crate::memory;
 use crate::mesh::TriMesh;
 use crate::report::{FrameStats, Stage, Stages};
@@ -104,11 +103,10 @@ fn gather(
     let mut handlers = stages.run(Stage::HandlerArray, || {
         HandlerArray::new(particles, lookup_cell(params))
     })?;
-    if let Some(support) = field.particle_volume_support() {
-        handlers.channels = vec![stages.run(Stage::SurfaceParticles, || {
-            particle_volumes(&handlers, support)
-        })];
-    }
+    // Per-particle work, like the colour field: counted with t_sp.
+    handlers.channels = stages.run(Stage::SurfaceParticles, || {
+        field.particle_channels(&handlers)
+    });
     // Fields with adaptive kernels fit them now, and sample from their own handler array.
     let fitted = stages
         .run(Stage::ScalarField, || field.fit(&handlers))
