@@ -34,7 +34,7 @@ use anyhow::{Result, bail};
 use glam::{Mat3, Vec3};
 use serde::{Deserialize, Serialize};
 
-use super::density::particle_volumes;
+use super::density::{cubic_spline, particle_volumes};
 use super::{Fitted, ScalarField};
 use crate::config::Length;
 use crate::recon::handler_array::HandlerArray;
@@ -265,13 +265,6 @@ pub fn symmetric_eigen(c: [f32; 6]) -> (Mat3, [f32; 3]) {
     )
 }
 
-/// Cubic spline of support 1 at q, without its factor 8/π (as `density::spline`).
-#[inline(always)]
-fn spline(q: f32) -> f32 {
-    let (a, b) = ((1.0 - q).max(0.0), (0.5 - q).max(0.0));
-    2.0 * a * a * a - 8.0 * b * b * b
-}
-
 impl ScalarField for Anisotropic {
     fn support(&self) -> f32 {
         self.support
@@ -329,7 +322,7 @@ impl ScalarField for Anisotropic {
             let gx = gxx[i] * dx + gxy[i] * dy + gxz[i] * dz;
             let gy = gxy[i] * dx + gyy[i] * dy + gyz[i] * dz;
             let gz = gxz[i] * dx + gyz[i] * dy + gzz[i] * dz;
-            sum += w[i] * spline((gx * gx + gy * gy + gz * gz).sqrt());
+            sum += w[i] * cubic_spline((gx * gx + gy * gy + gz * gz).sqrt());
         }
         self.iso - sum
     }

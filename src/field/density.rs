@@ -64,7 +64,12 @@ pub struct Density {
 /// it has no branch.
 #[inline(always)]
 fn spline(dx: f32, dy: f32, dz: f32, inv_h: f32) -> f32 {
-    let q = (dx * dx + dy * dy + dz * dz).sqrt() * inv_h;
+    cubic_spline((dx * dx + dy * dy + dz * dz).sqrt() * inv_h)
+}
+
+/// The same of q directly.
+#[inline(always)]
+pub(super) fn cubic_spline(q: f32) -> f32 {
     let (a, b) = ((1.0 - q).max(0.0), (0.5 - q).max(0.0));
     2.0 * a * a * a - 8.0 * b * b * b
 }
