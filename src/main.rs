@@ -9,7 +9,7 @@ use anyhow::{Context, Result, bail};
 use clap::{Args, Parser, Subcommand};
 
 use splash::batch::{Batch, Output};
-use splash::config::{Config, Length};
+use splash::config::{Config, Length, Normals};
 use splash::field::FieldConfig;
 use splash::io::{InputFormat, MeshFormat, UpAxis};
 use splash::log::{Console, LogFormat, Verbosity};
@@ -70,6 +70,10 @@ struct ConfigArgs {
     /// Marching Cubes cell size: 2r, r, r/2 (default), or a length.
     #[arg(long)]
     cell: Option<String>,
+
+    /// Vertex normals: the field's gradient (default), grid differences (faster), or none.
+    #[arg(long, value_enum)]
+    normals: Option<Normals>,
 }
 
 impl ConfigArgs {
@@ -91,6 +95,9 @@ impl ConfigArgs {
         }
         if let Some(c) = &self.cell {
             config.cell = Length::parse(c).context("--cell")?;
+        }
+        if let Some(n) = self.normals {
+            config.normals = n;
         }
         config.validate()?;
         Ok(config)

@@ -3,6 +3,8 @@
 
 mod common;
 
+use common::Jitter;
+
 use glam::Vec3;
 use splash::config::{Config, Length, Params};
 use splash::field::FieldConfig;
@@ -19,15 +21,11 @@ const SPACING: f32 = 1.25;
 /// One layer of N × N particles at spacing 1.25r in the plane z = ORIGIN.z, each moved by up
 /// to ±0.2r along every axis: a sheet thinning out, as in a splash.
 fn sheet() -> Vec<Vec3> {
-    let mut seed = 7u32;
-    let mut jitter = || {
-        seed = seed.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
-        (seed >> 8) as f32 / (1u32 << 24) as f32 - 0.5
-    };
+    let mut jitter = Jitter::new(7);
     let mut out = Vec::new();
     for y in 0..N {
         for x in 0..N {
-            let jitter = Vec3::new(jitter(), jitter(), jitter()) * 0.4;
+            let jitter = jitter.vec3() * 0.4;
             out.push(ORIGIN + (Vec3::new(x as f32, y as f32, 0.0) * SPACING + jitter) * R);
         }
     }

@@ -61,10 +61,21 @@ fn shown_configuration_reproduces_the_same_mesh() {
 #[test]
 fn flags_override_the_file_and_typos_are_errors() {
     let preset = concat!(env!("CARGO_MANIFEST_DIR"), "/configs/zb05.toml");
-    let out = splash(&["config", "show", "--config", preset, "--cell", "r/2"]);
+    let out = splash(&[
+        "config",
+        "show",
+        "--config",
+        preset,
+        "--cell",
+        "r/2",
+        "--normals",
+        "grid",
+    ]);
     let text = String::from_utf8(out.stdout).unwrap();
     assert!(
-        text.contains("cell = \"r/2\"") && text.contains("kind = \"zb05\""),
+        text.contains("cell = \"r/2\"")
+            && text.contains("kind = \"zb05\"")
+            && text.contains("normals = \"grid\""),
         "{text}"
     );
     let dir = std::env::temp_dir().join(format!("splash-config-typo-{}", std::process::id()));
@@ -92,5 +103,39 @@ fn flags_override_the_file_and_typos_are_errors() {
             .unwrap()
             .contains("unknown field 'splat'")
     );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn normals_flag_chooses_what_the_obj_carries() {
+    let dir = std::env::temp_dir().join(format!("splash-normals-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let frame = concat!(env!("CARGO_MANIFEST_DIR"), "/fixtures/frame_0010.ply");
+    let mut counts = Vec::new();
+    for normals in ["field", "grid", "none"] {
+        let out = dir.join(format!("{normals}.obj"));
+        let run = splash(&[
+            "recon",
+            frame,
+            "--spacing",
+            "0.014",
+            "--cell",
+            "r",
+            "--normals",
+            normals,
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert!(run.status.success(), "{run:?}");
+        let text = std::fs::read_to_string(&out).unwrap();
+        let count = |p: &str| text.lines().filter(|l| l.starts_with(p)).count();
+        counts.push((normals, count("v "), count("vn "), count("f ")));
+    }
+    let [(_, v, vn_field, f), (_, _, vn_grid, _), (_, _, vn_none, _)] = counts[..] else {
+        unreachable!()
+    };
+    assert!(v > 0 && f > 0);
+    assert_eq!((vn_field, vn_grid, vn_none), (v, v, 0), "{counts:?}");
+    assert!(counts.iter().all(|c| c.1 == v && c.3 == f), "{counts:?}");
     std::fs::remove_dir_all(&dir).unwrap();
 }

@@ -49,8 +49,9 @@ fn same_mesh(a: &TriMesh, b: &TriMesh, tol: f32) -> Result<(), String> {
             b.triangles.len()
         ));
     }
-    // Buckets of side `2 tol` (or exact positions): a match lies in one of the 27 around.
-    let side = (2.0 * tol).max(f32::MIN_POSITIVE);
+    // Buckets of side `2 tol` (at least 1e-4, far below the cells): a match lies in one of the
+    // 27 around.
+    let side = (2.0 * tol).max(1e-4);
     let key = |v: Vec3| (v / side).floor().as_ivec3();
     let mut buckets: FxHashMap<IVec3, Vec<u32>> = FxHashMap::default();
     for (i, &v) in b.vertices.iter().enumerate() {

@@ -34,7 +34,7 @@ use anyhow::{Result, bail};
 use glam::{Mat3, Vec3};
 use serde::{Deserialize, Serialize};
 
-use super::density::{cubic_spline, particle_volumes};
+use super::density::{cubic_spline, cubic_spline_slope_over_q, particle_volumes};
 use super::{Fitted, ScalarField};
 use crate::config::Length;
 use crate::recon::handler_array::HandlerArray;
@@ -325,6 +325,29 @@ impl ScalarField for Anisotropic {
             sum += w[i] * cubic_spline((gx * gx + gy * gy + gz * gz).sqrt());
         }
         self.iso - sum
+    }
+
+    /// Σ_j w_j P'(q)/q · G_j g_j, with g_j = G_j (x_j − x) and q = |g_j|, as ∇_x q = −G g/q
+    /// (G symmetric).
+    fn gradient(&self, near: &Neighbourhood, x: Vec3) -> Vec3 {
+        let [gxx, gyy, gzz, gxy, gxz, gyz, w, _] =
+            <&[Vec<f32>; CHANNELS]>::try_from(near.channels.as_slice())
+                .expect("the anisotropic field samples fitted kernels only");
+        let mut sum = Vec3::ZERO;
+        for i in 0..near.len() {
+            let (dx, dy, dz) = (near.x[i] - x.x, near.y[i] - x.y, near.z[i] - x.z);
+            let gx = gxx[i] * dx + gxy[i] * dy + gxz[i] * dz;
+            let gy = gxy[i] * dx + gyy[i] * dy + gyz[i] * dz;
+            let gz = gxz[i] * dx + gyz[i] * dy + gzz[i] * dz;
+            let q = (gx * gx + gy * gy + gz * gz).sqrt();
+            let s = w[i] * cubic_spline_slope_over_q(q);
+            sum += s * Vec3::new(
+                gxx[i] * gx + gxy[i] * gy + gxz[i] * gz,
+                gxy[i] * gx + gyy[i] * gy + gyz[i] * gz,
+                gxz[i] * gx + gyz[i] * gy + gzz[i] * gz,
+            );
+        }
+        sum
     }
 }
 

@@ -89,18 +89,40 @@ crate::lane_sums! {
     }
 }
 
+crate::lane_sums! {
+    /// Σ ∂bump/∂s² · d_j over the particles inside the cut-off.
+    fn bump_slope_sum(p: Shape) -> [3] |dx, dy, dz| {
+        let s2 = (dx * dx + dy * dy + dz * dz) * p.inv_r2;
+        let inside = f32::from(u8::from(s2 < p.cutoff_s2));
+        let slope = inside * (p.b * (1.0 - s2.min(p.cutoff_s2))).exp();
+        [slope * dx, slope * dy, slope * dz]
+    }
+}
+
 impl ScalarField for Blobby {
     fn support(&self) -> f32 {
         self.radius * self.cutoff_s2.sqrt()
     }
 
     fn value(&self, near: &Neighbourhood, x: Vec3) -> f32 {
-        let shape = Shape {
+        let [sum] = bump_sum(near, x, self.shape());
+        self.threshold - sum
+    }
+
+    /// −Σ ∇ exp(B(1 − s²)), with ∇_x s² = −2(x_j − x)/R².
+    fn gradient(&self, near: &Neighbourhood, x: Vec3) -> Vec3 {
+        let shape = self.shape();
+        let s = bump_slope_sum(near, x, shape);
+        Vec3::from_array(s) * (-2.0 * shape.b * shape.inv_r2)
+    }
+}
+
+impl Blobby {
+    fn shape(&self) -> Shape {
+        Shape {
             inv_r2: 1.0 / (self.radius * self.radius),
             b: self.blobbiness,
             cutoff_s2: self.cutoff_s2,
-        };
-        let [sum] = bump_sum(near, x, shape);
-        self.threshold - sum
+        }
     }
 }

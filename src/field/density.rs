@@ -74,6 +74,13 @@ pub(super) fn cubic_spline(q: f32) -> f32 {
     2.0 * a * a * a - 8.0 * b * b * b
 }
 
+/// d/dq of [`cubic_spline`], divided by q (finite at q = 0, where the slope is 0).
+#[inline(always)]
+pub(super) fn cubic_spline_slope_over_q(q: f32) -> f32 {
+    let (a, b) = ((1.0 - q).max(0.0), (0.5 - q).max(0.0));
+    (24.0 * b * b - 6.0 * a * a) / q.max(f32::MIN_POSITIVE)
+}
+
 fn sigma(h: f32) -> f32 {
     8.0 / (PI * h.powi(3))
 }
@@ -87,6 +94,15 @@ crate::lane_sums! {
 crate::lane_sums! {
     fn weighted_spline_sum(inv_h: f32) -> [1] |dx, dy, dz, volume| {
         [volume * spline(dx, dy, dz, inv_h)]
+    }
+}
+
+crate::lane_sums! {
+    /// Σ V_j W'(q_j)/q_j d_j, with q_j = |d_j|/h.
+    fn weighted_spline_slope_sum(inv_h: f32) -> [3] |dx, dy, dz, volume| {
+        let q = (dx * dx + dy * dy + dz * dz).sqrt() * inv_h;
+        let s = volume * cubic_spline_slope_over_q(q);
+        [s * dx, s * dy, s * dz]
     }
 }
 
@@ -112,6 +128,13 @@ impl ScalarField for Density {
     fn value(&self, near: &Neighbourhood, x: Vec3) -> f32 {
         let [w] = weighted_spline_sum(near, x, 1.0 / self.support);
         self.iso - sigma(self.support) * w
+    }
+
+    /// −σ Σ V_j ∇W: with q = |x_j − x|/h, ∇_x q = −(x_j − x)/(q h²).
+    fn gradient(&self, near: &Neighbourhood, x: Vec3) -> Vec3 {
+        let inv_h = 1.0 / self.support;
+        let s = weighted_spline_slope_sum(near, x, inv_h);
+        Vec3::from_array(s) * (sigma(self.support) * inv_h * inv_h)
     }
 }
 

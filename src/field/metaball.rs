@@ -83,6 +83,17 @@ crate::lane_sums! {
     }
 }
 
+crate::lane_sums! {
+    /// Σ α t^(α−1) d_j over the particles inside the cut-off.
+    fn kernel_slope_sum(p: (f32, i32)) -> [3] |dx, dy, dz| {
+        let (inv_r2, exponent) = p;
+        let t = 1.0 - (dx * dx + dy * dy + dz * dz) * inv_r2;
+        let inside = f32::from(u8::from(t > 0.0));
+        let slope = inside * exponent as f32 * t.max(0.0).powi(exponent - 1);
+        [slope * dx, slope * dy, slope * dz]
+    }
+}
+
 impl ScalarField for Metaball {
     fn support(&self) -> f32 {
         self.cutoff
@@ -91,5 +102,12 @@ impl ScalarField for Metaball {
     fn value(&self, near: &Neighbourhood, x: Vec3) -> f32 {
         let [sum] = kernel_sum(near, x, (1.0 / (self.cutoff * self.cutoff), self.exponent));
         self.threshold - self.scale * sum
+    }
+
+    /// −c Σ ∇t^α, with ∇_x t = 2(x_j − x)/R_c².
+    fn gradient(&self, near: &Neighbourhood, x: Vec3) -> Vec3 {
+        let inv_r2 = 1.0 / (self.cutoff * self.cutoff);
+        let s = kernel_slope_sum(near, x, (inv_r2, self.exponent));
+        Vec3::from_array(s) * (-2.0 * self.scale * inv_r2)
     }
 }

@@ -24,6 +24,10 @@ pub trait ScalarField: Sync {
     /// [`support`](Self::support) of `x`, and may hold others.
     fn value(&self, near: &Neighbourhood, x: Vec3) -> f32;
 
+    /// ∇ of [`value`](Self::value) at `x`, from the same particles: it points out of the
+    /// fluid, and normalised it gives the mesh's vertex normals.
+    fn gradient(&self, near: &Neighbourhood, x: Vec3) -> Vec3;
+
     /// Per-particle values the field needs beside the positions (the density field: each
     /// particle's volume m/ρ), computed once per frame in `handlers`' order. The engines store
     /// them as the handler array's channels, gathered into `Neighbourhood::channels`.

@@ -6,6 +6,7 @@ use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
 use super::ScalarField;
+use super::ssp07::{MeanDistance, Sums};
 use crate::config::Length;
 use crate::recon::neighbourhood::Neighbourhood;
 
@@ -67,5 +68,11 @@ impl ScalarField for Zb05 {
             return self.support - self.radius;
         }
         Vec3::new(kx, ky, kz).length() / k - self.radius
+    }
+
+    /// ∇|x̄ − x|, as in SSP07's first term.
+    fn gradient(&self, near: &Neighbourhood, x: Vec3) -> Vec3 {
+        let sums = Sums::over(near, x, 1.0 / (self.support * self.support));
+        MeanDistance::of(&sums, self.support).map_or(Vec3::ZERO, |m| m.gradient.as_vec3())
     }
 }

@@ -8,6 +8,7 @@ pub mod halo;
 pub mod handler_array;
 pub mod narrow_band;
 pub mod neighbourhood;
+pub mod normals;
 pub mod scatter;
 pub mod surface_particles;
 pub mod triangulation;

@@ -10,6 +10,7 @@ use super::band_closure::close_band;
 use super::field_sampling::{BrickValues, sample_field};
 use super::full_grid::{self, Grid};
 use super::handler_array::HandlerArray;
+use super::normals::set_normals;
 use super::scatter;
 use super::surface_particles::{SurfaceCriteria, surface_particles};
 use super::triangulation::{Triangulation, triangulate};
@@ -140,7 +141,11 @@ fn gather(
             sample_field(grown, samples, field)
         })
     });
-    let triangulation = stages.run(Stage::Triangulation, || triangulate(&band, &values));
+    let triangulation = stages.run(Stage::Triangulation, || {
+        let mut t = triangulate(&band, &values);
+        set_normals(params.normals, &mut t, band.cell, samples, field);
+        t
+    });
     Ok(finish(
         stages.stats,
         &band,

@@ -222,7 +222,8 @@ pub fn map_particles<T: Send>(
 /// feature and would not be inlined into the AVX2 loop.
 #[macro_export]
 macro_rules! lane_sums {
-    ($vis:vis fn $name:ident($p:ident: $ty:ty) -> [$n:expr] |$dx:ident, $dy:ident, $dz:ident $(, $v:ident)?| $term:block) => {
+    ($(#[$attr:meta])* $vis:vis fn $name:ident($p:ident: $ty:ty) -> [$n:expr] |$dx:ident, $dy:ident, $dz:ident $(, $v:ident)?| $term:block) => {
+        $(#[$attr])*
         $vis fn $name(
             near: &$crate::recon::neighbourhood::Neighbourhood,
             x: glam::Vec3,

@@ -12,15 +12,17 @@ use glam::{IVec3, Vec3};
 use super::band::{BRICK, BRICK_VERTICES, Band, local_index};
 use super::field_sampling::BrickValues;
 use super::full_grid::{self, Grid};
+use super::handler_array::HandlerArray;
 use super::narrow_band::{Reconstruction, finish};
+use super::normals::set_normals;
 use super::triangulation::triangulate;
 use crate::config::Params;
 use crate::field::FieldConfig;
 use crate::field::ssp07::{Ssp07, Sums};
 use crate::report::{Stage, Stages};
 
-/// The scatter engine's reconstruction: no handler array, as the scatter needs no neighbour
-/// search.
+/// The scatter engine's reconstruction: the scatter needs no neighbour search, only the
+/// normals do.
 pub fn reconstruct(
     particles: &[Vec3],
     params: &Params,
@@ -39,7 +41,13 @@ pub fn reconstruct(
     let values = stages.run(Stage::ScalarField, || {
         scatter_field(particles, &band, grid, &field)
     })?;
-    let triangulation = stages.run(Stage::Triangulation, || triangulate(&band, &values));
+    // The field's normals gather the particles around each vertex, like the other engines.
+    let triangulation = stages.run(Stage::Triangulation, || -> Result<_> {
+        let mut t = triangulate(&band, &values);
+        let handlers = HandlerArray::new(particles, field.support / 2.0)?;
+        set_normals(params.normals, &mut t, band.cell, &handlers, &field);
+        Ok(t)
+    })?;
     Ok(finish(stages.stats, &band, &values, 0, triangulation))
 }
 

@@ -7,6 +7,8 @@
 //! vertex numbers do not depend on the thread count: the first creates each brick's edge
 //! vertices, a prefix sum numbers them, the second emits triangles.
 
+use std::ops::Range;
+
 use glam::{IVec3, Vec3};
 use rayon::prelude::*;
 
@@ -38,6 +40,8 @@ impl BrickEdges {
 
 pub struct Triangulation {
     pub mesh: TriMesh,
+    /// The mesh's vertices of each brick: all lie within its cells.
+    pub brick_vertices: Vec<Range<usize>>,
     /// Cells with all eight corners in the band that the surface crosses.
     pub surface_cells: usize,
 }
@@ -53,9 +57,13 @@ pub fn triangulate(band: &Band, values: &BrickValues) -> Triangulation {
         })
         .collect();
     let mut next = 0u32;
+    let mut brick_vertices = Vec::with_capacity(edges.len());
     for e in &mut edges {
         e.first = next;
         next += e.positions.len() as u32;
+        if !e.positions.is_empty() {
+            brick_vertices.push(e.first as usize..next as usize);
+        }
     }
     let per_brick: Vec<(Vec<[u32; 3]>, usize)> = band
         .bricks
@@ -80,6 +88,7 @@ pub fn triangulate(band: &Band, values: &BrickValues) -> Triangulation {
     }
     Triangulation {
         mesh,
+        brick_vertices,
         surface_cells,
     }
 }

@@ -108,3 +108,21 @@ pub fn entries(dir: &Path) -> Vec<String> {
     names.sort();
     names
 }
+
+/// Reproducible uniform numbers in [−½, ½) from a linear congruential generator.
+pub struct Jitter(u32);
+
+impl Jitter {
+    pub fn new(seed: u32) -> Jitter {
+        Jitter(seed)
+    }
+
+    pub fn next(&mut self) -> f32 {
+        self.0 = self.0.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+        (self.0 >> 8) as f32 / (1u32 << 24) as f32 - 0.5
+    }
+
+    pub fn vec3(&mut self) -> Vec3 {
+        Vec3::new(self.next(), self.next(), self.next())
+    }
+}
