@@ -135,14 +135,14 @@ fn spread(all: &[PathBuf], n: usize) -> Vec<PathBuf> {
         .collect()
 }
 
-/// The rows of Tables 3/4: the scatter once (it is serial), then the full gather and the
-/// narrow band at each thread count.
+/// The rows of Tables 3/4: the scatter once (it is serial), then the full gather, the narrow
+/// band and Marching Slices at each thread count.
 pub fn matrix(engines: &[Engine], threads: &[usize]) -> Vec<(Engine, usize)> {
     let mut rows = Vec::new();
     if engines.contains(&Engine::Scatter) {
         rows.push((Engine::Scatter, 1));
     }
-    for e in [Engine::FullGather, Engine::NarrowBand] {
+    for e in [Engine::FullGather, Engine::NarrowBand, Engine::Slices] {
         if engines.contains(&e) {
             rows.extend(threads.iter().map(|&t| (e, t)));
         }
@@ -313,7 +313,9 @@ mod tests {
                 "full-gather-1",
                 "full-gather-2",
                 "narrow-band-1",
-                "narrow-band-2"
+                "narrow-band-2",
+                "slices-1",
+                "slices-2"
             ]
         );
     }

@@ -24,8 +24,24 @@ pub struct Config {
     pub band: BandConfig,
     /// Where the mesh's vertex normals come from.
     pub normals: Normals,
+    /// The Marching Slices engine's blocks.
+    pub slices: SlicesConfig,
     /// The scalar field and its parameters (SSP07 by default).
     pub field: FieldConfig,
+}
+
+/// `[slices]`: the block-parallel Marching Slices engine (`--engine slices`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SlicesConfig {
+    /// Cubes per side of a block (Rosenberg & Birdwell 2008, Sec. 3), without its margin.
+    pub block: u32,
+}
+
+impl Default for SlicesConfig {
+    fn default() -> Self {
+        SlicesConfig { block: 64 }
+    }
 }
 
 /// `normals = "field" | "grid" | "none"`.
@@ -71,6 +87,7 @@ impl Default for Config {
             surface_particles: SurfaceParticles::default(),
             band: BandConfig::default(),
             normals: Normals::default(),
+            slices: SlicesConfig::default(),
             field: FieldConfig::default(),
         }
     }
@@ -123,6 +140,12 @@ impl Config {
         }
         if self.band.half_width.value().is_nan() || self.band.half_width.value() < 0.0 {
             bail!("band.half_width must be ≥ 0");
+        }
+        if !(1..=4096).contains(&self.slices.block) {
+            bail!(
+                "slices.block must be from 1 to 4096 cubes, got {}",
+                self.slices.block
+            );
         }
         self.field.validate()?;
         Ok(())
@@ -234,6 +257,8 @@ pub struct Params {
     pub band_half_width: f32,
     pub field: FieldConfig,
     pub normals: Normals,
+    /// Cubes per side of a Marching Slices block.
+    pub block: u32,
     /// The field's support radius in world units.
     pub support: f32,
 }
@@ -256,6 +281,7 @@ impl Params {
             support: config.field.build(r).support(),
             field: config.field.clone(),
             normals: config.normals,
+            block: config.slices.block,
         }
     }
 }

@@ -74,6 +74,10 @@ struct ConfigArgs {
     /// Vertex normals: the field's gradient (default), grid differences (faster), or none.
     #[arg(long, value_enum)]
     normals: Option<Normals>,
+
+    /// Cubes per side of a block of the slices engine (default 64).
+    #[arg(long)]
+    block: Option<u32>,
 }
 
 impl ConfigArgs {
@@ -98,6 +102,9 @@ impl ConfigArgs {
         }
         if let Some(n) = self.normals {
             config.normals = n;
+        }
+        if let Some(b) = self.block {
+            config.slices.block = b;
         }
         config.validate()?;
         Ok(config)
@@ -188,9 +195,10 @@ struct Recon {
     #[arg(short, long, conflicts_with = "verbose")]
     quiet: bool,
 
-    /// Reconstruction engine: narrow-band (default), or the paper's baselines full-gather
-    /// (Z-index gather on every grid vertex) and scatter (serial, SSP07 only). All three give
-    /// the same mesh.
+    /// Reconstruction engine: narrow-band (default), the paper's baselines full-gather
+    /// (Z-index gather on every grid vertex) and scatter (serial, SSP07 only), or slices
+    /// (block-parallel Marching Slices, memory bounded per block; see --block). All give the
+    /// same mesh.
     #[arg(long, default_value = "narrow-band")]
     engine: String,
 

@@ -147,6 +147,46 @@ pub struct FrameStats {
     /// Worker threads of the pool that reconstructed the frame.
     pub threads: usize,
     pub timings: Timings,
+    /// The slices engine's blocks (zeros for the other engines).
+    pub slices: SlicesFigures,
+}
+
+/// The Marching Slices engine's memory per block, as in Fig. 7 of Rosenberg & Birdwell 2008.
+#[derive(Debug, Clone, Copy, Default, Serialize)]
+pub struct SlicesFigures {
+    pub blocks: usize,
+    /// Most slices cached at once in any block.
+    pub peak_slices: usize,
+    /// Largest and mean peak "render memory" of a block: slice and corner caches, todo lists.
+    pub render_bytes_max: usize,
+    pub render_bytes_mean: usize,
+    /// Largest and mean "cache memory" of a block: lookup cache and particle list.
+    pub cache_bytes_max: usize,
+    pub cache_bytes_mean: usize,
+    /// Peak of both, summed over the blocks being marched at once.
+    pub in_flight_peak: usize,
+}
+
+impl fmt::Display for SlicesFigures {
+    /// Nothing for the engines without blocks.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.blocks == 0 {
+            return Ok(());
+        }
+        let mb = |b: usize| b as f64 / 1e6;
+        write!(
+            f,
+            "; {} blocks: render memory ≤ {:.2} MB (mean {:.2}), cache memory ≤ {:.2} MB \
+             (mean {:.2}), ≤ {} slices, {:.1} MB in flight",
+            self.blocks,
+            mb(self.render_bytes_max),
+            mb(self.render_bytes_mean),
+            mb(self.cache_bytes_max),
+            mb(self.cache_bytes_mean),
+            self.peak_slices,
+            mb(self.in_flight_peak)
+        )
+    }
 }
 
 impl FrameStats {
@@ -163,7 +203,7 @@ impl fmt::Display for FrameStats {
             f,
             "{} particles ({} surface), {} surface vertices, {} triangles; \
              read {:.0} ms, sort {:.0} ms, t_sp {:.0} ms, band {:.0} ms, t_sf {:.0} ms, \
-             t_tri {:.0} ms, write {:.0} ms; {:.1} MB arrays, {:.1} MB peak heap, {:.1} MB peak RSS",
+             t_tri {:.0} ms, write {:.0} ms; {:.1} MB arrays, {:.1} MB peak heap, {:.1} MB peak RSS{}",
             self.particles,
             self.surface_particles,
             self.surface_vertices,
@@ -177,7 +217,8 @@ impl fmt::Display for FrameStats {
             ms(t.write),
             self.peak_bytes as f64 / 1e6,
             self.heap_peak as f64 / 1e6,
-            self.peak_rss as f64 / 1e6
+            self.peak_rss as f64 / 1e6,
+            self.slices
         )
     }
 }

@@ -51,12 +51,12 @@ const PER_PARTICLE: u64 = 48;
 
 /// Peak heap an engine needs on `grid`, in bytes, without the mesh (which follows the surface
 /// and is not known beforehand: on fixtures/frame_0040 at r/2 the full gather's measured peak
-/// is 1.45× this figure, the scatter's 0.98×, its sums dominating); None for the narrow band,
-/// whose memory follows the surface and cannot be known before the band is built.
+/// is 1.45× this figure, the scatter's 0.98×, its sums dominating); None for the narrow band
+/// and the slices engine, whose memory follows the surface.
 pub fn needed_bytes(engine: Engine, grid: &Grid, particles: usize) -> Option<u64> {
     let band = grid.bricks() * (BRICK_VERTICES as u64 * 4 + BRICK_OVERHEAD);
     match engine {
-        Engine::NarrowBand => None,
+        Engine::NarrowBand | Engine::Slices => None,
         Engine::FullGather => Some(band + particles as u64 * PER_PARTICLE),
         // One set of kernel sums per vertex, then the values per brick.
         Engine::Scatter => Some(band + grid.vertices() * size_of::<Sums>() as u64),
@@ -98,26 +98,34 @@ pub fn bounds(particles: &[Vec3]) -> (Vec3, Vec3) {
 }
 
 impl Engine {
-    pub const ALL: [Engine; 3] = [Engine::NarrowBand, Engine::FullGather, Engine::Scatter];
+    pub const ALL: [Engine; 4] = [
+        Engine::NarrowBand,
+        Engine::FullGather,
+        Engine::Scatter,
+        Engine::Slices,
+    ];
 
     pub fn name(self) -> &'static str {
         match self {
             Engine::NarrowBand => "narrow-band",
             Engine::FullGather => "full-gather",
             Engine::Scatter => "scatter",
+            Engine::Slices => "slices",
         }
     }
 
     pub fn parse(text: &str) -> Result<Engine> {
         match Engine::ALL.into_iter().find(|e| e.name() == text) {
             Some(e) => Ok(e),
-            None => bail!("unknown engine '{text}': use narrow-band, full-gather or scatter"),
+            None => {
+                bail!("unknown engine '{text}': use narrow-band, full-gather, scatter or slices")
+            }
         }
     }
 
     /// Whether the engine processes every vertex of the grid (and is subject to
     /// `--max-memory`).
     pub fn is_full_grid(self) -> bool {
-        self != Engine::NarrowBand
+        matches!(self, Engine::FullGather | Engine::Scatter)
     }
 }

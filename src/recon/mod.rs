@@ -6,6 +6,7 @@ pub mod field_sampling;
 pub mod full_grid;
 pub mod halo;
 pub mod handler_array;
+pub mod marching_slices;
 pub mod narrow_band;
 pub mod neighbourhood;
 pub mod normals;

@@ -10,11 +10,13 @@ use super::band_closure::close_band;
 use super::field_sampling::{BrickValues, sample_field};
 use super::full_grid::{self, Grid};
 use super::handler_array::HandlerArray;
+use super::marching_slices::{self, Checks};
 use super::normals::set_normals;
 use super::scatter;
 use super::surface_particles::{SurfaceCriteria, surface_particles};
 use super::triangulation::{Triangulation, triangulate};
 use crate::config::Params;
+use crate::field::{Fitted, ScalarField};
 use crate::memory;
 use crate::mesh::TriMesh;
 use crate::report::{FrameStats, Stage, Stages};
@@ -30,6 +32,8 @@ pub enum Engine {
     /// Serial scatter of every particle into per-vertex sums over the same full grid, then all
     /// cells triangulated: the paper's "scatter" row (SSP07 only; see `scatter.rs`).
     Scatter,
+    /// Block-parallel Marching Slices (Rosenberg & Birdwell 2008; see `marching_slices`).
+    Slices,
 }
 
 /// Resource limits of one reconstruction.
@@ -88,6 +92,10 @@ pub fn reconstruct_with(
     match engine {
         Engine::Scatter => scatter::reconstruct(particles, params, &grid?, stages),
         Engine::NarrowBand | Engine::FullGather => gather(particles, params, engine, stages),
+        Engine::Slices => {
+            marching_slices::reconstruct(particles, params, Checks::default(), stages)
+                .map(|(r, _)| r)
+        }
     }
 }
 
@@ -98,23 +106,10 @@ fn gather(
     engine: Engine,
     mut stages: Stages,
 ) -> Result<Reconstruction> {
-    let field = params.field.build(params.spacing);
-    let field = field.as_ref();
-    // The handler array comes first here, as the colour field needs the neighbours too.
-    let mut handlers = stages.run(Stage::HandlerArray, || {
-        HandlerArray::new(particles, lookup_cell(params))
-    })?;
-    // Per-particle work, like the colour field: counted with t_sp.
-    handlers.channels = stages.run(Stage::SurfaceParticles, || {
-        field.particle_channels(&handlers)
-    });
-    // Fields with adaptive kernels fit them now, and sample from their own handler array.
-    let fitted = stages
-        .run(Stage::ScalarField, || field.fit(&handlers))
-        .transpose()?;
+    let (field, handlers, fitted) = prepare(particles, params, &mut stages)?;
     let (field, samples) = match &fitted {
         Some(f) => (f.field.as_ref(), &f.handlers),
-        None => (field, &handlers),
+        None => (field.as_ref(), &handlers),
     };
     // The full grid reaches as far as the fitted kernels do.
     let params = &Params {
@@ -131,7 +126,7 @@ fn gather(
                 Band::around(&surface, params.cell, params.band_half_width)
             })?
         }
-        Engine::FullGather | Engine::Scatter => {
+        Engine::FullGather | Engine::Scatter | Engine::Slices => {
             stages.run(Stage::Band, || full_grid::band(particles, params))?
         }
     };
@@ -143,7 +138,14 @@ fn gather(
     });
     let triangulation = stages.run(Stage::Triangulation, || {
         let mut t = triangulate(&band, &values);
-        set_normals(params.normals, &mut t, band.cell, samples, field);
+        set_normals(
+            params.normals,
+            &mut t.mesh,
+            &t.brick_vertices,
+            band.cell,
+            samples,
+            field,
+        );
         t
     });
     Ok(finish(
@@ -153,6 +155,28 @@ fn gather(
         handlers.heap_bytes() + fitted.as_ref().map_or(0, |f| f.handlers.heap_bytes()),
         triangulation,
     ))
+}
+
+/// The field, and the handler array the engines gather from, with the field's channels;
+/// fields with adaptive kernels also come fitted to the frame, with their own handler array.
+pub(super) fn prepare(
+    particles: &[Vec3],
+    params: &Params,
+    stages: &mut Stages,
+) -> Result<(Box<dyn ScalarField>, HandlerArray, Option<Fitted>)> {
+    let field = params.field.build(params.spacing);
+    // The handler array comes first here, as the colour field needs the neighbours too.
+    let mut handlers = stages.run(Stage::HandlerArray, || {
+        HandlerArray::new(particles, lookup_cell(params))
+    })?;
+    // Per-particle work, like the colour field: counted with t_sp.
+    handlers.channels = stages.run(Stage::SurfaceParticles, || {
+        field.particle_channels(&handlers)
+    });
+    let fitted = stages
+        .run(Stage::ScalarField, || field.fit(&handlers))
+        .transpose()?;
+    Ok((field, handlers, fitted))
 }
 
 /// Lookup cells that suit both gathers: the colour support (2r), and half the field's support

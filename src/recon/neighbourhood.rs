@@ -133,6 +133,27 @@ impl Neighbourhood {
         }
     }
 
+    /// Starts a list of particles picked one by one with [`add`](Self::add), relative to
+    /// `anchor`, with the channels of `handlers`; [`seal`](Self::seal) ends it.
+    pub fn begin(&mut self, handlers: &HandlerArray, anchor: Vec3) {
+        self.channels.resize_with(handlers.channels.len(), Vec::new);
+        self.clear(anchor);
+    }
+
+    /// Adds particle `i` of `handlers`.
+    #[inline]
+    pub fn add(&mut self, handlers: &HandlerArray, i: usize) {
+        self.push(handlers.positions[i] - self.anchor);
+        for (c, values) in self.channels.iter_mut().enumerate() {
+            values.push(handlers.channels[c][i]);
+        }
+    }
+
+    /// Pads the list for the lane sums.
+    pub fn seal(&mut self) {
+        self.pad();
+    }
+
     /// Holds exactly `points`, relative to `anchor`, without channels.
     pub fn set(&mut self, anchor: Vec3, points: &[Vec3]) {
         self.clear(anchor);

@@ -12,35 +12,29 @@ use rayon::prelude::*;
 
 use super::handler_array::HandlerArray;
 use super::neighbourhood::Neighbourhood;
-use super::triangulation::Triangulation;
 use crate::config::Normals;
 use crate::field::ScalarField;
 use crate::mesh::TriMesh;
 
-/// Gives the triangulation's mesh the normals `kind` asks for: it comes with grid normals.
+/// Gives an engine's mesh, which comes with its grid normals, the normals `kind` asks for.
+/// `bricks` are the ranges of vertices that each lie within one brick.
 pub fn set_normals<F: ScalarField + ?Sized>(
     kind: Normals,
-    triangulation: &mut Triangulation,
+    mesh: &mut TriMesh,
+    bricks: &[Range<usize>],
     cell: f32,
     handlers: &HandlerArray,
     field: &F,
 ) {
     match kind {
-        Normals::Field => field_normals(
-            &mut triangulation.mesh,
-            &triangulation.brick_vertices,
-            cell,
-            handlers,
-            field,
-        ),
+        Normals::Field => field_normals(mesh, bricks, cell, handlers, field),
         Normals::Grid => {}
-        Normals::None => triangulation.mesh.normals = Vec::new(),
+        Normals::None => mesh.normals = Vec::new(),
     }
 }
 
 /// Replaces each vertex normal by the normalised field gradient there, where it is not zero
-/// (a vertex then keeps its grid normal). `bricks` are the ranges of vertices that each lie
-/// within one brick.
+/// (a vertex then keeps its grid normal).
 fn field_normals<F: ScalarField + ?Sized>(
     mesh: &mut TriMesh,
     bricks: &[Range<usize>],
@@ -82,6 +76,7 @@ fn field_normals<F: ScalarField + ?Sized>(
             },
         )
         .collect();
+    mesh.normals.resize(mesh.vertices.len(), Vec3::ZERO);
     for (range, gradients) in normals {
         for (n, g) in mesh.normals[range].iter_mut().zip(gradients) {
             if let Some(g) = g.try_normalize() {

@@ -45,7 +45,14 @@ pub fn reconstruct(
     let triangulation = stages.run(Stage::Triangulation, || -> Result<_> {
         let mut t = triangulate(&band, &values);
         let handlers = HandlerArray::new(particles, field.support / 2.0)?;
-        set_normals(params.normals, &mut t, band.cell, &handlers, &field);
+        set_normals(
+            params.normals,
+            &mut t.mesh,
+            &t.brick_vertices,
+            band.cell,
+            &handlers,
+            &field,
+        );
         Ok(t)
     })?;
     Ok(finish(stages.stats, &band, &values, 0, triangulation))

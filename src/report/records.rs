@@ -53,6 +53,16 @@ pub struct Figures {
     pub heap_triangulation: f64,
     /// Peak resident set size of the process (VmHWM) after the frame.
     pub peak_rss: f64,
+    /// The slices engine's blocks (zeros for the other engines): count, most slices cached at
+    /// once, per-block peak render and cache memory (largest and mean), and both summed over
+    /// the blocks in flight at once.
+    pub slices_blocks: f64,
+    pub slices_peak_slices: f64,
+    pub slices_render_bytes_max: f64,
+    pub slices_render_bytes_mean: f64,
+    pub slices_cache_bytes_max: f64,
+    pub slices_cache_bytes_mean: f64,
+    pub slices_in_flight_peak: f64,
 }
 
 impl Figures {
@@ -91,6 +101,13 @@ impl Figures {
             heap_scalar_field: h.scalar_field as f64,
             heap_triangulation: h.triangulation as f64,
             peak_rss: s.peak_rss as f64,
+            slices_blocks: s.slices.blocks as f64,
+            slices_peak_slices: s.slices.peak_slices as f64,
+            slices_render_bytes_max: s.slices.render_bytes_max as f64,
+            slices_render_bytes_mean: s.slices.render_bytes_mean as f64,
+            slices_cache_bytes_max: s.slices.cache_bytes_max as f64,
+            slices_cache_bytes_mean: s.slices.cache_bytes_mean as f64,
+            slices_in_flight_peak: s.slices.in_flight_peak as f64,
         }
     }
 

@@ -141,6 +141,7 @@ fn row_name(engine: Engine, threads: usize) -> String {
         Engine::Scatter => "scatter".into(),
         Engine::FullGather => format!("Z-index-{t}"),
         Engine::NarrowBand => format!("our-{t}"),
+        Engine::Slices => format!("slices-{t}"),
     }
 }
 

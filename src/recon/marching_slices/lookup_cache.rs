@@ -1,0 +1,210 @@
+//! The particle lookup cache of Rosenberg & Birdwell 2008, Sec. 6 ("2D projection, 1D
+//! lookup"): the projection slice holds, per column (x, y) of corners, one entry for each
+//! particle within reach of some corner of the column, with the range of slices min_z..=max_z
+//! where it is. A lookup scans the column's entries of particles near its height and keeps
+//! those whose range holds it: exactly the particles within reach, none outside.
+//!
+//! Entries are stored column by column in one array (the paper's linked lists, flattened), in
+//! the particles' z order; the particle index doubles as the paper's mid_z, as particles are
+//! numbered by height.
+
+use glam::{DVec3, IVec3};
+
+/// One particle's influence on one column.
+#[derive(Debug, Clone, Copy)]
+struct Entry {
+    particle: u32,
+    min_z: u16,
+    max_z: u16,
+}
+
+pub struct LookupCache {
+    /// Corners per side of the block's volume.
+    side: usize,
+    /// Slabs of one reach, rounded up: a particle reaches corners at most this many slices
+    /// from its own.
+    reach_slabs: i32,
+    /// Column c's entries are `entries[start[c]..start[c + 1]]`.
+    start: Vec<u32>,
+    entries: Vec<Entry>,
+    /// Where the column's last lookup started: the next, a slice up or down, starts nearby.
+    cursor: Vec<u32>,
+    /// The first particle whose own slab (its height in cubes, rounded down) is at least s.
+    slab_start: Vec<u32>,
+}
+
+impl LookupCache {
+    /// The cache of `particles`, sorted by z, in cube units of a block whose corners are
+    /// 0..=`cubes` on each axis (`particles` = world position / cube size − the block's
+    /// origin), each reaching `reach(i)` cubes. Columns and slices on the block's boundary
+    /// get no entries, which forces the field there to its empty (outside) value (Sec. 3).
+    pub fn build(particles: &[DVec3], cubes: i32, reach: impl Fn(usize) -> f64) -> LookupCache {
+        let side = cubes as usize + 1;
+        let max_reach = (0..particles.len()).map(&reach).fold(0.0, f64::max);
+        let mut counts = vec![0u32; side * side + 1];
+        for_each_entry(particles, cubes, &reach, |column, _| counts[column] += 1);
+        let mut start = Vec::with_capacity(counts.len());
+        let mut total = 0u32;
+        for &c in &counts {
+            start.push(total);
+            total += c;
+        }
+        let mut fill = start.clone();
+        let mut entries = vec![
+            Entry {
+                particle: 0,
+                min_z: 0,
+                max_z: 0
+            };
+            total as usize
+        ];
+        for_each_entry(particles, cubes, &reach, |column, entry| {
+            entries[fill[column] as usize] = entry;
+            fill[column] += 1;
+        });
+        let mut slab_start = Vec::with_capacity(side + 1);
+        let mut i = 0;
+        for s in 0..=side as i32 {
+            while i < particles.len() && (particles[i].z.floor() as i32) < s {
+                i += 1;
+            }
+            slab_start.push(i as u32);
+        }
+        LookupCache {
+            side,
+            reach_slabs: max_reach.ceil() as i32,
+            cursor: start.clone(),
+            start,
+            entries,
+            slab_start,
+        }
+    }
+
+    /// Calls `f` with every particle within reach of corner `c`, in z order.
+    pub fn lookup(&mut self, c: IVec3, mut f: impl FnMut(usize)) {
+        let column = c.y as usize * self.side + c.x as usize;
+        let (first, end) = (self.start[column], self.start[column + 1]);
+        // Particles whose own slab lies within reach (plus one for rounding) of c.z.
+        let slab = |s: i32| self.slab_start[s.clamp(0, self.side as i32) as usize];
+        let (lowest, highest) = (
+            slab(c.z - self.reach_slabs - 1),
+            slab(c.z + self.reach_slabs + 2),
+        );
+        let mut at = self.cursor[column].clamp(first, end);
+        while at > first && self.entries[at as usize - 1].particle >= lowest {
+            at -= 1;
+        }
+        while at < end && self.entries[at as usize].particle < lowest {
+            at += 1;
+        }
+        self.cursor[column] = at;
+        let z = c.z as u16;
+        for e in &self.entries[at as usize..end as usize] {
+            if e.particle >= highest {
+                break;
+            }
+            if e.min_z <= z && z <= e.max_z {
+                f(e.particle as usize);
+            }
+        }
+    }
+
+    /// Bytes held: the paper's "cache memory".
+    pub fn heap_bytes(&self) -> usize {
+        self.entries.capacity() * size_of::<Entry>()
+            + (self.start.capacity() + self.cursor.capacity() + self.slab_start.capacity())
+                * size_of::<u32>()
+    }
+}
+
+/// The column and entry of every particle's influence: columns within its reach, each with
+/// the slices within reach on that column, all clamped off the block's boundary.
+fn for_each_entry(
+    particles: &[DVec3],
+    cubes: i32,
+    reach: impl Fn(usize) -> f64,
+    mut f: impl FnMut(usize, Entry),
+) {
+    let side = cubes as usize + 1;
+    let inner = |v: f64| v.clamp(1.0, f64::from(cubes - 1));
+    for (i, q) in particles.iter().enumerate() {
+        let h2 = reach(i).powi(2);
+        let h = h2.sqrt();
+        let (y0, y1) = (
+            inner((q.y - h).ceil()) as i32,
+            inner((q.y + h).floor()) as i32,
+        );
+        for y in y0..=y1 {
+            // The row's columns within reach: a chord of the disk.
+            let row2 = h2 - (f64::from(y) - q.y).powi(2);
+            if row2 < 0.0 {
+                continue;
+            }
+            let w = row2.sqrt();
+            let (x0, x1) = (
+                inner((q.x - w).ceil()) as i32,
+                inner((q.x + w).floor()) as i32,
+            );
+            for x in x0..=x1 {
+                let d2 = (f64::from(x) - q.x).powi(2) + (f64::from(y) - q.y).powi(2);
+                if d2 > h2 {
+                    continue;
+                }
+                let hz = (h2 - d2).sqrt();
+                let (lo, hi) = ((q.z - hz).ceil(), (q.z + hz).floor());
+                let (lo, hi) = (lo.max(1.0), hi.min(f64::from(cubes - 1)));
+                if lo > hi {
+                    continue;
+                }
+                let entry = Entry {
+                    particle: i as u32,
+                    min_z: lo as u16,
+                    max_z: hi as u16,
+                };
+                f(y as usize * side + x as usize, entry);
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Random particles in a block of 20 cubes, reach 3.3 cubes: every corner's lookup equals
+    /// the brute-force set within reach (boundary corners: none).
+    #[test]
+    fn lookups_return_exactly_the_particles_within_reach() {
+        let mut seed = 5u32;
+        let mut next = || {
+            seed = seed.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            f64::from(seed >> 8) / f64::from(1u32 << 24)
+        };
+        let cubes = 20;
+        let mut ps: Vec<DVec3> = (0..300)
+            .map(|_| DVec3::new(next(), next(), next()) * 16.0 + 2.0)
+            .collect();
+        ps.sort_by(|a, b| a.z.total_cmp(&b.z));
+        let reach = 3.3;
+        let mut cache = LookupCache::build(&ps, cubes, |_| reach);
+        let mut found = Vec::new();
+        // Up and down each column, as the marching does, to move the cursors both ways.
+        for pass in [false, true] {
+            for y in 0..=cubes {
+                for x in 0..=cubes {
+                    for k in 0..=cubes {
+                        let z = if pass { cubes - k } else { k };
+                        let c = IVec3::new(x, y, z);
+                        found.clear();
+                        cache.lookup(c, |i| found.push(i));
+                        let boundary = c.min_element() == 0 || c.max_element() == cubes;
+                        let expected: Vec<usize> = (0..ps.len())
+                            .filter(|&i| !boundary && ps[i].distance(c.as_dvec3()) <= reach)
+                            .collect();
+                        assert_eq!(found, expected, "corner {c}");
+                    }
+                }
+            }
+        }
+    }
+}

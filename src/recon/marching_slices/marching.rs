@@ -1,0 +1,416 @@
+//! Marching Slices within one block (Rosenberg & Birdwell 2008, Sec. 4, Algorithm 1): seeds
+//! from every particle, then the lowest slab with work is polygonised, following the surface
+//! cube by cube through todo lists, with slice caches only for the slices next to live slabs.
+
+use std::sync::atomic::{AtomicUsize, Ordering};
+
+use glam::{DVec3, IVec3, Vec3};
+use rustc_hash::FxHashSet;
+use serde::Serialize;
+
+use super::blocks::Block;
+use super::lookup_cache::LookupCache;
+use super::slice_cache::{Corner, DONE_ABOVE, DONE_BELOW, NO_VERTEX, SliceCache};
+use crate::field::ScalarField;
+use crate::mesh::marching_cubes::{case_index, cases, corner_offset, edge_axis, edge_corners};
+use crate::recon::field_sampling::vertex_position;
+use crate::recon::handler_array::HandlerArray;
+use crate::recon::neighbourhood::Neighbourhood;
+
+/// What one block's marching needs besides the block.
+pub struct Setting<'a, F: ScalarField + ?Sized> {
+    pub handlers: &'a HandlerArray,
+    pub field: &'a F,
+    pub cell: f32,
+    /// Cache the field's gradient at corners, for `normals = "grid"`.
+    pub corner_gradients: bool,
+    /// Keep every visited cube, to count visits to a cube already visited.
+    pub check_visits: bool,
+    /// Bytes held by the blocks being marched now, and their peak.
+    pub in_flight: &'a InFlight,
+}
+
+#[derive(Default)]
+pub struct InFlight {
+    now: AtomicUsize,
+    pub peak: AtomicUsize,
+}
+
+/// A block's part of the mesh: triangles of its own cubes, and the vertices they use, some on
+/// faces shared with other blocks.
+#[derive(Default)]
+pub struct BlockMesh {
+    /// Per vertex: its edge, as the global index of the edge's lower corner and its axis.
+    pub edges: Vec<(IVec3, u8)>,
+    pub positions: Vec<Vec3>,
+    /// Interpolated corner gradients, with `corner_gradients`; else empty.
+    pub normals: Vec<Vec3>,
+    pub triangles: Vec<[u32; 3]>,
+}
+
+/// The figures of one block (Fig. 7 of the paper: render and cache memory).
+#[derive(Debug, Clone, Copy, Default, Serialize)]
+pub struct BlockStats {
+    /// Global index of the block's first interior cube.
+    pub lo: [i32; 3],
+    pub particles: usize,
+    pub cubes_visited: usize,
+    /// Cubes visited again: 0 unless the algorithm is wrong (counted with `check_visits`).
+    pub revisits: usize,
+    pub corners: usize,
+    pub peak_slices: usize,
+    /// Peak bytes of slice caches, corner caches and todo lists.
+    pub render_bytes: usize,
+    /// Bytes of the particle lookup cache and the block's particle list.
+    pub cache_bytes: usize,
+}
+
+struct Marcher<'a, F: ScalarField + ?Sized> {
+    set: &'a Setting<'a, F>,
+    block: &'a Block,
+    /// Cubes per side of the block with its margins.
+    n: i32,
+    side: usize,
+    /// Global index of the local corner (0, 0, 0).
+    origin: IVec3,
+    cache: LookupCache,
+    near: Neighbourhood,
+    slices: Vec<Option<SliceCache>>,
+    pool: Vec<SliceCache>,
+    todo: Vec<Vec<[u16; 2]>>,
+    mesh: BlockMesh,
+    stats: BlockStats,
+    visited: FxHashSet<IVec3>,
+    live: usize,
+    /// Bytes last added to `in_flight`.
+    counted: usize,
+}
+
+/// Marches one block; the block's memory is freed when this returns.
+pub fn march<F: ScalarField + ?Sized>(set: &Setting<F>, block: &Block) -> (BlockMesh, BlockStats) {
+    let n = block.size + 2 * block.margin;
+    let origin = block.lo - block.margin;
+    let cell = f64::from(set.cell);
+    let own_reach = set.field.reach_channel();
+    let reach = f64::from(set.field.support());
+    let local: Vec<DVec3> = block
+        .particles
+        .iter()
+        .map(|&h| set.handlers.positions[h as usize].as_dvec3() / cell - origin.as_dvec3())
+        .collect();
+    let cache = LookupCache::build(&local, n, |i| {
+        let h = block.particles[i] as usize;
+        own_reach.map_or(reach, |c| f64::from(set.handlers.channels[c][h]).min(reach)) / cell
+    });
+    let mut m = Marcher {
+        set,
+        block,
+        n,
+        side: n as usize + 1,
+        origin,
+        cache,
+        near: Neighbourhood::default(),
+        slices: (0..=n).map(|_| None).collect(),
+        pool: Vec::new(),
+        todo: vec![Vec::new(); n as usize],
+        mesh: BlockMesh::default(),
+        stats: BlockStats {
+            lo: block.lo.to_array(),
+            particles: block.particles.len(),
+            ..BlockStats::default()
+        },
+        visited: FxHashSet::default(),
+        live: 0,
+        counted: 0,
+    };
+    m.stats.cache_bytes = m.cache.heap_bytes() + block.heap_bytes();
+    m.account();
+    m.seed(&local, (reach / cell).ceil() as i32);
+    m.run();
+    m.account();
+    set.in_flight.now.fetch_sub(m.counted, Ordering::Relaxed);
+    (m.mesh, m.stats)
+}
+
+impl<F: ScalarField + ?Sized> Marcher<'_, F> {
+    /// Seeds (Sec. 4): from each particle's nearest corner, down in −z until the field is
+    /// outside; the cube above that corner goes on its slab's todo list. A particle's walk
+    /// ends where the walk of the particle below it in the same column began, or a reach
+    /// below it (the paper's R_c: a particle found nothing there, one below it will). Where
+    /// the nearest corner is already outside, the particle's own cube is the seed.
+    ///
+    /// Particles above the block start their walk at its top slice: a bubble in the top margin
+    /// that dips into the block's cubes is found only from the fluid above it. Particles
+    /// beside or below the block start none.
+    fn seed(&mut self, local: &[DVec3], reach_slabs: i32) {
+        let top = self.n - 1;
+        let mut starts: Vec<(IVec3, usize)> = local
+            .iter()
+            .enumerate()
+            .map(|(i, q)| (q.round().as_ivec3(), i))
+            .filter(|(c, _)| c.x >= 1 && c.y >= 1 && c.z >= 1 && c.x <= top && c.y <= top)
+            .map(|(c, i)| (c.with_z(c.z.min(top)), i))
+            .collect();
+        starts.sort_unstable_by_key(|(c, _)| (c.y, c.x, c.z));
+        let mut below: Option<(IVec3, bool)> = None;
+        for (c, i) in starts {
+            let same_column = below.filter(|(b, _)| b.x == c.x && b.y == c.y);
+            if same_column.is_some_and(|(b, _)| b.z == c.z) {
+                continue;
+            }
+            let start_inside = self.value(c) < 0.0;
+            below = Some((c, start_inside));
+            if !start_inside {
+                if local[i].z < f64::from(top) {
+                    let own = local[i]
+                        .floor()
+                        .as_ivec3()
+                        .clamp(IVec3::ZERO, IVec3::splat(top));
+                    self.push(own);
+                }
+                continue;
+            }
+            let floor = (c.z - reach_slabs - 1).max(0);
+            for z in (floor..c.z).rev() {
+                if let Some((b, inside)) = same_column
+                    && z == b.z
+                {
+                    // The walk below starts here: it goes on from here, or this is its top.
+                    if !inside {
+                        self.push(IVec3::new(c.x, c.y, z));
+                    }
+                    break;
+                }
+                if self.value(IVec3::new(c.x, c.y, z)) >= 0.0 {
+                    self.push(IVec3::new(c.x, c.y, z));
+                    break;
+                }
+            }
+        }
+    }
+
+    fn push(&mut self, cube: IVec3) {
+        self.todo[cube.z as usize].push([cube.x as u16, cube.y as u16]);
+    }
+
+    /// Algorithm 1.
+    fn run(&mut self) {
+        while let Some(z) = self.todo.iter().position(|t| !t.is_empty()) {
+            self.allocate(z);
+            self.allocate(z + 1);
+            self.account();
+            while let Some([x, y]) = self.todo[z].pop() {
+                self.visit(IVec3::new(i32::from(x), i32::from(y), z as i32));
+            }
+            self.account();
+            if z == 0 || self.todo[z - 1].is_empty() {
+                self.free(z);
+            }
+            if z + 1 == self.todo.len() || self.todo[z + 1].is_empty() {
+                self.free(z + 1);
+            }
+        }
+    }
+
+    fn visit(&mut self, cube: IVec3) {
+        let (z, i) = (cube.z as usize, self.entry(cube));
+        let (below, above) = (self.slice(z), self.slice(z + 1));
+        if below.entry(i) & DONE_ABOVE != 0 || above.entry(i) & DONE_BELOW != 0 {
+            return;
+        }
+        self.slices[z].as_mut().unwrap().set_flag(i, DONE_ABOVE);
+        self.slices[z + 1].as_mut().unwrap().set_flag(i, DONE_BELOW);
+        self.stats.cubes_visited += 1;
+        if self.set.check_visits && !self.visited.insert(cube) {
+            self.stats.revisits += 1;
+        }
+        let ids: [u32; 8] = std::array::from_fn(|c| self.corner(cube + offset(c)));
+        let values: [f32; 8] = std::array::from_fn(|c| {
+            let at = cube + offset(c);
+            self.slice(at.z as usize).corners[ids[c] as usize].value
+        });
+        let inner = (cube - self.block.margin).cmpge(IVec3::ZERO).all()
+            && (cube - self.block.margin)
+                .cmplt(IVec3::splat(self.block.size))
+                .all();
+        if inner {
+            self.polygonise(cube, &ids, &values);
+        }
+        // Neighbours across faces the surface crosses (cubesToDo).
+        for axis in 0..3 {
+            for high in [false, true] {
+                let face = (0..8).filter(|&c| (corner_offset(c)[axis] == 1) == high);
+                let (mut inside, mut outside) = (false, false);
+                for c in face {
+                    inside |= values[c] < 0.0;
+                    outside |= values[c] >= 0.0;
+                }
+                let next = cube + IVec3::AXES[axis] * if high { 1 } else { -1 };
+                if inside
+                    && outside
+                    && next.cmpge(IVec3::ZERO).all()
+                    && next.cmplt(IVec3::splat(self.n)).all()
+                    && !self.done(next, cube)
+                {
+                    self.push(next);
+                }
+            }
+        }
+    }
+
+    /// Whether cube `next`, next to `cube`, is done, by the flags of the slices `cube`'s slab
+    /// has allocated.
+    fn done(&self, next: IVec3, cube: IVec3) -> bool {
+        let i = self.entry(next);
+        if next.z > cube.z {
+            self.slice(next.z as usize).entry(i) & DONE_ABOVE != 0
+        } else if next.z < cube.z {
+            self.slice(cube.z as usize).entry(i) & DONE_BELOW != 0
+        } else {
+            self.slice(next.z as usize).entry(i) & DONE_ABOVE != 0
+        }
+    }
+
+    fn polygonise(&mut self, cube: IVec3, ids: &[u32; 8], values: &[f32; 8]) {
+        for t in cases()[case_index(values)].triangles() {
+            let tri = t.map(|e| self.vertex(cube, ids, values, e as usize));
+            self.mesh.triangles.push(tri);
+        }
+    }
+
+    /// The vertex on edge `e` of `cube`, kept by the edge's lower corner (lookupOrEval's
+    /// vertex indices).
+    fn vertex(&mut self, cube: IVec3, ids: &[u32; 8], values: &[f32; 8], e: usize) -> u32 {
+        let (c0, c1) = edge_corners(e);
+        let axis = edge_axis(e);
+        let at = cube + offset(c0);
+        let z = at.z as usize;
+        let existing = self.slice(z).corners[ids[c0] as usize].vertices[axis];
+        if existing != NO_VERTEX {
+            return existing;
+        }
+        let (v0, v1) = (values[c0], values[c1]);
+        let t = v0 / (v0 - v1);
+        let global = self.origin + at;
+        let mut p = vertex_position(global, self.set.cell);
+        p[axis] += t * self.set.cell;
+        let id = self.mesh.positions.len() as u32;
+        self.mesh.positions.push(p);
+        self.mesh.edges.push((global, axis as u8));
+        if self.set.corner_gradients {
+            let end = cube + offset(c1);
+            let (g0, g1) = (self.gradient(at, ids[c0]), self.gradient(end, ids[c1]));
+            let fallback = IVec3::AXES[axis].as_vec3() * (v1 - v0).signum();
+            self.mesh
+                .normals
+                .push(g0.lerp(g1, t).try_normalize().unwrap_or(fallback));
+        }
+        self.slices[z].as_mut().unwrap().corners[ids[c0] as usize].vertices[axis] = id;
+        id
+    }
+
+    /// The cached corner `c` (local), computed first if new: lookupOrEval.
+    fn corner(&mut self, c: IVec3) -> u32 {
+        let i = self.entry(c);
+        if let Some(id) = self.slice(c.z as usize).corner(i) {
+            return id;
+        }
+        let value = self.value(c);
+        self.stats.corners += 1;
+        let corner = Corner {
+            at: [c.x as u16, c.y as u16],
+            value,
+            gradient: Vec3::NAN,
+            vertices: [NO_VERTEX; 3],
+        };
+        self.slices[c.z as usize]
+            .as_mut()
+            .unwrap()
+            .insert(i, corner)
+    }
+
+    fn gradient(&mut self, c: IVec3, id: u32) -> Vec3 {
+        let cached = self.slice(c.z as usize).corners[id as usize].gradient;
+        if !cached.x.is_nan() {
+            return cached;
+        }
+        self.gather(c);
+        let g = self.set.field.gradient(&self.near, Vec3::ZERO);
+        self.slices[c.z as usize].as_mut().unwrap().corners[id as usize].gradient = g;
+        g
+    }
+
+    /// The field at local corner `c`, from exactly the particles in reach of it.
+    fn value(&mut self, c: IVec3) -> f32 {
+        self.gather(c);
+        self.set.field.value(&self.near, Vec3::ZERO)
+    }
+
+    fn gather(&mut self, c: IVec3) {
+        let (handlers, particles) = (self.set.handlers, &self.block.particles);
+        let near = &mut self.near;
+        near.begin(handlers, vertex_position(self.origin + c, self.set.cell));
+        self.cache
+            .lookup(c, |i| near.add(handlers, particles[i] as usize));
+        near.seal();
+    }
+
+    fn entry(&self, c: IVec3) -> usize {
+        c.y as usize * self.side + c.x as usize
+    }
+
+    fn slice(&self, z: usize) -> &SliceCache {
+        self.slices[z]
+            .as_ref()
+            .expect("slices of the slab in work are allocated")
+    }
+
+    fn allocate(&mut self, z: usize) {
+        if self.slices[z].is_none() {
+            self.slices[z] = Some(SliceCache::new(self.side, self.pool.pop()));
+            self.live += 1;
+            self.stats.peak_slices = self.stats.peak_slices.max(self.live);
+        }
+    }
+
+    /// Frees slice `z` once no slab next to it has work, into the pool.
+    fn free(&mut self, z: usize) {
+        if let Some(mut s) = self.slices[z].take() {
+            s.reset(self.side);
+            self.pool.push(s);
+            self.live -= 1;
+        }
+    }
+
+    /// Updates the render memory's peak and the bytes in flight.
+    fn account(&mut self) {
+        let slices: usize = self
+            .slices
+            .iter()
+            .flatten()
+            .chain(&self.pool)
+            .map(SliceCache::heap_bytes)
+            .sum();
+        let todo: usize = self
+            .todo
+            .iter()
+            .map(|t| t.capacity() * size_of::<[u16; 2]>())
+            .sum();
+        let render = slices + todo;
+        self.stats.render_bytes = self.stats.render_bytes.max(render);
+        let now = render + self.stats.cache_bytes;
+        let flight = &self.set.in_flight;
+        if now >= self.counted {
+            let total =
+                flight.now.fetch_add(now - self.counted, Ordering::Relaxed) + now - self.counted;
+            flight.peak.fetch_max(total, Ordering::Relaxed);
+        } else {
+            flight.now.fetch_sub(self.counted - now, Ordering::Relaxed);
+        }
+        self.counted = now;
+    }
+}
+
+fn offset(c: usize) -> IVec3 {
+    IVec3::from_array(corner_offset(c).map(|o| o as i32))
+}

@@ -1,0 +1,88 @@
+//! One seamless mesh from the blocks' meshes. A vertex on a face shared by two blocks is made
+//! by both, from the same corner values (each block looks up exactly the particles in reach,
+//! in the same order), so it is welded by its edge: vertices are ordered by edge as the
+//! narrow band numbers them (brick, vertex in brick, axis), and equal edges become one.
+//! Nothing depends on the thread count or on a distance tolerance.
+
+use std::ops::Range;
+
+use glam::IVec3;
+use rayon::prelude::*;
+
+use super::marching::BlockMesh;
+use crate::mesh::TriMesh;
+use crate::recon::band::{BRICK, brick_of, local_index};
+
+pub struct Welded {
+    pub mesh: TriMesh,
+    /// The vertices of each brick of 8³ corners, as the triangulation gives them.
+    pub brick_vertices: Vec<Range<usize>>,
+}
+
+/// Sort key of an edge: its brick in (z, y, x) order, then its lower corner in the brick,
+/// then its axis.
+type EdgeKey = (i32, i32, i32, u32);
+
+fn key((corner, axis): (IVec3, u8)) -> EdgeKey {
+    let b = brick_of(corner);
+    let local = local_index(corner - b * BRICK) as u32;
+    (b.z, b.y, b.x, local * 3 + u32::from(axis))
+}
+
+pub fn weld(blocks: Vec<BlockMesh>) -> Welded {
+    let with_normals = blocks.iter().any(|b| !b.normals.is_empty());
+    // (edge key, block, vertex in block), in block order.
+    let mut order: Vec<(EdgeKey, u32, u32)> = blocks
+        .iter()
+        .enumerate()
+        .flat_map(|(b, m)| {
+            m.edges
+                .iter()
+                .enumerate()
+                .map(move |(v, &e)| (key(e), b as u32, v as u32))
+        })
+        .collect();
+    order.par_sort_unstable();
+    let mut first = Vec::with_capacity(blocks.len());
+    let mut total = 0usize;
+    for b in &blocks {
+        first.push(total);
+        total += b.positions.len();
+    }
+    let mut remap = vec![0u32; total];
+    let mut mesh = TriMesh::default();
+    let mut brick_vertices: Vec<Range<usize>> = Vec::new();
+    let mut last: Option<EdgeKey> = None;
+    for &(k, b, v) in &order {
+        if last != Some(k) {
+            let id = mesh.vertices.len();
+            let m = &blocks[b as usize];
+            mesh.vertices.push(m.positions[v as usize]);
+            if with_normals {
+                mesh.normals.push(m.normals[v as usize]);
+            }
+            let same_brick = last.is_some_and(|l| (l.0, l.1, l.2) == (k.0, k.1, k.2));
+            match brick_vertices.last_mut() {
+                Some(r) if same_brick => r.end = id + 1,
+                _ => brick_vertices.push(id..id + 1),
+            }
+            last = Some(k);
+        }
+        remap[first[b as usize] + v as usize] = mesh.vertices.len() as u32 - 1;
+    }
+    mesh.triangles = blocks
+        .iter()
+        .enumerate()
+        .flat_map(|(b, m)| {
+            let base = first[b];
+            let remap = &remap;
+            m.triangles
+                .iter()
+                .map(move |t| t.map(|v| remap[base + v as usize]))
+        })
+        .collect();
+    Welded {
+        mesh,
+        brick_vertices,
+    }
+}
