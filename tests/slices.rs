@@ -166,11 +166,14 @@ fn slices_give_the_narrow_band_mesh_on_a_real_frame() {
         return;
     };
     let ps = read(&path);
-    let p = params("ssp07", "r", 0.014, 64);
-    let band = reconstruct(&ps, &p, Engine::NarrowBand).unwrap();
-    let (rec, report) = slices(&ps, &p, 2);
-    assert_same_surface(&rec.mesh, &band.mesh, p.cell, "cbd-small/frame_0020");
-    assert_sound(&report, "cbd-small/frame_0020");
+    for (field, block) in [("ssp07", 64), ("metaball", 16)] {
+        let what = format!("cbd-small/frame_0020, {field}, block {block}");
+        let p = params(field, "r", 0.014, block);
+        let band = reconstruct(&ps, &p, Engine::NarrowBand).unwrap();
+        let (rec, report) = slices(&ps, &p, 2);
+        assert_same_surface(&rec.mesh, &band.mesh, p.cell, &what);
+        assert_sound(&report, &what);
+    }
 }
 
 /// At cell r/2 SSP07 makes blobs of one or two cells between splash particles, 1.5r to 2.3r

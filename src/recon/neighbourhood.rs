@@ -133,24 +133,23 @@ impl Neighbourhood {
         }
     }
 
-    /// Starts a list of particles picked one by one with [`add`](Self::add), relative to
-    /// `anchor`, with the channels of `handlers`; [`seal`](Self::seal) ends it.
-    pub fn begin(&mut self, handlers: &HandlerArray, anchor: Vec3) {
-        self.channels.resize_with(handlers.channels.len(), Vec::new);
+    /// Holds the `candidates` (index into `positions` and `channels`, and whether to keep it)
+    /// that are kept, relative to `anchor`.
+    pub fn pick(
+        &mut self,
+        anchor: Vec3,
+        candidates: impl ExactSizeIterator<Item = (usize, bool)>,
+        positions: &[Vec3],
+        channels: &[Vec<f32>],
+    ) {
+        self.channels.resize_with(channels.len(), Vec::new);
         self.clear(anchor);
-    }
-
-    /// Adds particle `i` of `handlers`.
-    #[inline]
-    pub fn add(&mut self, handlers: &HandlerArray, i: usize) {
-        self.push(handlers.positions[i] - self.anchor);
-        for (c, values) in self.channels.iter_mut().enumerate() {
-            values.push(handlers.channels[c][i]);
+        self.grow(candidates.len());
+        let mut n = 0;
+        for (i, kept) in candidates {
+            n = self.put(n, positions[i] - anchor, kept, |c| channels[c][i]);
         }
-    }
-
-    /// Pads the list for the lane sums.
-    pub fn seal(&mut self) {
+        self.truncate(n);
         self.pad();
     }
 

@@ -80,8 +80,9 @@ impl LookupCache {
         }
     }
 
-    /// Calls `f` with every particle within reach of corner `c`, in z order.
-    pub fn lookup(&mut self, c: IVec3, mut f: impl FnMut(usize)) {
+    /// The particles near corner `c`'s height in its column, in z order, each with whether it
+    /// is within reach of `c`: all those within reach are among them.
+    pub fn lookup(&mut self, c: IVec3) -> impl ExactSizeIterator<Item = (usize, bool)> + '_ {
         let column = c.y as usize * self.side + c.x as usize;
         let (first, end) = (self.start[column], self.start[column + 1]);
         // Particles whose own slab lies within reach (plus one for rounding) of c.z.
@@ -98,15 +99,12 @@ impl LookupCache {
             at += 1;
         }
         self.cursor[column] = at;
+        let window = &self.entries[at as usize..end as usize];
+        let len = window.partition_point(|e| e.particle < highest);
         let z = c.z as u16;
-        for e in &self.entries[at as usize..end as usize] {
-            if e.particle >= highest {
-                break;
-            }
-            if e.min_z <= z && z <= e.max_z {
-                f(e.particle as usize);
-            }
-        }
+        window[..len]
+            .iter()
+            .map(move |e| (e.particle as usize, e.min_z <= z && z <= e.max_z))
     }
 
     /// Bytes held: the paper's "cache memory".
@@ -126,14 +124,11 @@ fn for_each_entry(
     mut f: impl FnMut(usize, Entry),
 ) {
     let side = cubes as usize + 1;
-    let inner = |v: f64| v.clamp(1.0, f64::from(cubes - 1));
+    let (lo_in, hi_in) = (1, cubes - 1);
     for (i, q) in particles.iter().enumerate() {
         let h2 = reach(i).powi(2);
         let h = h2.sqrt();
-        let (y0, y1) = (
-            inner((q.y - h).ceil()) as i32,
-            inner((q.y + h).floor()) as i32,
-        );
+        let (y0, y1) = (ceil(q.y - h).max(lo_in), floor(q.y + h).min(hi_in));
         for y in y0..=y1 {
             // The row's columns within reach: a chord of the disk.
             let row2 = h2 - (f64::from(y) - q.y).powi(2);
@@ -141,18 +136,14 @@ fn for_each_entry(
                 continue;
             }
             let w = row2.sqrt();
-            let (x0, x1) = (
-                inner((q.x - w).ceil()) as i32,
-                inner((q.x + w).floor()) as i32,
-            );
+            let (x0, x1) = (ceil(q.x - w).max(lo_in), floor(q.x + w).min(hi_in));
             for x in x0..=x1 {
                 let d2 = (f64::from(x) - q.x).powi(2) + (f64::from(y) - q.y).powi(2);
                 if d2 > h2 {
                     continue;
                 }
                 let hz = (h2 - d2).sqrt();
-                let (lo, hi) = ((q.z - hz).ceil(), (q.z + hz).floor());
-                let (lo, hi) = (lo.max(1.0), hi.min(f64::from(cubes - 1)));
+                let (lo, hi) = (ceil(q.z - hz).max(lo_in), floor(q.z + hz).min(hi_in));
                 if lo > hi {
                     continue;
                 }
@@ -165,6 +156,17 @@ fn for_each_entry(
             }
         }
     }
+}
+
+/// ⌊v⌋ and ⌈v⌉ without a libm call (the baseline x86-64 target has no SSE4.1 rounding).
+fn floor(v: f64) -> i32 {
+    let i = v as i32;
+    i - i32::from(v < f64::from(i))
+}
+
+fn ceil(v: f64) -> i32 {
+    let i = v as i32;
+    i + i32::from(v > f64::from(i))
 }
 
 #[cfg(test)]
@@ -196,7 +198,7 @@ mod tests {
                         let z = if pass { cubes - k } else { k };
                         let c = IVec3::new(x, y, z);
                         found.clear();
-                        cache.lookup(c, |i| found.push(i));
+                        found.extend(cache.lookup(c).filter(|p| p.1).map(|p| p.0));
                         let boundary = c.min_element() == 0 || c.max_element() == cubes;
                         let expected: Vec<usize> = (0..ps.len())
                             .filter(|&i| !boundary && ps[i].distance(c.as_dvec3()) <= reach)

@@ -68,6 +68,10 @@ pub struct BlockStats {
 struct Marcher<'a, F: ScalarField + ?Sized> {
     set: &'a Setting<'a, F>,
     block: &'a Block,
+    /// The block's particles and their channels, in its (height) order: lookups read them
+    /// nearly in sequence.
+    positions: Vec<Vec3>,
+    channels: Vec<Vec<f32>>,
     /// Cubes per side of the block with its margins.
     n: i32,
     side: usize,
@@ -102,9 +106,22 @@ pub fn march<F: ScalarField + ?Sized>(set: &Setting<F>, block: &Block) -> (Block
         let h = block.particles[i] as usize;
         own_reach.map_or(reach, |c| f64::from(set.handlers.channels[c][h]).min(reach)) / cell
     });
+    let handlers = set.handlers;
+    let positions = block
+        .particles
+        .iter()
+        .map(|&h| handlers.positions[h as usize])
+        .collect();
+    let channels = handlers
+        .channels
+        .iter()
+        .map(|c| block.particles.iter().map(|&h| c[h as usize]).collect())
+        .collect();
     let mut m = Marcher {
         set,
         block,
+        positions,
+        channels,
         n,
         side: n as usize + 1,
         origin,
@@ -123,7 +140,13 @@ pub fn march<F: ScalarField + ?Sized>(set: &Setting<F>, block: &Block) -> (Block
         live: 0,
         counted: 0,
     };
-    m.stats.cache_bytes = m.cache.heap_bytes() + block.heap_bytes();
+    m.stats.cache_bytes = m.cache.heap_bytes()
+        + block.heap_bytes()
+        + m.positions.capacity() * size_of::<Vec3>()
+        + m.channels
+            .iter()
+            .map(|c| c.capacity() * size_of::<f32>())
+            .sum::<usize>();
     m.account();
     m.seed(&local, (reach / cell).ceil() as i32);
     m.run();
@@ -347,12 +370,10 @@ impl<F: ScalarField + ?Sized> Marcher<'_, F> {
     }
 
     fn gather(&mut self, c: IVec3) {
-        let (handlers, particles) = (self.set.handlers, &self.block.particles);
-        let near = &mut self.near;
-        near.begin(handlers, vertex_position(self.origin + c, self.set.cell));
-        self.cache
-            .lookup(c, |i| near.add(handlers, particles[i] as usize));
-        near.seal();
+        let anchor = vertex_position(self.origin + c, self.set.cell);
+        let candidates = self.cache.lookup(c);
+        self.near
+            .pick(anchor, candidates, &self.positions, &self.channels);
     }
 
     fn entry(&self, c: IVec3) -> usize {
