@@ -2,8 +2,8 @@
 //! defines), rather than from differences of the sampled grid values, which a cell of 2r
 //! smooths over (those stay available as `normals = "grid"`).
 //!
-//! Gathered as the field is (`field_sampling.rs`): once per brick, narrowed to each cube of
-//! 2×2×2 cells, and the cube's list reused by every vertex in it.
+//! Gathered as the field is (`field_sampling.rs`): once per brick, narrowed to each block of
+//! 4³ cells and then to each cell, whose list serves every vertex in it.
 
 use std::ops::Range;
 
@@ -33,6 +33,9 @@ pub fn set_normals<F: ScalarField + ?Sized>(
     }
 }
 
+/// Cells per side of the middle level of narrowing.
+const BLOCK: i32 = 4;
+
 /// Replaces each vertex normal by the normalised field gradient there, where it is not zero
 /// (a vertex then keeps its grid normal).
 fn field_normals<F: ScalarField + ?Sized>(
@@ -48,28 +51,34 @@ fn field_normals<F: ScalarField + ?Sized>(
     let normals: Vec<(Range<usize>, Vec<Vec3>)> = bricks
         .par_iter()
         .map_init(
-            || ([(); 2].map(|_| Neighbourhood::default()), Vec::new()),
-            |([brick_near, group_near], order), range| {
+            || ([(); 3].map(|_| Neighbourhood::default()), Vec::new()),
+            |([brick_near, block_near, cell_near], order), range| {
                 let brick = &vertices[range.clone()];
                 let (lo, hi) = brick.iter().fold((Vec3::MAX, Vec3::MIN), |(lo, hi), &v| {
                     (lo.min(v), hi.max(v))
                 });
                 brick_near.gather_box(handlers, lo, hi, reach, own_reach);
-                // The brick's vertices by cube of 2 cells, so that each cube is gathered once.
-                let group = |v: Vec3| ((v - lo) / (2.0 * cell)).floor().as_ivec3();
+                // The brick's vertices by cell, cells by block of 4³: each block and each
+                // cell narrows the list once, as the field sampling does.
+                let cell_of = |v: Vec3| ((v - lo) / cell).floor().as_ivec3();
+                let block_of = |c: IVec3| c.div_euclid(IVec3::splat(BLOCK));
                 order.clear();
-                order.extend(0..brick.len());
-                order.sort_unstable_by_key(|&i| {
-                    let g = group(brick[i]);
-                    (g.z, g.y, g.x)
+                order.extend((0..brick.len()).map(|i| (cell_of(brick[i]), i)));
+                order.sort_unstable_by_key(|&(c, i)| {
+                    let b = block_of(c);
+                    (b.z, b.y, b.x, c.z, c.y, c.x, i)
                 });
                 let mut out = vec![Vec3::ZERO; brick.len()];
-                for run in order.chunk_by(|&a, &b| group(brick[a]) == group(brick[b])) {
-                    let g: IVec3 = group(brick[run[0]]);
-                    let glo = lo + g.as_vec3() * 2.0 * cell;
-                    group_near.filter_box(brick_near, glo, glo + 2.0 * cell, reach, own_reach);
-                    for &i in run {
-                        out[i] = field.gradient(group_near, brick[i] - glo);
+                for block in order.chunk_by(|a, b| block_of(a.0) == block_of(b.0)) {
+                    let blo = lo + (block_of(block[0].0) * BLOCK).as_vec3() * cell;
+                    let bhi = blo + BLOCK as f32 * cell;
+                    block_near.filter_box(brick_near, blo, bhi, reach, own_reach);
+                    for run in block.chunk_by(|a, b| a.0 == b.0) {
+                        let clo = lo + run[0].0.as_vec3() * cell;
+                        cell_near.filter_box(block_near, clo, clo + cell, reach, own_reach);
+                        for &(_, i) in run {
+                            out[i] = field.gradient(cell_near, brick[i] - clo);
+                        }
                     }
                 }
                 (range.clone(), out)
