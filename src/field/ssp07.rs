@@ -142,13 +142,34 @@ pub struct Sums {
     wdd: [f32; 6],
 }
 
+/// One particle's terms of [`Sums`] at offset d = x_j − x, with its t.
+#[inline(always)]
+fn sum_terms(dx: f32, dy: f32, dz: f32, inv_r2: f32) -> (f32, [f32; 13]) {
+    let t = (1.0 - (dx * dx + dy * dy + dz * dz) * inv_r2).max(0.0);
+    let w = t * t;
+    let k = w * t;
+    let (wx, wy, wz) = (w * dx, w * dy, w * dz);
+    let terms = [
+        k,
+        k * dx,
+        k * dy,
+        k * dz,
+        wx,
+        wy,
+        wz,
+        wx * dx,
+        wy * dy,
+        wz * dz,
+        wx * dy,
+        wx * dz,
+        wy * dz,
+    ];
+    (t, terms)
+}
+
 crate::lane_sums! {
     fn ssp07_sums(inv_r2: f32) -> [13] |dx, dy, dz| {
-        let t = (1.0 - (dx * dx + dy * dy + dz * dz) * inv_r2).max(0.0);
-        let w = t * t;
-        let k = w * t;
-        let (wx, wy, wz) = (w * dx, w * dy, w * dz);
-        [k, k * dx, k * dy, k * dz, wx, wy, wz, wx * dx, wy * dy, wz * dz, wx * dy, wx * dz, wy * dz]
+        sum_terms(dx, dy, dz, inv_r2).1
     }
 }
 
@@ -246,14 +267,13 @@ struct GradientSums {
 
 crate::lane_sums! {
     fn ssp07_gradient_sums(inv_r2: f32) -> [30] |dx, dy, dz| {
-        let t = (1.0 - (dx * dx + dy * dy + dz * dz) * inv_r2).max(0.0);
+        let (t, [k, kx, ky, kz, wx, wy, wz, wxx, wyy, wzz, wxy, wxz, wyz]) =
+            sum_terms(dx, dy, dz, inv_r2);
         let w = t * t;
-        let k = w * t;
-        let (wx, wy, wz) = (w * dx, w * dy, w * dz);
         let (tx, ty, tz) = (t * dx, t * dy, t * dz);
         let (txx, tyy, tzz, txy, txz, tyz) = (tx * dx, ty * dy, tz * dz, tx * dy, tx * dz, ty * dz);
         [
-            k, k * dx, k * dy, k * dz, wx, wy, wz, wx * dx, wy * dy, wz * dz, wx * dy, wx * dz, wy * dz,
+            k, kx, ky, kz, wx, wy, wz, wxx, wyy, wzz, wxy, wxz, wyz,
             w, txx, tyy, tzz, txy, txz, tyz,
             txx * dx, tyy * dy, tzz * dz, txx * dy, txx * dz, txy * dy, tyy * dz, txz * dz, tyz * dz,
             txy * dz,
