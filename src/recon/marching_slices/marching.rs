@@ -14,6 +14,7 @@ use super::slice_cache::{Corner, DONE_ABOVE, DONE_BELOW, NO_VERTEX, SliceCache};
 use crate::field::ScalarField;
 use crate::mesh::marching_cubes::{case_index, cases, corner_offset, edge_axis, edge_corners};
 use crate::recon::field_sampling::vertex_position;
+use crate::recon::halo::offset;
 use crate::recon::handler_array::HandlerArray;
 use crate::recon::neighbourhood::Neighbourhood;
 
@@ -252,11 +253,7 @@ impl<F: ScalarField + ?Sized> Marcher<'_, F> {
             let at = cube + offset(c);
             self.slice(at.z as usize).corners[ids[c] as usize].value
         });
-        let inner = (cube - self.block.margin).cmpge(IVec3::ZERO).all()
-            && (cube - self.block.margin)
-                .cmplt(IVec3::splat(self.block.size))
-                .all();
-        if inner {
+        if within(cube - self.block.margin, self.block.size) {
             self.polygonise(cube, &ids, &values);
         }
         // Neighbours across faces the surface crosses (cubesToDo).
@@ -269,12 +266,7 @@ impl<F: ScalarField + ?Sized> Marcher<'_, F> {
                     outside |= values[c] >= 0.0;
                 }
                 let next = cube + IVec3::AXES[axis] * if high { 1 } else { -1 };
-                if inside
-                    && outside
-                    && next.cmpge(IVec3::ZERO).all()
-                    && next.cmplt(IVec3::splat(self.n)).all()
-                    && !self.done(next, cube)
-                {
+                if inside && outside && within(next, self.n) && !self.done(next, cube) {
                     self.push(next);
                 }
             }
@@ -285,9 +277,7 @@ impl<F: ScalarField + ?Sized> Marcher<'_, F> {
     /// has allocated.
     fn done(&self, next: IVec3, cube: IVec3) -> bool {
         let i = self.entry(next);
-        if next.z > cube.z {
-            self.slice(next.z as usize).entry(i) & DONE_ABOVE != 0
-        } else if next.z < cube.z {
+        if next.z < cube.z {
             self.slice(cube.z as usize).entry(i) & DONE_BELOW != 0
         } else {
             self.slice(next.z as usize).entry(i) & DONE_ABOVE != 0
@@ -432,6 +422,7 @@ impl<F: ScalarField + ?Sized> Marcher<'_, F> {
     }
 }
 
-fn offset(c: usize) -> IVec3 {
-    IVec3::from_array(corner_offset(c).map(|o| o as i32))
+/// Whether cube `c` is one of the `n`³ from the origin.
+fn within(c: IVec3, n: i32) -> bool {
+    c.cmpge(IVec3::ZERO).all() && c.cmplt(IVec3::splat(n)).all()
 }
