@@ -106,29 +106,23 @@ fn gather(
     engine: Engine,
     mut stages: Stages,
 ) -> Result<Reconstruction> {
-    let (field, handlers, fitted) = prepare(particles, params, &mut stages)?;
-    let (field, samples) = match &fitted {
-        Some(f) => (f.field.as_ref(), &f.handlers),
-        None => (field.as_ref(), &handlers),
-    };
+    let prepared = prepare(particles, params, &mut stages)?;
+    let (field, samples) = prepared.sampling();
     // The full grid reaches as far as the fitted kernels do.
     let params = &Params {
         support: field.support(),
         ..params.clone()
     };
-    let mut band = match engine {
-        Engine::NarrowBand => {
-            let surface = stages.run(Stage::SurfaceParticles, || {
-                surface_particles(&handlers, &SurfaceCriteria::of(params))
-            });
-            stages.stats.surface_particles = surface.len();
-            stages.run(Stage::Band, || {
-                Band::around(&surface, params.cell, params.band_half_width)
-            })?
-        }
-        Engine::FullGather | Engine::Scatter | Engine::Slices => {
-            stages.run(Stage::Band, || full_grid::band(particles, params))?
-        }
+    let mut band = if engine == Engine::NarrowBand {
+        let surface = stages.run(Stage::SurfaceParticles, || {
+            surface_particles(&prepared.handlers, &SurfaceCriteria::of(params))
+        });
+        stages.stats.surface_particles = surface.len();
+        stages.run(Stage::Band, || {
+            Band::around(&surface, params.cell, params.band_half_width)
+        })?
+    } else {
+        stages.run(Stage::Band, || full_grid::band(particles, params))?
     };
     let mut values = stages.run(Stage::ScalarField, || sample_field(&band, samples, field));
     stages.stats.closure_vertices = stages.run(Stage::Band, || {
@@ -136,34 +130,55 @@ fn gather(
             sample_field(grown, samples, field)
         })
     });
-    let triangulation = stages.run(Stage::Triangulation, || {
+    let triangulation = stages.run(Stage::Triangulation, || -> Result<_> {
         let mut t = triangulate(&band, &values);
+        let cell = band.cell;
         set_normals(
             params.normals,
             &mut t.mesh,
             &t.brick_vertices,
-            band.cell,
-            samples,
+            cell,
+            || Ok(samples),
             field,
-        );
-        t
-    });
+        )?;
+        Ok(t)
+    })?;
     Ok(finish(
         stages.stats,
         &band,
         &values,
-        handlers.heap_bytes() + fitted.as_ref().map_or(0, |f| f.handlers.heap_bytes()),
+        prepared.heap_bytes(),
         triangulation,
     ))
 }
 
-/// The field, and the handler array the engines gather from, with the field's channels;
-/// fields with adaptive kernels also come fitted to the frame, with their own handler array.
+/// The field, and the handler array of the frame with the field's channels; fields with
+/// adaptive kernels also come fitted to the frame, with their own handler array.
+pub(super) struct Prepared {
+    field: Box<dyn ScalarField>,
+    pub handlers: HandlerArray,
+    fitted: Option<Fitted>,
+}
+
+impl Prepared {
+    /// The field to sample and the handler array to gather its particles from.
+    pub fn sampling(&self) -> (&dyn ScalarField, &HandlerArray) {
+        match &self.fitted {
+            Some(f) => (f.field.as_ref(), &f.handlers),
+            None => (self.field.as_ref(), &self.handlers),
+        }
+    }
+
+    pub fn heap_bytes(&self) -> usize {
+        self.handlers.heap_bytes() + self.fitted.as_ref().map_or(0, |f| f.handlers.heap_bytes())
+    }
+}
+
 pub(super) fn prepare(
     particles: &[Vec3],
     params: &Params,
     stages: &mut Stages,
-) -> Result<(Box<dyn ScalarField>, HandlerArray, Option<Fitted>)> {
+) -> Result<Prepared> {
     let field = params.field.build(params.spacing);
     // The handler array comes first here, as the colour field needs the neighbours too.
     let mut handlers = stages.run(Stage::HandlerArray, || {
@@ -176,7 +191,11 @@ pub(super) fn prepare(
     let fitted = stages
         .run(Stage::ScalarField, || field.fit(&handlers))
         .transpose()?;
-    Ok((field, handlers, fitted))
+    Ok(Prepared {
+        field,
+        handlers,
+        fitted,
+    })
 }
 
 /// Lookup cells that suit both gathers: the colour support (2r), and half the field's support

@@ -5,7 +5,10 @@
 //! Gathered as the field is (`field_sampling.rs`): once per brick, narrowed to each block of
 //! 4³ cells and then to each cell, whose list serves every vertex in it.
 
+use std::borrow::Borrow;
 use std::ops::Range;
+
+use anyhow::Result;
 
 use glam::{IVec3, Vec3};
 use rayon::prelude::*;
@@ -17,20 +20,22 @@ use crate::field::ScalarField;
 use crate::mesh::TriMesh;
 
 /// Gives an engine's mesh, which comes with its grid normals, the normals `kind` asks for.
-/// `bricks` are the ranges of vertices that each lie within one brick.
-pub fn set_normals<F: ScalarField + ?Sized>(
+/// `bricks` are the ranges of vertices that each lie within one brick; `handlers` gives the
+/// particles to gather, asked for only by the field's normals.
+pub fn set_normals<F: ScalarField + ?Sized, H: Borrow<HandlerArray>>(
     kind: Normals,
     mesh: &mut TriMesh,
     bricks: &[Range<usize>],
     cell: f32,
-    handlers: &HandlerArray,
+    handlers: impl FnOnce() -> Result<H>,
     field: &F,
-) {
+) -> Result<()> {
     match kind {
-        Normals::Field => field_normals(mesh, bricks, cell, handlers, field),
+        Normals::Field => field_normals(mesh, bricks, cell, handlers()?.borrow(), field),
         Normals::Grid => {}
         Normals::None => mesh.normals = Vec::new(),
     }
+    Ok(())
 }
 
 /// Cells per side of the middle level of narrowing.

@@ -41,18 +41,19 @@ pub fn reconstruct(
     let values = stages.run(Stage::ScalarField, || {
         scatter_field(particles, &band, grid, &field)
     })?;
-    // The field's normals gather the particles around each vertex, like the other engines.
+    // The field's normals gather the particles around each vertex, like the other engines:
+    // only they need a handler array.
     let triangulation = stages.run(Stage::Triangulation, || -> Result<_> {
         let mut t = triangulate(&band, &values);
-        let handlers = HandlerArray::new(particles, field.support / 2.0)?;
+        let handlers = || HandlerArray::new(particles, field.support / 2.0);
         set_normals(
             params.normals,
             &mut t.mesh,
             &t.brick_vertices,
             band.cell,
-            &handlers,
+            handlers,
             &field,
-        );
+        )?;
         Ok(t)
     })?;
     Ok(finish(stages.stats, &band, &values, 0, triangulation))

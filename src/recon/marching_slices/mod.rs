@@ -51,11 +51,8 @@ pub fn reconstruct(
     checks: Checks,
     mut stages: Stages,
 ) -> Result<(Reconstruction, SlicesReport)> {
-    let (field, handlers, fitted) = prepare(particles, params, &mut stages)?;
-    let (field, samples) = match &fitted {
-        Some(f) => (f.field.as_ref(), &f.handlers),
-        None => (field.as_ref(), &handlers),
-    };
+    let prepared = prepare(particles, params, &mut stages)?;
+    let (field, samples) = prepared.sampling();
     let cell = params.cell;
     let blocks = stages.run(Stage::Band, || {
         blocks::subdivide(
@@ -81,18 +78,18 @@ pub fn reconstruct(
     });
     let blocks_bytes: usize = blocks.iter().map(|b| b.heap_bytes()).sum();
     drop(blocks);
-    let welded = stages.run(Stage::Triangulation, || {
+    let welded = stages.run(Stage::Triangulation, || -> Result<_> {
         let mut w = weld::weld(meshes);
         set_normals(
             params.normals,
             &mut w.mesh,
             &w.brick_vertices,
             cell,
-            samples,
+            || Ok(samples),
             field,
-        );
-        w
-    });
+        )?;
+        Ok(w)
+    })?;
     let report = SlicesReport {
         in_flight_peak: in_flight.peak.load(Ordering::Relaxed),
         blocks: stats,
@@ -114,11 +111,7 @@ pub fn reconstruct(
     s.surface_cells = report.blocks.iter().map(|b| b.cubes_visited).sum();
     s.triangles = mesh.triangles.len();
     s.vertices = mesh.vertices.len();
-    s.peak_bytes = handlers.heap_bytes()
-        + fitted.as_ref().map_or(0, |f| f.handlers.heap_bytes())
-        + blocks_bytes
-        + report.in_flight_peak
-        + mesh.heap_bytes();
+    s.peak_bytes = prepared.heap_bytes() + blocks_bytes + report.in_flight_peak + mesh.heap_bytes();
     s.heap_peak = s.stage_heap.max();
     s.peak_rss = memory::peak_rss().unwrap_or(0);
     Ok((Reconstruction { mesh, stats: s }, report))
