@@ -61,10 +61,7 @@ impl Neighbourhood {
         own_reach: Option<usize>,
     ) {
         self.clear(lo);
-        let reach = |i: usize| match own_reach {
-            Some(c) => handlers.channels[c][i].min(radius),
-            None => radius,
-        };
+        let reach = reach(&handlers.channels, radius, own_reach);
         self.channels.resize_with(handlers.channels.len(), Vec::new);
         handlers.for_each_in_cells(cells.0, cells.1, |range| {
             let start = self.x.len();
@@ -93,10 +90,7 @@ impl Neighbourhood {
         own_reach: Option<usize>,
     ) {
         self.clear(lo);
-        let reach = |i: usize| match own_reach {
-            Some(c) => from.channels[c][i].min(radius),
-            None => radius,
-        };
+        let reach = reach(&from.channels, radius, own_reach);
         let shift = from.anchor - lo;
         let (blo, bhi) = (Vec3::ZERO, hi - lo);
         self.channels.resize_with(from.channels.len(), Vec::new);
@@ -204,6 +198,16 @@ impl Neighbourhood {
     pub fn is_empty(&self) -> bool {
         self.x.is_empty()
     }
+}
+
+/// Particle i's reach: `radius`, or with `own_reach` the smaller of it and the particle's
+/// value in that channel.
+pub fn reach(
+    channels: &[Vec<f32>],
+    radius: f32,
+    own_reach: Option<usize>,
+) -> impl Fn(usize) -> f32 + '_ {
+    move |i| own_reach.map_or(radius, |c| channels[c][i].min(radius))
 }
 
 /// Maps every particle, in handler order, to `f(near, x)`: `near` holds the particles within

@@ -12,6 +12,7 @@ use rayon::prelude::*;
 use rustc_hash::FxHashSet;
 
 use crate::recon::handler_array::HandlerArray;
+use crate::recon::neighbourhood;
 
 pub struct Block {
     /// Global index of the block's first cube (cube k spans corners k to k + 1).
@@ -75,11 +76,12 @@ pub fn subdivide(
             let lo = key * size;
             let box_lo = (lo - margin).as_vec3() * cell;
             let box_hi = (lo + size + margin).as_vec3() * cell;
+            let particle_reach = neighbourhood::reach(&handlers.channels, reach, own_reach);
             let mut particles = Vec::new();
             handlers.for_each_in_box(box_lo - reach, box_hi + reach, |range| {
                 for i in range {
                     let p = handlers.positions[i];
-                    let r = own_reach.map_or(reach, |c| handlers.channels[c][i].min(reach));
+                    let r = particle_reach(i);
                     if (p - p.clamp(box_lo, box_hi)).length_squared() <= r * r {
                         particles.push(i as u32);
                     }

@@ -16,7 +16,7 @@ use crate::mesh::marching_cubes::{case_index, cases, corner_offset, edge_axis, e
 use crate::recon::field_sampling::vertex_position;
 use crate::recon::halo::offset;
 use crate::recon::handler_array::HandlerArray;
-use crate::recon::neighbourhood::Neighbourhood;
+use crate::recon::neighbourhood::{Neighbourhood, reach};
 
 /// What one block's marching needs besides the block.
 pub struct Setting<'a, F: ScalarField + ?Sized> {
@@ -95,29 +95,28 @@ struct Marcher<'a, F: ScalarField + ?Sized> {
 pub fn march<F: ScalarField + ?Sized>(set: &Setting<F>, block: &Block) -> (BlockMesh, BlockStats) {
     let n = block.size + 2 * block.margin;
     let origin = block.lo - block.margin;
-    let cell = f64::from(set.cell);
-    let own_reach = set.field.reach_channel();
-    let reach = f64::from(set.field.support());
-    let local: Vec<DVec3> = block
-        .particles
-        .iter()
-        .map(|&h| set.handlers.positions[h as usize].as_dvec3() / cell - origin.as_dvec3())
-        .collect();
-    let cache = LookupCache::build(&local, n, |i| {
-        let h = block.particles[i] as usize;
-        own_reach.map_or(reach, |c| f64::from(set.handlers.channels[c][h]).min(reach)) / cell
-    });
     let handlers = set.handlers;
-    let positions = block
+    let positions: Vec<Vec3> = block
         .particles
         .iter()
         .map(|&h| handlers.positions[h as usize])
         .collect();
-    let channels = handlers
+    let channels: Vec<Vec<f32>> = handlers
         .channels
         .iter()
         .map(|c| block.particles.iter().map(|&h| c[h as usize]).collect())
         .collect();
+    // In cube units of the block.
+    let cell = f64::from(set.cell);
+    let local: Vec<DVec3> = positions
+        .iter()
+        .map(|p| p.as_dvec3() / cell - origin.as_dvec3())
+        .collect();
+    let support = set.field.support();
+    let cache = {
+        let particle_reach = reach(&channels, support, set.field.reach_channel());
+        LookupCache::build(&local, n, |i| f64::from(particle_reach(i)) / cell)
+    };
     let mut m = Marcher {
         set,
         block,
@@ -149,7 +148,7 @@ pub fn march<F: ScalarField + ?Sized>(set: &Setting<F>, block: &Block) -> (Block
             .map(|c| c.capacity() * size_of::<f32>())
             .sum::<usize>();
     m.account();
-    m.seed(&local, (reach / cell).ceil() as i32);
+    m.seed(&local, (f64::from(support) / cell).ceil() as i32);
     m.run();
     m.account();
     set.in_flight.now.fetch_sub(m.counted, Ordering::Relaxed);
