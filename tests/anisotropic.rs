@@ -3,11 +3,9 @@
 
 mod common;
 
-use common::Jitter;
+use common::{Jitter, field_params};
 
 use glam::Vec3;
-use splash::config::{Config, Length, Params};
-use splash::field::FieldConfig;
 use splash::mesh::TriMesh;
 use splash::mesh::topology::{Topology, topology};
 use splash::recon::{Engine, reconstruct};
@@ -45,12 +43,7 @@ fn thickness(mesh: &TriMesh) -> (f32, f32) {
 }
 
 fn reconstruct_sheet(kind: &str) -> (Topology, (f32, f32)) {
-    let config = Config {
-        cell: Length::Spacings(0.5),
-        field: FieldConfig::named(kind).unwrap(),
-        ..Config::default()
-    };
-    let mesh = reconstruct(&sheet(), &Params::resolve(&config, R), Engine::NarrowBand)
+    let mesh = reconstruct(&sheet(), &field_params(kind, R, "r/2"), Engine::NarrowBand)
         .unwrap()
         .mesh;
     (topology(&mesh), thickness(&mesh))

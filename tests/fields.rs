@@ -2,7 +2,7 @@
 
 mod common;
 
-use common::{fixture, lattice_ball};
+use common::{field_params, fixture, lattice_ball};
 use glam::Vec3;
 use splash::config::{Config, Length, Normals, Params};
 use splash::field::FieldConfig;
@@ -13,12 +13,7 @@ use splash::recon::{Engine, reconstruct};
 const R: f32 = 0.01;
 
 fn params(kind: &str, cell: &str) -> Params {
-    let config = Config {
-        cell: Length::parse(cell).unwrap(),
-        field: FieldConfig::named(kind).unwrap(),
-        ..Config::default()
-    };
-    Params::resolve(&config, R)
+    field_params(kind, R, cell)
 }
 
 /// Smallest and largest distance of the mesh's vertices from `centre`, in units of r.

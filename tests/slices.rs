@@ -3,10 +3,9 @@
 
 mod common;
 
-use common::{fixture, lattice_ball, offsets, same_mesh, shared_data};
+use common::{field_params, fixture, lattice_ball, offsets, same_mesh, shared_data};
 use glam::Vec3;
-use splash::config::{Config, Length, Params};
-use splash::field::FieldConfig;
+use splash::config::Params;
 use splash::mesh::TriMesh;
 use splash::mesh::topology::{component_volumes, topology};
 use splash::recon::marching_slices::{self, Checks, SlicesReport};
@@ -14,14 +13,9 @@ use splash::recon::{Engine, Reconstruction, reconstruct};
 use splash::report::{FrameStats, Stages};
 
 fn params(field: &str, cell: &str, r: f32, block: u32) -> Params {
-    let config = Config {
-        cell: Length::parse(cell).unwrap(),
-        field: FieldConfig::named(field).unwrap(),
-        ..Config::default()
-    };
     Params {
         block,
-        ..Params::resolve(&config, r)
+        ..field_params(field, r, cell)
     }
 }
 

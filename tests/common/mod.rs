@@ -8,6 +8,7 @@ use std::sync::atomic::{AtomicU32, Ordering};
 use glam::{IVec3, Vec3};
 use rustc_hash::FxHashMap;
 use splash::config::{Config, Length, Params};
+use splash::field::FieldConfig;
 use splash::mesh::TriMesh;
 
 /// Particles on a cubic lattice of spacing `r` inside a ball.
@@ -27,9 +28,16 @@ pub fn lattice_ball(center: Vec3, radius: f32, r: f32) -> Vec<Vec3> {
     out
 }
 
+/// The default parameters (SSP07) at spacing `r` and cell size `cell`.
 pub fn params(r: f32, cell: &str) -> Params {
+    field_params("ssp07", r, cell)
+}
+
+/// The defaults of the field `kind` at spacing `r` and cell size `cell`.
+pub fn field_params(kind: &str, r: f32, cell: &str) -> Params {
     let config = Config {
         cell: Length::parse(cell).unwrap(),
+        field: FieldConfig::named(kind).unwrap(),
         ..Config::default()
     };
     Params::resolve(&config, r)
