@@ -477,6 +477,16 @@ mod tests {
         n
     }
 
+    /// `n` points on a golden-angle spiral, waving in z, within `radii` of the origin.
+    fn spiral(n: usize, radii: Vec3) -> Vec<Vec3> {
+        (0..n)
+            .map(|i| {
+                let a = i as f32 * 2.399;
+                Vec3::new(a.cos(), a.sin(), (i as f32 * 0.37).sin()) * radii
+            })
+            .collect()
+    }
+
     fn field() -> Ssp07 {
         Ssp07 {
             support: 4.0,
@@ -544,12 +554,7 @@ mod tests {
     #[test]
     fn scattered_sums_give_the_gathered_value() {
         let f = field();
-        let pts: Vec<Vec3> = (0..60)
-            .map(|i| {
-                let a = i as f32 * 2.399;
-                Vec3::new(a.cos() * 2.3, a.sin() * 2.1, (i as f32 * 0.37).sin() * 2.5)
-            })
-            .collect();
+        let pts = spiral(60, Vec3::new(2.3, 2.1, 2.5));
         let n = near(&pts);
         for x in [
             Vec3::ZERO,
@@ -567,12 +572,7 @@ mod tests {
 
     #[test]
     fn jacobian_matches_finite_differences_of_the_mean() {
-        let pts: Vec<Vec3> = (0..40)
-            .map(|i| {
-                let a = i as f32 * 2.399;
-                Vec3::new(a.cos() * 1.3, a.sin() * 1.1, (i as f32 * 0.37).sin() * 1.5)
-            })
-            .collect();
+        let pts = spiral(40, Vec3::new(1.3, 1.1, 1.5));
         let n = near(&pts);
         let mean = |x: Vec3| {
             let s = Sums::over(&n, x, 1.0 / 16.0);
