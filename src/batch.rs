@@ -6,23 +6,17 @@ use std::time::Instant;
 
 use anyhow::{Context, Result, anyhow, bail};
 
-use crate::attributes::interpolate_velocities;
-use crate::config::{Config, Params};
-use crate::io::{self, InputFormat, MeshFormat, UpAxis, VertexAttributes};
-use crate::mesh::TriMesh;
-use crate::recon::{Engine, Limits, reconstruct_with};
-use crate::report::FrameStats;
-use crate::sequence::{Shard, padded_stem, path_frame_number};
-use crate::spacing::estimate_spacing;
+use splash_sph::io::{self, VertexAttributes};
+use splash_sph::{
+    Config, FrameStats, InputFormat, MeshFormat, Reconstructor, TriMesh, estimate_spacing,
+};
 
-pub use crate::sequence::frame_number;
+use crate::memory::reconstruct_measured;
+use crate::sequence::{Shard, frame_number, padded_stem, path_frame_number};
 
 /// Frame numbers in directory output names are zero-padded to this many digits, as Blender's
 /// sequence importers expect (`fluid_0001.obj`).
 pub const FRAME_DIGITS: usize = 4;
-
-/// Particles sampled for the spacing estimate.
-const SPACING_SAMPLES: usize = 20_000;
 
 /// Where the meshes go.
 #[derive(Debug, Clone)]
@@ -110,9 +104,10 @@ pub struct Batch {
     pub inputs: Vec<PathBuf>,
     pub input_format: Option<InputFormat>,
     pub output: Output,
+    /// The mesh format: the configuration's, else the one the output name implies.
     pub format: MeshFormat,
+    /// Everything else: the reconstruction, and the up axis and attributes of the output.
     pub config: Config,
-    pub engine: Engine,
     /// This job's part of the sequence; None: all of it.
     pub shard: Option<Shard>,
     /// Leaves frames whose output exists alone. Outputs are renamed into place whole, so an
@@ -120,12 +115,6 @@ pub struct Batch {
     pub skip_existing: bool,
     /// Stops at the first failing frame instead of going on with the others.
     pub fail_fast: bool,
-    /// Rotates the mesh on output.
-    pub up_axis: Option<UpAxis>,
-    /// Interpolates the particles' velocities onto the mesh vertices and writes them.
-    pub velocities: bool,
-    /// `--max-memory` for the full-grid engines.
-    pub limits: Limits,
 }
 
 /// What happened to one frame.
@@ -225,7 +214,7 @@ impl Batch {
         // Every output of the whole sequence is checked, so that all shards agree.
         let outputs = self.outputs()?;
         self.config.validate()?;
-        if self.velocities && !self.format.holds_velocities() {
+        if self.config.output.velocities() && !self.format.holds_velocities() {
             bail!(
                 "--attributes velocity needs PLY output (--format ply or ply-ascii): {} files have no place for them",
                 self.format.extension()
@@ -245,6 +234,7 @@ impl Batch {
             to_do: to_do.len(),
         };
         progress.started(&plan);
+        let mut reconstructor = None;
         let mut spacing = self.config.spacing;
         if spacing.is_none()
             && let Some(&first) = to_do.first()
@@ -258,7 +248,7 @@ impl Batch {
         for (k, &i) in to_do.iter().enumerate() {
             let input = &self.inputs[i];
             let output = outputs[i].clone();
-            let result = self.frame(input, &output, &mut spacing, progress);
+            let result = self.frame(input, &output, &mut spacing, &mut reconstructor, progress);
             let outcome = FrameOutcome {
                 input: input.clone(),
                 output,
@@ -285,13 +275,13 @@ impl Batch {
     fn reference_spacing(&self, earlier: &[PathBuf], progress: &mut dyn Progress) -> Option<f32> {
         for input in earlier {
             // A bad frame is reported by the job that owns it.
-            let Ok(particles) = io::read_particles(input, self.input_format) else {
+            let Ok(particles) = io::read_positions(input, self.input_format) else {
                 continue;
             };
             if particles.is_empty() {
                 continue;
             }
-            let r = estimate_spacing(&particles, SPACING_SAMPLES)?;
+            let r = estimate_spacing(&particles)?;
             progress.spacing_estimated(input, r);
             return Some(r);
         }
@@ -303,14 +293,15 @@ impl Batch {
         input: &Path,
         output: &Path,
         spacing: &mut Option<f32>,
+        reconstructor: &mut Option<Reconstructor>,
         progress: &mut dyn Progress,
     ) -> Result<FrameStats> {
         let start = Instant::now();
-        let (particles, velocities) = if self.velocities {
+        let (particles, velocities) = if self.config.output.velocities() {
             let (p, v) = io::read_particles_with_velocities(input, self.input_format)?;
             (p, Some(v))
         } else {
-            (io::read_particles(input, self.input_format)?, None)
+            (io::read_positions(input, self.input_format)?, None)
         };
         let read = start.elapsed();
         if particles.is_empty() {
@@ -327,7 +318,7 @@ impl Batch {
         let r = match *spacing {
             Some(r) => r,
             None => {
-                let r = estimate_spacing(&particles, SPACING_SAMPLES).ok_or_else(|| {
+                let r = estimate_spacing(&particles).ok_or_else(|| {
                     anyhow!(
                         "cannot estimate the particle spacing from {} particles; give --spacing or --particle-radius",
                         particles.len()
@@ -338,16 +329,25 @@ impl Batch {
                 r
             }
         };
-        let params = Params::resolve(&self.config, r);
-        let rec = reconstruct_with(&particles, &params, self.engine, &self.limits)
-            .context("reconstruction failed")?;
+        // One reconstructor, hence one thread pool, for the whole run.
+        let reconstructor = match reconstructor {
+            Some(rec) => rec,
+            None => reconstructor.insert(Reconstructor::new(Config {
+                spacing: Some(r),
+                // The CLI runs in its global pool, sized by the same setting.
+                threads: None,
+                ..self.config.clone()
+            })?),
+        };
+        let rec =
+            reconstruct_measured(reconstructor, &particles).context("reconstruction failed")?;
         let mut mesh = rec.mesh;
         let mut vertex_velocities = velocities
-            .map(|v| interpolate_velocities(&mesh.vertices, &particles, &v, params.support))
+            .map(|v| reconstructor.interpolate(&mesh, &particles, &v))
             .transpose()?;
         drop(particles);
         let start = Instant::now();
-        if let Some(axis) = self.up_axis {
+        if let Some(axis) = self.config.output.up_axis {
             axis.rotate(&mut mesh.vertices);
             axis.rotate(&mut mesh.normals);
             if let Some(v) = &mut vertex_velocities {

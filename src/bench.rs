@@ -9,15 +9,11 @@ use std::time::Instant;
 use anyhow::{Context, Result, anyhow, bail};
 use serde::{Deserialize, Serialize};
 
-use crate::config::{Config, Length, Params};
-use crate::io;
-use crate::memory;
-use crate::recon::{Engine, Limits, reconstruct_with};
-use crate::report::records::{Build, FrameRecord, Machine};
-use crate::spacing::estimate_spacing;
+use splash_sph::bytes::human;
+use splash_sph::{Config, Engine, InputFormat, Length, Reconstructor, estimate_spacing};
 
-/// Particles sampled for the spacing estimate.
-const SPACING_SAMPLES: usize = 20_000;
+use crate::memory::{self, reconstruct_measured};
+use crate::report::records::{Build, FrameRecord, Machine};
 
 pub struct Options {
     /// Scene directories (every particle file inside is a frame) or particle files (grouped
@@ -30,7 +26,7 @@ pub struct Options {
     /// Frames per scene, spread evenly over its files; all when None.
     pub frames_per_scene: Option<usize>,
     pub engines: Vec<Engine>,
-    pub limits: Limits,
+    /// The parameters; `cell`, `engine`, `threads` and `spacing` are set per run.
     pub config: Config,
 }
 
@@ -86,7 +82,7 @@ pub fn scenes(inputs: &[PathBuf], frames_per_scene: Option<usize>) -> Result<Vec
             let mut files: Vec<PathBuf> = std::fs::read_dir(input)
                 .with_context(|| format!("{}: cannot list the directory", input.display()))?
                 .filter_map(|e| e.ok().map(|e| e.path()))
-                .filter(|p| p.is_file() && io::InputFormat::from_path(p).is_ok())
+                .filter(|p| p.is_file() && InputFormat::from_path(p).is_ok())
                 .collect();
             files.sort();
             if files.is_empty() {
@@ -192,12 +188,12 @@ pub fn run(opts: &Options, mut say: impl FnMut(&str)) -> Result<BenchReport> {
                 |n| n.to_string_lossy().into(),
             );
             let start = Instant::now();
-            let particles = io::read_particles(frame, None)?;
+            let particles = splash_sph::read_particles(frame, None)?.positions;
             let read = start.elapsed();
             let spacing = match r {
                 Some(r) => r,
                 None => {
-                    let e = estimate_spacing(&particles, SPACING_SAMPLES).ok_or_else(|| {
+                    let e = estimate_spacing(&particles).ok_or_else(|| {
                         anyhow!(
                             "{}: cannot estimate the spacing; give --spacing",
                             frame.display()
@@ -218,15 +214,18 @@ pub fn run(opts: &Options, mut say: impl FnMut(&str)) -> Result<BenchReport> {
                 spacings.push((scene.name.clone(), spacing));
             }
             for &cell in &opts.cells {
-                let config = Config {
-                    cell,
-                    ..opts.config.clone()
-                };
-                let params = Params::resolve(&config, spacing);
                 for &(engine, threads) in &rows {
+                    // Each run in its own pool (the reconstructor's would be made per run).
+                    let reconstructor = Reconstructor::new(Config {
+                        cell,
+                        engine,
+                        spacing: Some(spacing),
+                        threads: None,
+                        ..opts.config.clone()
+                    })?;
                     memory::reset_peak_rss();
-                    let result = pool(threads)
-                        .install(|| reconstruct_with(&particles, &params, engine, &opts.limits));
+                    let result =
+                        pool(threads).install(|| reconstruct_measured(&reconstructor, &particles));
                     let mut run = Run {
                         scene: scene.name.clone(),
                         frame: name.clone(),
@@ -247,7 +246,7 @@ pub fn run(opts: &Options, mut say: impl FnMut(&str)) -> Result<BenchReport> {
                                 engine.name(),
                                 t.scalar_field.as_secs_f64(),
                                 t.triangulation.as_secs_f64(),
-                                memory::human(stats.heap_peak as u64)
+                                human(stats.heap_peak as u64)
                             ));
                             run.record = Some(FrameRecord::new(
                                 &scene.name,
@@ -278,7 +277,10 @@ pub fn run(opts: &Options, mut say: impl FnMut(&str)) -> Result<BenchReport> {
         cells: opts.cells.iter().map(|&c| cell_label(c)).collect(),
         threads: opts.threads.clone(),
         spacings,
-        max_memory: opts.limits.max_memory,
+        max_memory: opts
+            .config
+            .max_memory
+            .map_or_else(splash_sph::bytes::default_limit, |b| b.0),
         config: serde_json::to_value(&opts.config)?,
         runs,
     })

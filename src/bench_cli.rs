@@ -6,13 +6,12 @@ use std::process::ExitCode;
 use anyhow::{Context, Result, bail};
 use clap::Args;
 
-use splash::batch::FrameOutcome;
-use splash::bench::{self, Options};
-use splash::config::{Config, Length};
-use splash::memory;
-use splash::recon::{Engine, Limits};
-use splash::report::records::{FrameRecord, Report};
-use splash::report::tables;
+use splash_sph::{Bytes, Config, Engine, Length};
+
+use crate::batch::FrameOutcome;
+use crate::bench::{self, Options};
+use crate::report::records::{FrameRecord, Report};
+use crate::report::tables;
 
 #[derive(Args)]
 #[command(after_help = "\
@@ -72,20 +71,14 @@ pub struct BenchArgs {
     quiet: bool,
 }
 
-pub fn limits(max_memory: Option<&str>) -> Result<Limits> {
-    Ok(match max_memory {
-        Some(m) => Limits {
-            max_memory: memory::parse_bytes(m).context("--max-memory")?,
-        },
-        None => Limits::default(),
-    })
-}
-
 pub fn bench(args: BenchArgs) -> Result<ExitCode> {
-    let config = match &args.config {
+    let mut config = match &args.config {
         Some(path) => Config::from_file(path)?,
         None => Config::default(),
     };
+    if let Some(m) = &args.max_memory {
+        config.max_memory = Some(Bytes::parse(m).context("--max-memory")?);
+    }
     let cells = if args.cell.is_empty() {
         vec![Length::Spacings(1.0), Length::Spacings(0.5)]
     } else {
@@ -118,7 +111,6 @@ pub fn bench(args: BenchArgs) -> Result<ExitCode> {
         spacings: args.spacing,
         frames_per_scene: args.frames_per_scene,
         engines,
-        limits: limits(args.max_memory.as_deref())?,
         config,
     };
     let quiet = args.quiet;
@@ -146,7 +138,6 @@ pub fn bench(args: BenchArgs) -> Result<ExitCode> {
 pub fn write_recon_report(
     path: &Path,
     outcomes: &[FrameOutcome],
-    engine: Engine,
     config: &Config,
     resolved: serde_json::Value,
 ) -> Result<()> {
@@ -166,8 +157,8 @@ pub fn write_recon_report(
             Some(FrameRecord::new(
                 &scene,
                 &frame,
-                engine.name(),
-                &splash::bench::cell_label(config.cell),
+                config.engine.name(),
+                &bench::cell_label(config.cell),
                 stats,
             ))
         })
@@ -177,7 +168,7 @@ pub fn write_recon_report(
         // The spacing used (given or estimated) and the world cell, besides the config.
         obj.insert("spacing_used".into(), first.spacing.into());
         obj.insert("cell_world".into(), first.cell_world.into());
-        obj.insert("engine".into(), engine.name().into());
+        obj.insert("engine".into(), config.engine.name().into());
     }
     Report::new(resolved, rayon::current_num_threads(), records).write(path)
 }

@@ -8,13 +8,22 @@ use std::process::ExitCode;
 use anyhow::{Context, Result, bail};
 use clap::{Args, Parser, Subcommand};
 
-use splash::batch::{Batch, Output};
-use splash::config::{Config, Length, Normals};
-use splash::field::FieldConfig;
-use splash::io::{InputFormat, MeshFormat, UpAxis};
-use splash::log::{Console, LogFormat, Verbosity};
-use splash::recon::Engine;
-use splash::sequence::{self, FrameSet, Shard};
+mod batch;
+mod bench;
+mod bench_cli;
+mod log;
+mod memory;
+mod report;
+mod sequence;
+
+use splash_sph::field::FieldConfig;
+use splash_sph::{
+    Bytes, Config, Engine, InputFormat, Length, MeshFormat, Normals, OutputConfig, UpAxis,
+};
+
+use batch::{Batch, Output};
+use log::{Console, LogFormat, Verbosity};
+use sequence::{FrameSet, Shard};
 
 #[derive(Parser)]
 #[command(
@@ -45,8 +54,8 @@ enum ConfigCommand {
     Show(ConfigArgs),
 }
 
-/// The reconstruction parameters: built-in defaults, overridden by the config file, overridden
-/// by these flags.
+/// The configuration of a run: built-in defaults, overridden by the config file, overridden by
+/// these flags.
 #[derive(Args)]
 struct ConfigArgs {
     /// TOML file with the reconstruction parameters (see configs/).
@@ -71,13 +80,45 @@ struct ConfigArgs {
     #[arg(long)]
     cell: Option<String>,
 
-    /// Vertex normals: the field's gradient (default), grid differences (faster), or none.
-    #[arg(long, value_enum)]
-    normals: Option<Normals>,
+    /// Vertex normals: field (the field's gradient, default), grid (differences of the
+    /// sampled grid: faster), or none.
+    #[arg(long)]
+    normals: Option<String>,
 
     /// Cubes per side of a block of the slices engine (default 64).
     #[arg(long)]
     block: Option<u32>,
+
+    /// Reconstruction engine: narrow-band (default), the paper's baselines full-gather
+    /// (Z-index gather on every grid vertex) and scatter (serial, SSP07 only), or slices
+    /// (block-parallel Marching Slices, memory bounded per block; see --block). All give the
+    /// same mesh.
+    #[arg(long)]
+    engine: Option<String>,
+
+    /// Worker threads (default: all cores). The mesh does not depend on it.
+    #[arg(long)]
+    threads: Option<usize>,
+
+    /// Memory a full-grid engine may use, e.g. 8G or 512M; it refuses larger grids before
+    /// allocating. Default: half the machine's memory.
+    #[arg(long)]
+    max_memory: Option<String>,
+
+    /// Mesh format: obj, ply (binary little-endian), ply-ascii, or pov (POV-Ray mesh2 include,
+    /// .inc). Default: from the output file's extension, else obj.
+    #[arg(long)]
+    format: Option<String>,
+
+    /// Rotate the mesh on output: z turns Y-up data Z-up, y turns Z-up data Y-up. Default:
+    /// coordinates as they are.
+    #[arg(long, value_name = "AXIS")]
+    up_axis: Option<String>,
+
+    /// Per-vertex attributes to write (PLY only): velocity, interpolated from the particles'
+    /// vx vy vz with the field's kernel, written as vx vy vz.
+    #[arg(long, value_name = "LIST")]
+    attributes: Option<String>,
 }
 
 impl ConfigArgs {
@@ -100,11 +141,32 @@ impl ConfigArgs {
         if let Some(c) = &self.cell {
             config.cell = Length::parse(c).context("--cell")?;
         }
-        if let Some(n) = self.normals {
-            config.normals = n;
+        if let Some(n) = &self.normals {
+            config.normals = Normals::parse(n).context("--normals")?;
         }
         if let Some(b) = self.block {
             config.slices.block = b;
+        }
+        if let Some(e) = &self.engine {
+            config.engine = Engine::parse(e).context("--engine")?;
+        }
+        if let Some(n) = self.threads {
+            if n == 0 {
+                bail!("--threads must be at least 1");
+            }
+            config.threads = Some(n);
+        }
+        if let Some(m) = &self.max_memory {
+            config.max_memory = Some(Bytes::parse(m).context("--max-memory")?);
+        }
+        if let Some(f) = &self.format {
+            config.output.format = Some(MeshFormat::parse(f)?);
+        }
+        if let Some(a) = &self.up_axis {
+            config.output.up_axis = Some(UpAxis::parse(a)?);
+        }
+        if let Some(a) = &self.attributes {
+            config.output.attributes = OutputConfig::parse_attributes(a).context("--attributes")?;
         }
         config.validate()?;
         Ok(config)
@@ -164,28 +226,9 @@ struct Recon {
     #[arg(long, value_name = "FORMAT", default_value = "plain")]
     log_format: String,
 
-    /// Rotate the mesh on output: z turns Y-up data Z-up, y turns Z-up data Y-up. Default:
-    /// coordinates as they are.
-    #[arg(long, value_name = "AXIS")]
-    up_axis: Option<String>,
-
-    /// Per-vertex attributes to write (PLY only): velocity, interpolated from the particles'
-    /// vx vy vz with the field's kernel, written as vx vy vz.
-    #[arg(long, value_name = "LIST")]
-    attributes: Option<String>,
-
-    /// Mesh format: obj, ply (binary little-endian), ply-ascii, or pov (POV-Ray mesh2 include,
-    /// .inc). Default: from the output file's extension, else obj.
-    #[arg(long)]
-    format: Option<String>,
-
     /// Input format for every file: ply, csv or raw.
     #[arg(long)]
     input_format: Option<String>,
-
-    /// Worker threads (default: all cores). The mesh does not depend on it.
-    #[arg(long)]
-    threads: Option<usize>,
 
     /// Print stage times and counts per frame.
     #[arg(short, long)]
@@ -194,18 +237,6 @@ struct Recon {
     /// Print only errors.
     #[arg(short, long, conflicts_with = "verbose")]
     quiet: bool,
-
-    /// Reconstruction engine: narrow-band (default), the paper's baselines full-gather
-    /// (Z-index gather on every grid vertex) and scatter (serial, SSP07 only), or slices
-    /// (block-parallel Marching Slices, memory bounded per block; see --block). All give the
-    /// same mesh.
-    #[arg(long, default_value = "narrow-band")]
-    engine: String,
-
-    /// Memory a full-grid engine may use, e.g. 8G or 512M; it refuses larger grids before
-    /// allocating. Default: half the machine's memory.
-    #[arg(long)]
-    max_memory: Option<String>,
 
     /// Write per-frame figures and their averages (times, counts, memory, machine, build,
     /// configuration) to this file: .json, .csv or .md.
@@ -228,36 +259,28 @@ fn main() -> ExitCode {
 
 fn show_config(args: &ConfigArgs) -> Result<ExitCode> {
     let config = args.resolve()?;
-    print!(
-        "{}",
-        toml::to_string(&config).context("cannot write the configuration as TOML")?
-    );
+    print!("{}", config.to_toml());
     Ok(ExitCode::SUCCESS)
 }
 
-mod bench_cli;
-
 fn recon(args: Recon) -> Result<ExitCode> {
-    if let Some(n) = args.threads {
-        if n == 0 {
-            bail!("--threads must be at least 1");
-        }
+    let config = args.params.resolve()?;
+    if let Some(n) = config.threads {
         rayon::ThreadPoolBuilder::new()
             .num_threads(n)
             .build_global()
             .context("cannot start the worker threads")?;
     }
-    let config = args.params.resolve()?;
     let output = args
         .output
         .as_deref()
         .map_or(Output::BesideInput, Output::parse);
-    let format = match (&args.format, output.format_hint()) {
-        (Some(f), hint) => {
-            let format = MeshFormat::parse(f)?;
+    let format = match (config.output.format, output.format_hint()) {
+        (Some(format), hint) => {
             if let Some(hint) = hint.filter(|h| h.extension() != format.extension()) {
                 bail!(
-                    "--format {f} does not match the output name's .{} extension",
+                    "--format {} does not match the output name's .{} extension",
+                    args.params.format.as_deref().unwrap_or(format.extension()),
                     hint.extension()
                 );
             }
@@ -271,12 +294,6 @@ fn recon(args: Recon) -> Result<ExitCode> {
         .map(InputFormat::parse)
         .transpose()?;
     let log_format = LogFormat::parse(&args.log_format)?;
-    let up_axis = args.up_axis.as_deref().map(UpAxis::parse).transpose()?;
-    let velocities = match args.attributes.as_deref().map(str::trim) {
-        None | Some("") => false,
-        Some("velocity" | "velocities") => true,
-        Some(other) => bail!("unknown --attributes '{other}': expected velocity"),
-    };
     let shard = args
         .shard
         .as_deref()
@@ -313,11 +330,9 @@ fn recon(args: Recon) -> Result<ExitCode> {
             );
         }
     }
-    let engine = Engine::parse(&args.engine).context("--engine")?;
-    let limits = bench_cli::limits(args.max_memory.as_deref())?;
     let report_config = serde_json::to_value(&config)?;
     if let Some(path) = &args.report {
-        splash::report::records::check_report_path(path)?;
+        report::records::check_report_path(path)?;
     }
     let batch = Batch {
         inputs,
@@ -325,24 +340,14 @@ fn recon(args: Recon) -> Result<ExitCode> {
         output,
         format,
         config,
-        engine,
-        limits,
         shard,
         skip_existing: args.skip_existing,
         fail_fast: args.fail_fast,
-        up_axis,
-        velocities,
     };
     let mut console = Console::new(log_format, verbosity, std::io::stderr().is_terminal());
     let report = batch.run(&mut console)?;
     if let Some(path) = &args.report {
-        bench_cli::write_recon_report(
-            path,
-            &report.outcomes,
-            engine,
-            &batch.config,
-            report_config,
-        )?;
+        bench_cli::write_recon_report(path, &report.outcomes, &batch.config, report_config)?;
     }
     Ok(if console.finish(&report) {
         ExitCode::SUCCESS

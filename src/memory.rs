@@ -1,11 +1,14 @@
 //! Memory figures: exact heap bytes from a counting global allocator, the process's peak
-//! resident set size, and the machine's memory for the default `--max-memory`.
+//! resident set size, and the [`Meter`] that gives both, and stage times, to the library's
+//! reports.
 //!
 //! The allocator counts every allocation of the process, on every thread; the figures of one
 //! reconstruction are exact when nothing else allocates meanwhile (the `splash` CLI, one frame
 //! at a time). With the `count-alloc` feature off (it is on by default) the heap figures read 0.
 
 use std::sync::atomic::{AtomicUsize, Ordering};
+
+use splash_sph::{Clock, Observer, Reconstruction, Reconstructor, Stage, StageFigures, Vec3};
 
 static CURRENT: AtomicUsize = AtomicUsize::new(0);
 static PEAK: AtomicUsize = AtomicUsize::new(0);
@@ -92,11 +95,6 @@ impl HeapScope {
         PEAK.load(Ordering::Relaxed).saturating_sub(self.base)
     }
 
-    /// Heap above the start now.
-    pub fn now(&self) -> usize {
-        heap_now().saturating_sub(self.base)
-    }
-
     /// Restarts the peak from the current heap, to measure one stage; the base is kept.
     pub fn restart_peak(&self) {
         PEAK.store(heap_now(), Ordering::Relaxed);
@@ -114,17 +112,6 @@ pub fn reset_peak_rss() -> bool {
     std::fs::write("/proc/self/clear_refs", "5").is_ok()
 }
 
-/// Total memory of the machine in bytes (MemTotal of /proc/meminfo), if known.
-pub fn machine_memory() -> Option<u64> {
-    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
-    kib_field(&text, "MemTotal:").map(|k| k * 1024)
-}
-
-/// The default `--max-memory`: half the machine's memory, or 8 GiB where that is unknown.
-pub fn default_limit() -> u64 {
-    machine_memory().map_or(8 << 30, |m| m / 2)
-}
-
 fn status_kib(key: &str) -> Option<u64> {
     let text = std::fs::read_to_string("/proc/self/status").ok()?;
     kib_field(&text, key)
@@ -135,60 +122,113 @@ fn kib_field(text: &str, key: &str) -> Option<u64> {
     line[key.len()..].split_whitespace().next()?.parse().ok()
 }
 
-/// Parses a byte count as a user writes it: `12G`, `512M`, `1.5GB`, `800MiB`, `1000000`.
-/// Suffixes are binary (K = 1024).
-pub fn parse_bytes(text: &str) -> anyhow::Result<u64> {
-    let t = text.trim();
-    let split = t.find(|c: char| c.is_ascii_alphabetic()).unwrap_or(t.len());
-    let (number, unit) = t.split_at(split);
-    let number: f64 = number
-        .trim()
-        .parse()
-        .map_err(|_| anyhow::anyhow!("'{text}' is not a size: use e.g. 12G, 512M or 1000000"))?;
-    let scale: u64 = match unit.trim().to_ascii_lowercase().as_str() {
-        "" | "b" => 1,
-        "k" | "kb" | "kib" => 1 << 10,
-        "m" | "mb" | "mib" => 1 << 20,
-        "g" | "gb" | "gib" => 1 << 30,
-        "t" | "tb" | "tib" => 1 << 40,
-        _ => anyhow::bail!("'{text}': unknown unit '{unit}' (use K, M, G or T)"),
-    };
-    if !(number.is_finite() && number >= 0.0) {
-        anyhow::bail!("'{text}' is not a size");
-    }
-    Ok((number * scale as f64) as u64)
+/// Measures a reconstruction's stages for its report: wall time, and the peak heap above the
+/// heap held when the meter was made (the input particles are not counted).
+pub struct Meter {
+    clock: Clock,
+    heap: HeapScope,
 }
 
-/// Bytes for people: `1.23 GB`, `45.6 MB` (decimal units, as the paper's tables).
-pub fn human(bytes: u64) -> String {
-    let b = bytes as f64;
-    if b >= 1e9 {
-        format!("{:.2} GB", b / 1e9)
-    } else if b >= 1e6 {
-        format!("{:.1} MB", b / 1e6)
-    } else {
-        format!("{:.0} kB", b / 1e3)
+impl Meter {
+    pub fn start() -> Meter {
+        Meter {
+            clock: Clock::default(),
+            heap: HeapScope::start(),
+        }
     }
+}
+
+impl Observer for Meter {
+    fn stage_started(&mut self, stage: Stage) {
+        self.heap.restart_peak();
+        self.clock.stage_started(stage);
+    }
+
+    fn stage_finished(&mut self, stage: Stage) -> StageFigures {
+        StageFigures {
+            heap_peak: self.heap.peak(),
+            ..self.clock.stage_finished(stage)
+        }
+    }
+}
+
+/// Reconstructs with a [`Meter`], and records the process's peak resident set size after it.
+pub fn reconstruct_measured(
+    reconstructor: &Reconstructor,
+    particles: &[Vec3],
+) -> splash_sph::Result<Reconstruction> {
+    let mut meter = Meter::start();
+    let mut rec = reconstructor.reconstruct_observed(particles, &mut meter)?;
+    rec.stats.peak_rss = peak_rss().unwrap_or(0);
+    Ok(rec)
 }
 
 #[cfg(test)]
 mod tests {
+    use std::path::Path;
+
+    use splash_sph::{Config, Engine, Length};
+
     use super::*;
 
+    /// The heap figures of the engines at cells r and r/2. The counting allocator counts the
+    /// whole test process; the other tests of this binary allocate kilobytes, these megabytes.
     #[test]
-    fn sizes_parse() {
-        assert_eq!(parse_bytes("1000").unwrap(), 1000);
-        assert_eq!(parse_bytes("2K").unwrap(), 2048);
-        assert_eq!(parse_bytes("1.5G").unwrap(), 3 << 29);
-        assert_eq!(parse_bytes("512MiB").unwrap(), 512 << 20);
-        assert!(parse_bytes("lots").is_err());
-        assert!(parse_bytes("3X").is_err());
+    fn memory_follows_the_cell_and_the_narrow_band_needs_least() {
+        assert!(counting(), "the counting allocator is off");
+        let fixture = concat!(env!("CARGO_MANIFEST_DIR"), "/fixtures/frame_0040.ply");
+        let ps = splash_sph::read_particles(Path::new(fixture), None)
+            .unwrap()
+            .positions;
+        let reconstructor = |cell: &str, engine| {
+            Reconstructor::new(Config {
+                spacing: Some(0.014),
+                cell: Length::parse(cell).unwrap(),
+                engine,
+                ..Config::default()
+            })
+            .unwrap()
+        };
+        let heap = |cell: &str, engine| {
+            let s = reconstruct_measured(&reconstructor(cell, engine), &ps)
+                .unwrap()
+                .stats;
+            // Every stage that ran holds something; the peak is the largest stage's.
+            assert!(s.stage_heap.scalar_field > 0 && s.stage_heap.triangulation > 0);
+            assert_eq!(s.heap_peak, s.stage_heap.max());
+            assert!(s.peak_rss as usize > s.heap_peak);
+            s.heap_peak
+        };
+        let mut at_half = Vec::new();
+        for engine in [Engine::NarrowBand, Engine::FullGather, Engine::Scatter] {
+            let (r, r2) = (heap("r", engine), heap("r/2", engine));
+            assert!(r2 > 2 * r, "{engine:?}: {r} bytes at r, {r2} at r/2");
+            at_half.push(r2);
+        }
+        let [band, gather, scatter] = at_half[..] else {
+            unreachable!()
+        };
+        assert!(
+            band < gather && gather < scatter,
+            "{band} {gather} {scatter}"
+        );
+        // The estimate that --max-memory checks covers the grid; the mesh comes on top.
+        for (engine, measured) in [(Engine::FullGather, gather), (Engine::Scatter, scatter)] {
+            let need = reconstructor("r/2", engine)
+                .planned_memory(&ps)
+                .unwrap()
+                .unwrap() as f64;
+            let ratio = measured as f64 / need;
+            assert!(
+                (0.9..1.6).contains(&ratio),
+                "{engine:?}: measured/estimate {ratio}"
+            );
+        }
     }
 
     #[test]
     fn machine_figures_are_read() {
         if cfg!(target_os = "linux") {
-            assert!(machine_memory().unwrap() > 1 << 20);
             assert!(peak_rss().unwrap() > 0);
         }
     }

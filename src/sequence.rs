@@ -15,7 +15,7 @@ use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, anyhow, bail};
 
-use crate::io::InputFormat;
+use splash_sph::InputFormat;
 
 /// The last run of digits in a file stem: `frame_0042` → 42.
 pub fn frame_number(stem: &str) -> Option<u64> {

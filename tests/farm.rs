@@ -10,12 +10,20 @@ use std::path::PathBuf;
 use std::process::{Command, Output};
 use std::time::{Duration, Instant};
 
-use common::{TempDir, entries, fixture, lattice_ball, params};
+use common::{TempDir, entries, fixture, lattice_ball};
 use glam::Vec3;
 use ply_rs_bw::parser::Parser;
 use ply_rs_bw::ply::{DefaultElement, Property};
-use splash::io::{MeshFormat, VertexAttributes, read_particles, write_mesh_with};
-use splash::recon::{Engine, reconstruct};
+use splash_sph::io::{MeshFormat, VertexAttributes, write_mesh_with};
+use splash_sph::{Config, Length, Reconstructor};
+
+/// The positions of a particle file.
+fn read_particles(
+    path: &std::path::Path,
+    format: Option<splash_sph::InputFormat>,
+) -> splash_sph::Result<Vec<Vec3>> {
+    splash_sph::read_particles(path, format).map(|p| p.positions)
+}
 
 const R: f32 = 0.01;
 const FAST: [&str; 4] = ["--spacing", "0.01", "--cell", "r"];
@@ -475,7 +483,14 @@ fn meshes_read_back_equal_with_velocities_and_axes() {
     let velocity = Vec3::new(0.5, -1.0, 2.0);
     let velocities = vec![velocity; particles.len()];
     let input = dir.file("in/f_1.ply", ply(&particles, Some(&velocities)));
-    let mesh = reconstruct(&particles, &params(R, "r"), Engine::NarrowBand)
+    let config = Config {
+        spacing: Some(R),
+        cell: Length::Spacings(1.0),
+        ..Config::default()
+    };
+    let mesh = Reconstructor::new(config)
+        .unwrap()
+        .reconstruct(&particles)
         .unwrap()
         .mesh;
     assert!(mesh.triangles.len() > 100);

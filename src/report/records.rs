@@ -8,7 +8,9 @@ use anyhow::{Context, Result, bail};
 use serde::{Deserialize, Serialize};
 use serde_json::{Map, Value};
 
-use super::FrameStats;
+use splash_sph::FrameStats;
+use splash_sph::bytes::human;
+
 use crate::memory;
 
 /// The figures of one frame, all numbers so that they can be averaged. Times in seconds,
@@ -198,7 +200,7 @@ impl Machine {
         Machine {
             cpu_model,
             cores: std::thread::available_parallelism().map_or(1, |n| n.get()),
-            memory_total: memory::machine_memory().unwrap_or(0),
+            memory_total: splash_sph::bytes::machine_memory().unwrap_or(0),
             os: std::env::consts::OS.into(),
         }
     }
@@ -325,7 +327,7 @@ impl Report {
             "# splash report\n\n- machine: {} ({} logical cores, {} memory), {}\n- build: splash {} ({}, {}{})\n- threads used: {}\n\n",
             m.cpu_model,
             m.cores,
-            memory::human(m.memory_total),
+            human(m.memory_total),
             m.os,
             self.build.version,
             self.build
@@ -356,8 +358,8 @@ impl Report {
                 f.t_scalar_field,
                 f.t_triangulation,
                 f.t_total,
-                memory::human(f.heap_peak as u64),
-                memory::human(f.peak_rss as u64),
+                human(f.heap_peak as u64),
+                human(f.peak_rss as u64),
             )
         };
         for r in &self.frames {

@@ -4,9 +4,9 @@
 //! with the reason.
 
 use crate::bench::{BenchReport, Run, matrix};
-use crate::memory::human;
-use crate::recon::Engine;
 use crate::report::records::Figures;
+use splash_sph::Engine;
+use splash_sph::bytes::human;
 
 /// Mean figures of the runs matching a scene, cell, engine and thread count; Err with the first
 /// reason when a run has none, None when there are no such runs.

@@ -7,9 +7,7 @@ use std::sync::atomic::{AtomicU32, Ordering};
 
 use glam::{IVec3, Vec3};
 use rustc_hash::FxHashMap;
-use splash::config::{Config, Length, Params};
-use splash::field::FieldConfig;
-use splash::mesh::TriMesh;
+use splash_sph::TriMesh;
 
 /// Particles on a cubic lattice of spacing `r` inside a ball.
 pub fn lattice_ball(center: Vec3, radius: f32, r: f32) -> Vec<Vec3> {
@@ -28,26 +26,22 @@ pub fn lattice_ball(center: Vec3, radius: f32, r: f32) -> Vec<Vec3> {
     out
 }
 
-/// The default parameters (SSP07) at spacing `r` and cell size `cell`.
-pub fn params(r: f32, cell: &str) -> Params {
-    field_params("ssp07", r, cell)
-}
-
-/// The defaults of the field `kind` at spacing `r` and cell size `cell`.
-pub fn field_params(kind: &str, r: f32, cell: &str) -> Params {
-    let config = Config {
-        cell: Length::parse(cell).unwrap(),
-        field: FieldConfig::named(kind).unwrap(),
-        ..Config::default()
-    };
-    Params::resolve(&config, r)
+/// The repository's top directory, whichever crate's tests include this file.
+pub fn repository() -> PathBuf {
+    let mut dir = PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    while !dir.join("fixtures").is_dir() {
+        assert!(
+            dir.pop(),
+            "no fixtures/ above {}",
+            env!("CARGO_MANIFEST_DIR")
+        );
+    }
+    dir
 }
 
 /// A file in `../shared/data`, or None (with a notice) where that folder is absent.
 pub fn shared_data(relative: &str) -> Option<PathBuf> {
-    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../shared/data")
-        .join(relative);
+    let path = repository().join("../shared/data").join(relative);
     if path.exists() {
         Some(path)
     } else {
@@ -60,9 +54,7 @@ pub fn shared_data(relative: &str) -> Option<PathBuf> {
 }
 
 pub fn fixture(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("fixtures")
-        .join(name)
+    repository().join("fixtures").join(name)
 }
 
 /// A fresh directory under the system temp dir, removed when dropped.

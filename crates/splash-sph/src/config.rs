@@ -1,0 +1,369 @@
+//! The tunable numbers of a reconstruction, with the paper defaults, as read from a TOML file.
+//!
+//! Lengths are given in units of the particle spacing `r` (Akinci et al. 2012 Sec. 3: cell sizes
+//! 2r, r, r/2; support 4r; band 2r) and resolved to world lengths once `r` is known.
+
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+
+use crate::bytes::{Bytes, default_limit};
+use crate::error::{Error, Result};
+use crate::field::FieldConfig;
+use crate::io::{MeshFormat, UpAxis};
+use crate::length::{Length, positive};
+
+/// Everything that decides a run: the mesh of a frame, the engine and its resources, and how
+/// the mesh is written. `splash recon` fills it from these defaults, the `--config` file and
+/// command-line flags, in that order of precedence (last wins); `splash config show` prints it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Config {
+    /// Particle spacing r in world units; the CLI estimates it from the first frame when absent.
+    pub spacing: Option<f32>,
+    /// Marching Cubes cell edge length.
+    pub cell: Length,
+    /// Which engine reconstructs (all give the same mesh).
+    pub engine: Engine,
+    /// Worker threads; all cores when absent. The mesh does not depend on it.
+    pub threads: Option<usize>,
+    /// Heap a full-grid engine may plan to use; half the machine's memory when absent.
+    pub max_memory: Option<Bytes>,
+    pub surface_particles: SurfaceParticles,
+    pub band: BandConfig,
+    /// Where the mesh's vertex normals come from.
+    pub normals: Normals,
+    /// The Marching Slices engine's blocks.
+    pub slices: SlicesConfig,
+    /// The scalar field and its parameters (SSP07 by default).
+    pub field: FieldConfig,
+    /// How meshes are written.
+    pub output: OutputConfig,
+}
+
+/// Which grid vertices get a field value, and in what order.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Engine {
+    /// Only the band around the surface particles (Akinci et al. 2012 Sec. 4.1).
+    #[default]
+    NarrowBand,
+    /// Every vertex of the particles' bounding box widened by the support: the paper's
+    /// "Z-index" gather without a narrow band. Memory follows the volume.
+    FullGather,
+    /// Serial scatter of every particle into per-vertex sums over the same full grid, then all
+    /// cells triangulated: the paper's "scatter" row (SSP07 only).
+    Scatter,
+    /// Block-parallel Marching Slices (Rosenberg & Birdwell 2008).
+    Slices,
+}
+
+impl Engine {
+    pub const ALL: [Engine; 4] = [
+        Engine::NarrowBand,
+        Engine::FullGather,
+        Engine::Scatter,
+        Engine::Slices,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Engine::NarrowBand => "narrow-band",
+            Engine::FullGather => "full-gather",
+            Engine::Scatter => "scatter",
+            Engine::Slices => "slices",
+        }
+    }
+
+    pub fn parse(text: &str) -> Result<Engine> {
+        match Engine::ALL.into_iter().find(|e| e.name() == text.trim()) {
+            Some(e) => Ok(e),
+            None => bail_config!(
+                "unknown engine '{text}': use narrow-band, full-gather, scatter or slices"
+            ),
+        }
+    }
+
+    /// Whether the engine processes every vertex of the grid (and is subject to the memory
+    /// limit before it starts).
+    pub fn is_full_grid(self) -> bool {
+        matches!(self, Engine::FullGather | Engine::Scatter)
+    }
+}
+
+/// `[output]`: how meshes are written.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct OutputConfig {
+    /// Mesh format; from the output file's extension when absent, else OBJ.
+    pub format: Option<MeshFormat>,
+    /// Rotates the mesh on output so that this axis is up; coordinates as they are when absent.
+    pub up_axis: Option<UpAxis>,
+    /// Per-vertex attributes interpolated from the particles and written (PLY): `velocity`.
+    pub attributes: Vec<String>,
+}
+
+/// The vertex attributes that can be interpolated and written.
+pub const ATTRIBUTES: [&str; 1] = ["velocity"];
+
+impl OutputConfig {
+    /// Whether the velocities are asked for.
+    pub fn velocities(&self) -> bool {
+        self.attributes.iter().any(|a| a == "velocity")
+    }
+
+    /// Parses a comma-separated list as a user writes it (`velocity`; `velocities` is accepted).
+    pub fn parse_attributes(text: &str) -> Result<Vec<String>> {
+        let mut out = Vec::new();
+        for name in text.split(',').map(str::trim).filter(|n| !n.is_empty()) {
+            let name = if name == "velocities" {
+                "velocity"
+            } else {
+                name
+            };
+            if !ATTRIBUTES.contains(&name) {
+                bail_config!("unknown attribute '{name}': expected velocity");
+            }
+            if !out.iter().any(|n| n == name) {
+                out.push(name.to_string());
+            }
+        }
+        Ok(out)
+    }
+}
+
+/// `[slices]`: the block-parallel Marching Slices engine (`--engine slices`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SlicesConfig {
+    /// Cubes per side of a block (Rosenberg & Birdwell 2008, Sec. 3), without its margin.
+    pub block: u32,
+}
+
+impl Default for SlicesConfig {
+    fn default() -> Self {
+        SlicesConfig { block: 64 }
+    }
+}
+
+/// `normals = "field" | "grid" | "none"`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Normals {
+    /// The field's analytic gradient at each vertex: exact, and costs a gather per vertex
+    /// (about a third of the field's sampling time at cell r/2).
+    #[default]
+    Field,
+    /// Central differences of the sampled grid values, interpolated along the edge: almost
+    /// free, smoothed over a cell.
+    Grid,
+    /// No normals in the output (the renderer computes its own).
+    None,
+}
+
+impl Normals {
+    /// `field`, `grid` or `none`.
+    pub fn parse(text: &str) -> Result<Normals> {
+        match text.trim().to_ascii_lowercase().as_str() {
+            "field" => Ok(Normals::Field),
+            "grid" => Ok(Normals::Grid),
+            "none" => Ok(Normals::None),
+            _ => bail_config!("unknown normals '{text}': expected field, grid or none"),
+        }
+    }
+}
+
+/// Surface particle detection (Sec. 4): colour field of Müller et al. 2003 plus a neighbour count.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SurfaceParticles {
+    /// Support radius h of the colour field kernel and of the neighbour count.
+    pub support: Length,
+    /// A particle is on the surface when |∇c|·h exceeds this (dimensionless).
+    pub colour_threshold: f32,
+    /// Particles with fewer neighbours than this within `support` are splashes, hence surface.
+    pub min_neighbours: u32,
+}
+
+/// The narrow band (Sec. 4.1): grid vertices in the box of this half-width around a surface
+/// particle are surface vertices.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct BandConfig {
+    pub half_width: Length,
+}
+
+impl Default for Config {
+    fn default() -> Self {
+        Config {
+            spacing: None,
+            cell: Length::Spacings(0.5),
+            surface_particles: SurfaceParticles::default(),
+            band: BandConfig::default(),
+            normals: Normals::default(),
+            slices: SlicesConfig::default(),
+            field: FieldConfig::default(),
+            engine: Engine::default(),
+            threads: None,
+            max_memory: None,
+            output: OutputConfig::default(),
+        }
+    }
+}
+
+impl Default for SurfaceParticles {
+    fn default() -> Self {
+        SurfaceParticles {
+            support: Length::Spacings(2.0),
+            colour_threshold: 0.4,
+            min_neighbours: 25,
+        }
+    }
+}
+
+impl Default for BandConfig {
+    fn default() -> Self {
+        BandConfig {
+            half_width: Length::Spacings(2.0),
+        }
+    }
+}
+
+impl Config {
+    /// Reads and validates a TOML file; errors name the file (and the key).
+    pub fn from_file(path: &Path) -> Result<Config> {
+        let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
+            message: format!("{}: cannot read the config file: {source}", path.display()),
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Config::from_toml(&text).map_err(|e| e.context(path.display()))
+    }
+
+    /// Parses and validates TOML text.
+    pub fn from_toml(text: &str) -> Result<Config> {
+        let config: Config = toml::from_str(text).map_err(|e| Error::config(e.to_string()))?;
+        config
+            .validate()
+            .map_err(|e| e.context("invalid configuration"))?;
+        Ok(config)
+    }
+
+    /// The configuration as TOML, every key written.
+    pub fn to_toml(&self) -> String {
+        toml::to_string(self).expect("a configuration is always representable in TOML")
+    }
+
+    /// Checks the ranges that the TOML types cannot express.
+    pub fn validate(&self) -> Result<()> {
+        if let Some(r) = self.spacing {
+            positive("spacing", r)?;
+        }
+        positive("cell", self.cell.value())?;
+        positive(
+            "surface_particles.support",
+            self.surface_particles.support.value(),
+        )?;
+        if self.surface_particles.colour_threshold.is_nan()
+            || self.surface_particles.colour_threshold < 0.0
+        {
+            bail_config!("surface_particles.colour_threshold must be ≥ 0");
+        }
+        if self.band.half_width.value().is_nan() || self.band.half_width.value() < 0.0 {
+            bail_config!("band.half_width must be ≥ 0");
+        }
+        if !(1..=4096).contains(&self.slices.block) {
+            bail_config!(
+                "slices.block must be from 1 to 4096 cubes, got {}",
+                self.slices.block
+            );
+        }
+        if self.threads == Some(0) {
+            bail_config!("threads must be at least 1");
+        }
+        for name in &self.output.attributes {
+            if !ATTRIBUTES.contains(&name.as_str()) {
+                bail_config!("output.attributes: unknown attribute '{name}': expected velocity");
+            }
+        }
+        if self.output.velocities() && self.output.format.is_some_and(|f| !f.holds_velocities()) {
+            bail_config!(
+                "output.attributes = [\"velocity\"] needs PLY output: .{} files have no place for them",
+                self.output.format.map_or("obj", |f| f.extension())
+            );
+        }
+        self.field.validate()?;
+        Ok(())
+    }
+}
+
+/// World-unit parameters of one reconstruction, resolved from a [`Config`] and the spacing r.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Params {
+    pub spacing: f32,
+    pub cell: f32,
+    pub colour_support: f32,
+    pub colour_threshold: f32,
+    pub min_neighbours: u32,
+    /// Band half-width after widening for large cells (see [`Params::resolve`]).
+    pub band_half_width: f32,
+    pub field: FieldConfig,
+    pub normals: Normals,
+    /// Cubes per side of a Marching Slices block.
+    pub block: u32,
+    /// The field's support radius in world units.
+    pub support: f32,
+    pub engine: Engine,
+    /// Heap bytes a full-grid engine may plan to use.
+    pub max_memory: u64,
+}
+
+impl Params {
+    /// The band is widened to r + cell when that exceeds the configured half-width: the fields'
+    /// surfaces lie within about r of the particles (SSP07: f ≤ 1 in eq. 1 with r̄ = r), and
+    /// every corner of a cell that the surface crosses lies within one cell of it on each axis.
+    /// At cells r and r/2 the paper's 2r already covers this; at 2r the band becomes 3r.
+    /// Wherever the surface still leaves the band, the band closure follows it.
+    pub fn resolve(config: &Config, r: f32) -> Params {
+        let cell = config.cell.resolve(r);
+        Params {
+            spacing: r,
+            cell,
+            colour_support: config.surface_particles.support.resolve(r),
+            colour_threshold: config.surface_particles.colour_threshold,
+            min_neighbours: config.surface_particles.min_neighbours,
+            band_half_width: config.band.half_width.resolve(r).max(r + cell),
+            support: config.field.build(r).support(),
+            field: config.field.clone(),
+            normals: config.normals,
+            block: config.slices.block,
+            engine: config.engine,
+            max_memory: config.max_memory.map_or_else(default_limit, |b| b.0),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn band_widens_only_for_large_cells() {
+        let mut c = Config::default();
+        for (cell, band) in [(0.5, 2.0), (1.0, 2.0), (2.0, 3.0)] {
+            c.cell = Length::Spacings(cell);
+            let p = Params::resolve(&c, 1.0);
+            assert_eq!(p.band_half_width, band, "cell {cell}r");
+        }
+    }
+
+    #[test]
+    fn unknown_keys_and_bad_ranges_are_errors() {
+        assert!(toml::from_str::<Config>("cel = \"r\"").is_err());
+        let c: Config = toml::from_str("[field]\nkind = \"ssp07\"\nt_low = 4.0").unwrap();
+        assert!(c.validate().is_err());
+        let c: Config = toml::from_str("cell = \"r/2\"\n[band]\nhalf_width = \"3r\"").unwrap();
+        assert_eq!(c.cell, Length::Spacings(0.5));
+        assert_eq!(c.band.half_width, Length::Spacings(3.0));
+    }
+}

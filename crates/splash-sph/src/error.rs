@@ -1,0 +1,92 @@
+//! The library's error: every failure names what was wrong (and the file, where there is one);
+//! its variant says whose it is, so that callers can react (a Python binding raises `OSError`
+//! for [`Error::Io`], `ValueError` for the others).
+
+use std::path::PathBuf;
+
+/// What went wrong.
+#[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
+pub enum Error {
+    /// A file could not be opened, read or written; `message` names the file.
+    #[error("{message}")]
+    Io {
+        path: PathBuf,
+        message: String,
+        #[source]
+        source: std::io::Error,
+    },
+    /// A particle file whose content is not a valid frame of its format.
+    #[error("cannot read particles from '{}': {message}", path.display())]
+    Format { path: PathBuf, message: String },
+    /// A configuration that cannot be used: unknown keys or names, values out of range.
+    #[error("{0}")]
+    Config(String),
+    /// Input data the reconstruction cannot use: non-finite coordinates, attributes whose
+    /// length differs from the particles'.
+    #[error("{0}")]
+    Input(String),
+    /// The work would exceed a limit: the memory limit, or a grid too large to index.
+    #[error("{0}")]
+    Limit(String),
+}
+
+/// `Result` with the library's [`Error`].
+pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+impl Error {
+    pub(crate) fn config(message: impl Into<String>) -> Error {
+        Error::Config(message.into())
+    }
+
+    pub(crate) fn input(message: impl Into<String>) -> Error {
+        Error::Input(message.into())
+    }
+
+    pub(crate) fn limit(message: impl Into<String>) -> Error {
+        Error::Limit(message.into())
+    }
+
+    /// Prefixes the message with `context` (`"{context}: {message}"`), keeping the variant.
+    pub fn context(self, context: impl std::fmt::Display) -> Error {
+        match self {
+            Error::Io {
+                path,
+                message,
+                source,
+            } => Error::Io {
+                path,
+                message: format!("{context}: {message}"),
+                source,
+            },
+            Error::Format { path, message } => Error::Format {
+                path,
+                message: format!("{context}: {message}"),
+            },
+            Error::Config(m) => Error::Config(format!("{context}: {m}")),
+            Error::Input(m) => Error::Input(format!("{context}: {m}")),
+            Error::Limit(m) => Error::Limit(format!("{context}: {m}")),
+        }
+    }
+}
+
+/// Returns an [`Error::Config`] with a formatted message.
+macro_rules! bail_config {
+    ($($arg:tt)*) => {
+        return Err($crate::error::Error::Config(format!($($arg)*)))
+    };
+}
+
+/// Returns an [`Error::Input`] with a formatted message.
+macro_rules! bail_input {
+    ($($arg:tt)*) => {
+        return Err($crate::error::Error::Input(format!($($arg)*)))
+    };
+}
+
+/// Returns an [`Error::Limit`] with a formatted message.
+macro_rules! bail_limit {
+    ($($arg:tt)*) => {
+        return Err($crate::error::Error::Limit(format!($($arg)*)))
+    };
+}

@@ -1,0 +1,137 @@
+//! Scalar fields whose zero level set is the fluid surface. Every engine samples a field through
+//! [`ScalarField`], and the Marching Cubes code never asks which one it is.
+
+pub mod anisotropic;
+pub mod blobby;
+pub mod density;
+pub mod metaball;
+pub mod ssp07;
+pub mod zb05;
+
+use crate::error::Result;
+use glam::Vec3;
+use serde::{Deserialize, Serialize};
+
+use crate::recon::handler_array::HandlerArray;
+use crate::recon::neighbourhood::Neighbourhood;
+
+pub trait ScalarField: Sync {
+    /// Particles farther than this from a point do not change the field there.
+    fn support(&self) -> f32;
+
+    /// The field at `x` (relative to `near.anchor`, as the particles of `near` are): negative
+    /// inside the fluid, zero on its surface. `near` holds every particle within
+    /// [`support`](Self::support) of `x`, and may hold others.
+    fn value(&self, near: &Neighbourhood, x: Vec3) -> f32;
+
+    /// ∇ of [`value`](Self::value) at `x`, from the same particles: it points out of the
+    /// fluid, and normalised it gives the mesh's vertex normals.
+    fn gradient(&self, near: &Neighbourhood, x: Vec3) -> Vec3;
+
+    /// Per-particle values the field needs beside the positions (the density field: each
+    /// particle's volume m/ρ), computed once per frame in `handlers`' order. The engines store
+    /// them as the handler array's channels, gathered into `Neighbourhood::channels`.
+    fn particle_channels(&self, _handlers: &HandlerArray) -> Vec<Vec<f32>> {
+        Vec::new()
+    }
+
+    /// For fields whose kernels adapt to the particles around them (the anisotropic field):
+    /// the field fitted to the frame in `handlers`, to be sampled instead of `self` and
+    /// gathered from the handler array it comes with. `None` for the others.
+    fn fit(&self, _handlers: &HandlerArray) -> Option<Result<Fitted>> {
+        None
+    }
+
+    /// For fields whose particles reach different distances: the channel that holds each
+    /// particle's own reach (at most [`support`](Self::support)). The sampling then narrows
+    /// each vertex's list to the particles that reach it.
+    fn reach_channel(&self) -> Option<usize> {
+        None
+    }
+}
+
+/// A field fitted to one frame, with the particles its kernels sit on: their handler array,
+/// with the per-particle data the field reads in its channels.
+pub struct Fitted {
+    pub field: Box<dyn ScalarField>,
+    pub handlers: HandlerArray,
+}
+
+/// The `[field]` table of a configuration: `kind` picks the field, the other keys are its own.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "kind", rename_all = "lowercase")]
+pub enum FieldConfig {
+    Ssp07(ssp07::Ssp07Config),
+    Zb05(zb05::Zb05Config),
+    Density(density::DensityConfig),
+    Blobby(blobby::BlobbyConfig),
+    Metaball(metaball::MetaballConfig),
+    Anisotropic(anisotropic::AnisotropicConfig),
+}
+
+impl Default for FieldConfig {
+    fn default() -> Self {
+        FieldConfig::Ssp07(Default::default())
+    }
+}
+
+impl FieldConfig {
+    pub const KINDS: [&str; 6] = [
+        "ssp07",
+        "zb05",
+        "density",
+        "blobby",
+        "metaball",
+        "anisotropic",
+    ];
+
+    /// A field of the named kind with its defaults (`--field NAME`).
+    pub fn named(kind: &str) -> Result<FieldConfig> {
+        Ok(match kind {
+            "ssp07" => FieldConfig::Ssp07(Default::default()),
+            "zb05" => FieldConfig::Zb05(Default::default()),
+            "density" => FieldConfig::Density(Default::default()),
+            "blobby" => FieldConfig::Blobby(Default::default()),
+            "metaball" => FieldConfig::Metaball(Default::default()),
+            "anisotropic" => FieldConfig::Anisotropic(Default::default()),
+            _ => bail_config!(
+                "unknown field '{kind}': use one of {}",
+                Self::KINDS.join(", ")
+            ),
+        })
+    }
+
+    pub fn kind(&self) -> &'static str {
+        match self {
+            FieldConfig::Ssp07(_) => "ssp07",
+            FieldConfig::Zb05(_) => "zb05",
+            FieldConfig::Density(_) => "density",
+            FieldConfig::Blobby(_) => "blobby",
+            FieldConfig::Metaball(_) => "metaball",
+            FieldConfig::Anisotropic(_) => "anisotropic",
+        }
+    }
+
+    pub fn validate(&self) -> Result<()> {
+        match self {
+            FieldConfig::Ssp07(c) => c.validate(),
+            FieldConfig::Zb05(c) => c.validate(),
+            FieldConfig::Density(c) => c.validate(),
+            FieldConfig::Blobby(c) => c.validate(),
+            FieldConfig::Metaball(c) => c.validate(),
+            FieldConfig::Anisotropic(c) => c.validate(),
+        }
+    }
+
+    /// The field in world units for particle spacing `r`.
+    pub fn build(&self, r: f32) -> Box<dyn ScalarField> {
+        match self {
+            FieldConfig::Ssp07(c) => Box::new(c.resolve(r)),
+            FieldConfig::Zb05(c) => Box::new(c.resolve(r)),
+            FieldConfig::Density(c) => Box::new(c.resolve(r)),
+            FieldConfig::Blobby(c) => Box::new(c.resolve(r)),
+            FieldConfig::Metaball(c) => Box::new(c.resolve(r)),
+            FieldConfig::Anisotropic(c) => Box::new(c.resolve(r)),
+        }
+    }
+}

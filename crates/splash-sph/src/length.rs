@@ -1,0 +1,123 @@
+//! Lengths in units of the particle spacing r ("2r", "r/2") or in world units (Akinci et al.
+//! 2012 Sec. 3 gives cells, supports and the band in units of r).
+
+use std::fmt;
+
+use serde::{Deserialize, Deserializer, Serialize, Serializer};
+
+use crate::error::{Error, Result};
+
+/// A length either in multiples of the particle spacing r ("2r", "r", "r/2", "0.5r") or in
+/// world units (a plain number).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Length {
+    Spacings(f32),
+    World(f32),
+}
+
+impl Length {
+    pub fn resolve(self, r: f32) -> f32 {
+        match self {
+            Length::Spacings(k) => k * r,
+            Length::World(l) => l,
+        }
+    }
+
+    /// Errors unless the length is positive and finite, naming `key`.
+    pub fn check_positive(self, key: &str) -> Result<()> {
+        positive(key, self.value())
+    }
+
+    /// The number as written, in units of r or world units.
+    pub fn value(self) -> f32 {
+        match self {
+            Length::Spacings(v) | Length::World(v) => v,
+        }
+    }
+
+    pub fn parse(text: &str) -> Result<Length> {
+        let t = text.trim();
+        let bad = || {
+            Error::config(format!(
+                "'{text}' is not a length: use e.g. 2r, r, r/2, 0.5r or 0.007"
+            ))
+        };
+        if let Some(head) = t.strip_suffix("r/2") {
+            let k = if head.is_empty() {
+                1.0
+            } else {
+                head.parse::<f32>().map_err(|_| bad())?
+            };
+            return Ok(Length::Spacings(k / 2.0));
+        }
+        if let Some(head) = t.strip_suffix('r') {
+            let k = if head.is_empty() {
+                1.0
+            } else {
+                head.parse::<f32>().map_err(|_| bad())?
+            };
+            return Ok(Length::Spacings(k));
+        }
+        t.parse::<f32>().map(Length::World).map_err(|_| bad())
+    }
+}
+
+impl fmt::Display for Length {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            Length::Spacings(1.0) => write!(f, "r"),
+            Length::Spacings(0.5) => write!(f, "r/2"),
+            Length::Spacings(k) => write!(f, "{k}r"),
+            Length::World(l) => write!(f, "{l}"),
+        }
+    }
+}
+
+impl Serialize for Length {
+    fn serialize<S: Serializer>(&self, s: S) -> std::result::Result<S::Ok, S::Error> {
+        match *self {
+            Length::World(l) => s.serialize_f32(l),
+            Length::Spacings(_) => s.serialize_str(&self.to_string()),
+        }
+    }
+}
+
+impl<'de> Deserialize<'de> for Length {
+    fn deserialize<D: Deserializer<'de>>(d: D) -> std::result::Result<Self, D::Error> {
+        #[derive(Deserialize)]
+        #[serde(untagged)]
+        enum Raw {
+            Number(f64),
+            Text(String),
+        }
+        match Raw::deserialize(d)? {
+            Raw::Number(v) => Ok(Length::World(v as f32)),
+            Raw::Text(t) => Length::parse(&t).map_err(serde::de::Error::custom),
+        }
+    }
+}
+
+/// Errors unless `v` is a positive, finite length, naming `key`.
+pub(crate) fn positive(key: &str, v: f32) -> Result<()> {
+    if !(v.is_finite() && v > 0.0) {
+        return Err(Error::config(format!(
+            "{key} must be a positive length, got {v}"
+        )));
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lengths_parse() {
+        assert_eq!(Length::parse("2r").unwrap(), Length::Spacings(2.0));
+        assert_eq!(Length::parse("r").unwrap(), Length::Spacings(1.0));
+        assert_eq!(Length::parse("r/2").unwrap(), Length::Spacings(0.5));
+        assert_eq!(Length::parse("0.25r").unwrap(), Length::Spacings(0.25));
+        assert_eq!(Length::parse("0.007").unwrap(), Length::World(0.007));
+        assert!(Length::parse("half").is_err());
+    }
+}

@@ -1,0 +1,60 @@
+//! splash: closed triangle meshes from SPH particle frames.
+//!
+//! The parallel narrow-band reconstruction of Akinci et al. 2012 with six scalar fields
+//! (SSP07 by default), four engines that give the same mesh, particle readers and mesh writers.
+//!
+//! ```
+//! use splash_sph::{Config, Reconstructor, Vec3};
+//!
+//! // A ball of particles on a lattice of spacing r = 0.1.
+//! let r = 0.1;
+//! let mut positions = Vec::new();
+//! for (x, y, z) in (-5..=5).flat_map(|x| (-5..=5).flat_map(move |y| (-5..=5).map(move |z| (x, y, z)))) {
+//!     let p = Vec3::new(x as f32, y as f32, z as f32) * r;
+//!     if p.length() <= 0.5 {
+//!         positions.push(p);
+//!     }
+//! }
+//! let config = Config { spacing: Some(r), ..Config::default() };
+//! let result = Reconstructor::new(config)?.reconstruct(&positions)?;
+//! assert!(result.mesh.triangles.len() > 100);
+//! assert_eq!(result.stats.particles, positions.len());
+//! # Ok::<(), splash_sph::Error>(())
+//! ```
+
+#[macro_use]
+mod error;
+
+mod attributes;
+mod config;
+mod length;
+mod reconstructor;
+mod spacing;
+
+pub mod bytes;
+pub mod field;
+pub mod io;
+pub mod mesh;
+mod recon;
+pub mod report;
+
+pub use bytes::Bytes;
+pub use config::{
+    ATTRIBUTES, BandConfig, Config, Engine, Normals, OutputConfig, Params, SlicesConfig,
+    SurfaceParticles,
+};
+pub use error::{Error, Result};
+pub use glam::Vec3;
+pub use io::{InputFormat, MeshFormat, Particles, UpAxis, read_particles};
+pub use length::Length;
+pub use mesh::TriMesh;
+pub use recon::Reconstruction;
+pub use reconstructor::Reconstructor;
+pub use report::{Clock, FrameStats, Observer, Stage, StageFigures};
+pub use spacing::estimate_spacing;
+
+#[cfg(test)]
+mod tests;
+// The tests share helpers with the command line's, which call this crate by its name.
+#[cfg(test)]
+extern crate self as splash_sph;

@@ -1,0 +1,260 @@
+//! The narrow band of surface vertices (Sec. 4.1), stored sparsely.
+//!
+//! The paper keeps one integer per vertex of the whole grid; here the grid is cut into bricks
+//! of 8×8×8 vertices and only bricks holding surface vertices exist (the coarse-cell indexing
+//! of Wu et al. 2016), each with a bit per vertex. Memory follows the surface: a droplet far
+//! from the fluid adds a brick or two, not a box of empty cells.
+//!
+//! Vertex `v` sits at `v * cell` in world coordinates, so the grid is the same in every frame.
+
+use crate::error::Result;
+use glam::{IVec3, Vec3};
+use rayon::prelude::*;
+use rustc_hash::FxHashMap;
+
+/// Vertices per brick side.
+pub const BRICK: i32 = 8;
+pub const BRICK_VERTICES: usize = 512;
+
+/// A surface particle's index with a brick its box touches, keyed by (z, y, x).
+type BrickParticle = ((i32, i32, i32), u32);
+
+/// Vertex coordinates must stay far from i32 overflow, also after adding halos.
+const MAX_VERTEX_COORD: f64 = (1 << 29) as f64;
+
+pub struct Band {
+    pub cell: f32,
+    /// Brick coordinates, sorted by (z, y, x): the order of every per-brick output.
+    pub bricks: Vec<IVec3>,
+    /// Surface vertex bits per brick: bit `x + 8y` of word `z` (local coordinates).
+    pub masks: Vec<[u64; 8]>,
+    index: FxHashMap<IVec3, u32>,
+}
+
+/// Local index of a vertex inside its brick.
+#[inline]
+pub fn local_index(l: IVec3) -> usize {
+    (l.x + BRICK * (l.y + BRICK * l.z)) as usize
+}
+
+#[inline]
+pub fn brick_of(v: IVec3) -> IVec3 {
+    IVec3::new(v.x >> 3, v.y >> 3, v.z >> 3)
+}
+
+impl Band {
+    /// Marks every vertex in the box of half-width `half_width` around each surface particle.
+    pub fn around(surface: &[Vec3], cell: f32, half_width: f32) -> Result<Band> {
+        let boxes: Vec<(IVec3, IVec3)> = surface
+            .par_iter()
+            .map(|&p| vertex_box(p, cell, half_width))
+            .collect::<Result<_>>()?;
+        // One (brick, particle) pair per brick a particle's box touches, grouped by brick.
+        let mut pairs: Vec<BrickParticle> = boxes
+            .par_iter()
+            .enumerate()
+            .flat_map_iter(|(i, &(lo, hi))| {
+                let (a, b) = (brick_of(lo), brick_of(hi));
+                (a.z..=b.z).flat_map(move |z| {
+                    (a.y..=b.y).flat_map(move |y| (a.x..=b.x).map(move |x| ((z, y, x), i as u32)))
+                })
+            })
+            .collect();
+        pairs.par_sort_unstable();
+        let groups: Vec<&[BrickParticle]> = pairs.chunk_by(|a, b| a.0 == b.0).collect();
+        let (bricks, masks) = groups
+            .par_iter()
+            .map(|group| {
+                let (z, y, x) = group[0].0;
+                let brick = IVec3::new(x, y, z);
+                let mut mask = [0u64; 8];
+                for &(_, i) in group.iter() {
+                    let (lo, hi) = boxes[i as usize];
+                    mark_box(&mut mask, brick, lo, hi);
+                }
+                (brick, mask)
+            })
+            .unzip();
+        Ok(Band::from_parts(cell, bricks, masks))
+    }
+
+    /// Every vertex of the box `[lo, hi]` widened by `margin`: the full grid, for engines and
+    /// checks that process the whole volume.
+    pub fn full(lo: Vec3, hi: Vec3, cell: f32, margin: f32) -> Result<Band> {
+        let (vlo, vhi) = Band::full_extent(lo, hi, cell, margin)?;
+        let (a, b) = (brick_of(vlo), brick_of(vhi));
+        let mut bricks = Vec::new();
+        let mut masks = Vec::new();
+        for z in a.z..=b.z {
+            for y in a.y..=b.y {
+                for x in a.x..=b.x {
+                    let brick = IVec3::new(x, y, z);
+                    let mut mask = [0; 8];
+                    mark_box(&mut mask, brick, vlo, vhi);
+                    bricks.push(brick);
+                    masks.push(mask);
+                }
+            }
+        }
+        Ok(Band::from_parts(cell, bricks, masks))
+    }
+
+    /// First and last grid vertex of [`Band::full`]'s box, without building it.
+    pub fn full_extent(lo: Vec3, hi: Vec3, cell: f32, margin: f32) -> Result<(IVec3, IVec3)> {
+        let (vlo, _) = vertex_box(lo, cell, margin)?;
+        let (_, vhi) = vertex_box(hi, cell, margin)?;
+        Ok((vlo, vhi))
+    }
+
+    /// A band of exactly `vertices`, which must be sorted by (z, y, x).
+    pub fn from_vertices(vertices: &[IVec3], cell: f32) -> Band {
+        let mut bricks: Vec<IVec3> = vertices.iter().map(|&v| brick_of(v)).collect();
+        bricks.sort_unstable_by_key(|b| (b.z, b.y, b.x));
+        bricks.dedup();
+        let mut band = Band::from_parts(cell, bricks.clone(), vec![[0; 8]; bricks.len()]);
+        for &v in vertices {
+            let b = band.index[&brick_of(v)] as usize;
+            let l = v - brick_of(v) * BRICK;
+            band.masks[b][l.z as usize] |= 1 << (l.x + BRICK * l.y);
+        }
+        band
+    }
+
+    /// Adds the vertices of `other` and their values, keeping bricks in (z, y, x) order.
+    pub fn merge(
+        &mut self,
+        values: &mut Vec<[f32; BRICK_VERTICES]>,
+        other: Band,
+        other_values: Vec<[f32; BRICK_VERTICES]>,
+    ) {
+        let mut all: Vec<(IVec3, [u64; 8], [f32; BRICK_VERTICES])> =
+            Vec::with_capacity(self.bricks.len() + other.bricks.len());
+        let mut added = Vec::new();
+        for ((b, m), v) in other.bricks.into_iter().zip(other.masks).zip(other_values) {
+            match self.brick_index(b) {
+                Some(i) => {
+                    for (word, add) in self.masks[i].iter_mut().zip(m) {
+                        *word |= add;
+                    }
+                    for (k, &x) in v.iter().enumerate() {
+                        if !x.is_nan() {
+                            values[i][k] = x;
+                        }
+                    }
+                }
+                None => added.push((b, m, v)),
+            }
+        }
+        if added.is_empty() {
+            return;
+        }
+        all.extend(
+            self.bricks
+                .drain(..)
+                .zip(self.masks.drain(..))
+                .zip(values.drain(..))
+                .map(|((b, m), v)| (b, m, v)),
+        );
+        all.extend(added);
+        all.sort_unstable_by_key(|(b, _, _)| (b.z, b.y, b.x));
+        for (b, m, v) in all {
+            self.bricks.push(b);
+            self.masks.push(m);
+            values.push(v);
+        }
+        self.index = self
+            .bricks
+            .iter()
+            .enumerate()
+            .map(|(i, &b)| (b, i as u32))
+            .collect();
+    }
+
+    fn from_parts(cell: f32, bricks: Vec<IVec3>, masks: Vec<[u64; 8]>) -> Band {
+        let index = bricks
+            .iter()
+            .enumerate()
+            .map(|(i, &b)| (b, i as u32))
+            .collect();
+        Band {
+            cell,
+            bricks,
+            masks,
+            index,
+        }
+    }
+
+    pub fn brick_index(&self, brick: IVec3) -> Option<usize> {
+        self.index.get(&brick).map(|&i| i as usize)
+    }
+
+    pub fn surface_vertices(&self) -> usize {
+        self.masks
+            .iter()
+            .flatten()
+            .map(|w| w.count_ones() as usize)
+            .sum()
+    }
+
+    pub fn heap_bytes(&self) -> usize {
+        self.bricks.capacity() * size_of::<IVec3>()
+            + self.masks.capacity() * size_of::<[u64; 8]>()
+            + self.index.capacity() * (size_of::<(IVec3, u32)>() + 1)
+    }
+}
+
+/// Grid vertices in the box of half-width `w` around `p`.
+fn vertex_box(p: Vec3, cell: f32, w: f32) -> Result<(IVec3, IVec3)> {
+    let (c, w) = (f64::from(cell), f64::from(w));
+    let lo = (p.as_dvec3() - w) / c;
+    let hi = (p.as_dvec3() + w) / c;
+    if lo.abs().max_element() >= MAX_VERTEX_COORD || hi.abs().max_element() >= MAX_VERTEX_COORD {
+        bail_limit!(
+            "particle at {p} lies {:.3e} cells from the origin, beyond the grid's reach of {:.3e}",
+            p.as_dvec3().abs().max_element() / c,
+            MAX_VERTEX_COORD
+        );
+    }
+    Ok((lo.ceil().as_ivec3(), hi.floor().as_ivec3()))
+}
+
+/// Sets the bits of the vertices of `[lo, hi]` that fall inside `brick`.
+fn mark_box(mask: &mut [u64; 8], brick: IVec3, lo: IVec3, hi: IVec3) {
+    let base = brick * BRICK;
+    let a = (lo - base).max(IVec3::ZERO);
+    let b = (hi - base).min(IVec3::splat(BRICK - 1));
+    if a.cmpgt(b).any() {
+        return;
+    }
+    let row = ((1u64 << (b.x - a.x + 1)) - 1) << a.x;
+    let mut plane = 0u64;
+    for y in a.y..=b.y {
+        plane |= row << (BRICK * y);
+    }
+    for word in &mut mask[a.z as usize..=b.z as usize] {
+        *word |= plane;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn band_marks_the_box_around_each_particle() {
+        let band = Band::around(&[Vec3::new(0.05, 0.05, 0.05)], 0.1, 0.2).unwrap();
+        // Vertices −1..=2 on each axis: 4³, spread over the bricks at −1 and 0.
+        assert_eq!(band.surface_vertices(), 64);
+        assert_eq!(band.bricks.len(), 8);
+    }
+
+    #[test]
+    fn far_particle_adds_bricks_not_volume() {
+        let near: Vec<Vec3> = (0..100).map(|i| Vec3::splat(i as f32 * 0.01)).collect();
+        let mut far = near.clone();
+        far.push(Vec3::splat(1.0e3));
+        let a = Band::around(&near, 0.01, 0.02).unwrap();
+        let b = Band::around(&far, 0.01, 0.02).unwrap();
+        assert!(b.bricks.len() <= a.bricks.len() + 8);
+    }
+}

@@ -1,0 +1,218 @@
+//! The handler array of Sec. 4.1: particles sorted by the Z-order (Morton) id of their lookup
+//! cell (eqs. 6–8), stored contiguously, with the start of every non-empty cell.
+//!
+//! Unlike the paper's `startIndices`, which holds one integer per cell of the bounding box, the
+//! cell starts live in a hash map over non-empty cells only, so a droplet far from the fluid
+//! costs one entry instead of a box full of empty cells.
+
+use crate::error::Result;
+use glam::{IVec3, Vec3};
+use rayon::prelude::*;
+use rustc_hash::FxHashMap;
+
+/// Morton codes interleave 21 bits per axis into a u64.
+const AXIS_BITS: u32 = 21;
+
+pub struct HandlerArray {
+    cell_size: f32,
+    /// Lowest occupied cell; Morton codes are taken relative to it.
+    origin: IVec3,
+    /// Particle positions in handler order (sorted by cell id).
+    pub positions: Vec<Vec3>,
+    /// Per-particle attribute channels, each in handler order, for fields whose kernels carry
+    /// per-particle data (the density field's volumes m/ρ in channel 0; the anisotropic
+    /// field's matrices); empty for the others, whose gathers then copy positions only.
+    pub channels: Vec<Vec<f32>>,
+    /// Non-empty cell id → range of `positions`.
+    cells: FxHashMap<u64, (u32, u32)>,
+}
+
+impl HandlerArray {
+    pub fn new(particles: &[Vec3], cell_size: f32) -> Result<HandlerArray> {
+        Ok(Self::sorted(particles, cell_size)?.0)
+    }
+
+    /// A handler array over `particles` with per-particle `channels` given in the order of
+    /// `particles`, reordered with them into handler order.
+    pub fn with_channels(
+        particles: &[Vec3],
+        cell_size: f32,
+        channels: Vec<Vec<f32>>,
+    ) -> Result<HandlerArray> {
+        let (mut handlers, order) = Self::sorted(particles, cell_size)?;
+        handlers.channels = channels
+            .into_iter()
+            .map(|c| {
+                assert_eq!(c.len(), particles.len(), "one value per particle");
+                order.par_iter().map(|&(_, i)| c[i as usize]).collect()
+            })
+            .collect();
+        Ok(handlers)
+    }
+
+    /// The handler array and its handlers (cell id, index into `particles`), in handler order.
+    fn sorted(particles: &[Vec3], cell_size: f32) -> Result<(HandlerArray, Vec<(u64, u32)>)> {
+        if particles.len() >= u32::MAX as usize {
+            bail_limit!(
+                "{} particles are more than one frame can hold",
+                particles.len()
+            );
+        }
+        let cell_of = |p: Vec3| (p / cell_size).floor().as_ivec3();
+        let (lo, hi) = particles
+            .par_iter()
+            .map(|&p| (cell_of(p), cell_of(p)))
+            .reduce(
+                || (IVec3::MAX, IVec3::MIN),
+                |a, b| (a.0.min(b.0), a.1.max(b.1)),
+            );
+        let origin = if particles.is_empty() {
+            IVec3::ZERO
+        } else {
+            lo
+        };
+        let span = (hi - origin).max_element() as i64;
+        if !particles.is_empty() && span >= 1 << AXIS_BITS {
+            bail_limit!(
+                "the particles span {span} lookup cells of {cell_size} along one axis; \
+                 at most {} fit (a particle has escaped far from the fluid?)",
+                1u64 << AXIS_BITS
+            );
+        }
+        // eq. 8: handler = (cell id, particle id), sorted by cell id.
+        let mut handlers: Vec<(u64, u32)> = particles
+            .par_iter()
+            .enumerate()
+            .map(|(i, &p)| (morton(cell_of(p) - origin), i as u32))
+            .collect();
+        handlers.par_sort_unstable();
+        let positions = handlers
+            .par_iter()
+            .map(|&(_, i)| particles[i as usize])
+            .collect();
+        let mut cells = FxHashMap::default();
+        let mut start = 0;
+        for (i, w) in handlers.windows(2).enumerate() {
+            if w[0].0 != w[1].0 {
+                cells.insert(w[0].0, (start as u32, i as u32 + 1));
+                start = i + 1;
+            }
+        }
+        if let Some(last) = handlers.last() {
+            cells.insert(last.0, (start as u32, handlers.len() as u32));
+        }
+        let handlers_array = HandlerArray {
+            cell_size,
+            origin,
+            positions,
+            channels: Vec::new(),
+            cells,
+        };
+        Ok((handlers_array, handlers))
+    }
+
+    pub fn cell_size(&self) -> f32 {
+        self.cell_size
+    }
+
+    pub fn cell_of(&self, p: Vec3) -> IVec3 {
+        (p / self.cell_size).floor().as_ivec3()
+    }
+
+    /// The handler-order range of one cell's particles.
+    pub fn cell_range(&self, cell: IVec3) -> std::ops::Range<usize> {
+        let rel = cell - self.origin;
+        if rel.min_element() < 0 || rel.max_element() >= 1 << AXIS_BITS {
+            return 0..0;
+        }
+        match self.cells.get(&morton(rel)) {
+            Some(&(s, e)) => s as usize..e as usize,
+            None => 0..0,
+        }
+    }
+
+    /// The particles of one cell, in handler order.
+    pub fn cell(&self, cell: IVec3) -> &[Vec3] {
+        &self.positions[self.cell_range(cell)]
+    }
+
+    /// Calls `f` with the handler-order range of every non-empty cell overlapping `[lo, hi]`.
+    pub fn for_each_in_box(&self, lo: Vec3, hi: Vec3, f: impl FnMut(std::ops::Range<usize>)) {
+        self.for_each_in_cells(self.cell_of(lo), self.cell_of(hi), f);
+    }
+
+    /// Calls `f` with the handler-order range of every non-empty cell from `a` to `b`.
+    pub fn for_each_in_cells(&self, a: IVec3, b: IVec3, mut f: impl FnMut(std::ops::Range<usize>)) {
+        for z in a.z..=b.z {
+            for y in a.y..=b.y {
+                for x in a.x..=b.x {
+                    let range = self.cell_range(IVec3::new(x, y, z));
+                    if !range.is_empty() {
+                        f(range);
+                    }
+                }
+            }
+        }
+    }
+
+    pub fn heap_bytes(&self) -> usize {
+        self.positions.capacity() * size_of::<Vec3>()
+            + self
+                .channels
+                .iter()
+                .map(|c| c.capacity() * size_of::<f32>())
+                .sum::<usize>()
+            + self.cells.capacity() * (size_of::<(u64, (u32, u32))>() + 1)
+    }
+}
+
+/// Z-order id of a non-negative cell coordinate (eq. 8), by bit spreading instead of the
+/// paper's lookup table.
+fn morton(c: IVec3) -> u64 {
+    spread(c.x as u32) | (spread(c.y as u32) << 1) | (spread(c.z as u32) << 2)
+}
+
+fn spread(v: u32) -> u64 {
+    let mut x = u64::from(v) & 0x1f_ffff;
+    x = (x | (x << 32)) & 0x001f_0000_0000_ffff;
+    x = (x | (x << 16)) & 0x001f_0000_ff00_00ff;
+    x = (x | (x << 8)) & 0x100f_00f0_0f00_f00f;
+    x = (x | (x << 4)) & 0x10c3_0c30_c30c_30c3;
+    x = (x | (x << 2)) & 0x1249_2492_4924_9249;
+    x
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn morton_interleaves_bits() {
+        assert_eq!(morton(IVec3::new(1, 0, 0)), 1);
+        assert_eq!(morton(IVec3::new(0, 1, 0)), 2);
+        assert_eq!(morton(IVec3::new(0, 0, 1)), 4);
+        assert_eq!(morton(IVec3::new(3, 3, 3)), 63);
+        let m = (1 << AXIS_BITS) - 1;
+        assert_eq!(morton(IVec3::new(m, m, m)), u64::MAX >> 1);
+    }
+
+    #[test]
+    fn every_particle_is_found_in_its_cell() {
+        let ps: Vec<Vec3> = (0..500)
+            .map(|i| {
+                Vec3::new(
+                    (i % 7) as f32 * 0.3,
+                    (i % 11) as f32 * -0.2,
+                    (i % 13) as f32 * 0.1,
+                )
+            })
+            .collect();
+        let h = HandlerArray::new(&ps, 0.25).unwrap();
+        let mut total = 0;
+        h.for_each_in_box(Vec3::splat(-10.0), Vec3::splat(10.0), |c| total += c.len());
+        assert_eq!(total, ps.len());
+        for &p in &ps {
+            assert!(h.cell(h.cell_of(p)).contains(&p));
+        }
+    }
+}

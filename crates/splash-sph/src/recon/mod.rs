@@ -1,0 +1,78 @@
+//! Surface reconstruction engines behind one signature: [`reconstruct`] runs the engine that
+//! the parameters name. Each engine runs the stages of Algorithm 1 (Akinci et al. 2012) its own
+//! way and ends with the same triangulation and normals.
+
+pub(crate) mod band;
+pub(crate) mod band_closure;
+pub(crate) mod field_sampling;
+pub(crate) mod full_grid;
+pub(crate) mod halo;
+pub(crate) mod handler_array;
+pub(crate) mod marching_slices;
+pub(crate) mod narrow_band;
+pub(crate) mod neighbourhood;
+pub(crate) mod normals;
+pub(crate) mod prepared;
+pub(crate) mod scatter;
+pub(crate) mod surface_particles;
+pub(crate) mod triangulation;
+
+use glam::Vec3;
+
+use crate::config::{Engine, Params};
+use crate::error::Result;
+use crate::mesh::TriMesh;
+use crate::report::{FrameStats, Observer, Stages};
+use full_grid::Grid;
+
+/// A mesh and the report of its reconstruction.
+#[derive(Debug, Clone, Default)]
+pub struct Reconstruction {
+    pub mesh: TriMesh,
+    pub stats: FrameStats,
+}
+
+/// Reconstructs the surface of `particles` with `params.engine`, in the current rayon pool.
+pub(crate) fn reconstruct(
+    particles: &[Vec3],
+    params: &Params,
+    observer: Option<&mut dyn Observer>,
+) -> Result<Reconstruction> {
+    let mut stages = Stages::start(
+        FrameStats {
+            spacing: params.spacing,
+            cell: params.cell,
+            particles: particles.len(),
+            threads: rayon::current_num_threads(),
+            ..FrameStats::default()
+        },
+        observer,
+    );
+    if particles.is_empty() {
+        return Ok(Reconstruction {
+            mesh: TriMesh::default(),
+            stats: stages.stats,
+        });
+    }
+    // The grid of the full-grid engines; the others report it without allocating it.
+    let grid = Grid::around(particles, params.cell, params.support);
+    if let Ok(g) = &grid {
+        stages.stats.grid = g.resolution();
+    }
+    match params.engine {
+        Engine::NarrowBand => narrow_band::gather(particles, params, stages),
+        Engine::Slices => {
+            marching_slices::reconstruct(particles, params, Default::default(), stages)
+                .map(|(r, _)| r)
+        }
+        engine @ (Engine::FullGather | Engine::Scatter) => {
+            let grid = grid?;
+            full_grid::check(engine, &grid, particles.len(), params.max_memory)?;
+            if engine == Engine::Scatter {
+                scatter::reconstruct(particles, params, &grid, stages)
+            } else {
+                narrow_band::gather(particles, params, stages)
+            }
+        }
+    }
+}

@@ -1,0 +1,86 @@
+//! What every engine shares: the field and the handler array of the frame before the field is
+//! sampled, and the counts and memory figures once the mesh exists.
+
+use glam::Vec3;
+
+use super::Reconstruction;
+use super::band::{BRICK_VERTICES, Band};
+use super::field_sampling::BrickValues;
+use super::handler_array::HandlerArray;
+use super::triangulation::Triangulation;
+use crate::config::Params;
+use crate::error::Result;
+use crate::field::{Fitted, ScalarField};
+use crate::report::{FrameStats, Stage, Stages};
+
+/// The field, and the handler array of the frame with the field's channels; fields with
+/// adaptive kernels also come fitted to the frame, with their own handler array.
+pub(super) struct Prepared {
+    field: Box<dyn ScalarField>,
+    pub handlers: HandlerArray,
+    fitted: Option<Fitted>,
+}
+
+impl Prepared {
+    /// The field to sample and the handler array to gather its particles from.
+    pub fn sampling(&self) -> (&dyn ScalarField, &HandlerArray) {
+        match &self.fitted {
+            Some(f) => (f.field.as_ref(), &f.handlers),
+            None => (self.field.as_ref(), &self.handlers),
+        }
+    }
+
+    pub fn heap_bytes(&self) -> usize {
+        self.handlers.heap_bytes() + self.fitted.as_ref().map_or(0, |f| f.handlers.heap_bytes())
+    }
+}
+
+pub(super) fn prepare(
+    particles: &[Vec3],
+    params: &Params,
+    stages: &mut Stages<'_>,
+) -> Result<Prepared> {
+    let field = params.field.build(params.spacing);
+    // The handler array comes first here, as the colour field needs the neighbours too.
+    let mut handlers = stages.run(Stage::HandlerArray, || {
+        HandlerArray::new(particles, lookup_cell(params))
+    })?;
+    // Per-particle work, like the colour field: counted with t_sp.
+    handlers.channels = stages.run(Stage::SurfaceParticles, || {
+        field.particle_channels(&handlers)
+    });
+    let fitted = stages
+        .run(Stage::ScalarField, || field.fit(&handlers))
+        .transpose()?;
+    Ok(Prepared {
+        field,
+        handlers,
+        fitted,
+    })
+}
+
+/// Lookup cells that suit both gathers: the colour support (2r), and half the field's support
+/// (2r for SSP07) so that a brick's reach spans few cells.
+fn lookup_cell(params: &Params) -> f32 {
+    params.colour_support.max(params.support / 2.0)
+}
+
+/// Counts and memory figures once the mesh exists.
+pub(super) fn finish(
+    mut stats: FrameStats,
+    band: &Band,
+    values: &BrickValues,
+    handler_bytes: usize,
+    triangulation: Triangulation,
+) -> Reconstruction {
+    let values_bytes = values.capacity() * BRICK_VERTICES * size_of::<f32>();
+    let mesh = triangulation.mesh;
+    stats.bricks = band.bricks.len();
+    stats.surface_vertices = band.surface_vertices();
+    stats.surface_cells = triangulation.surface_cells;
+    stats.triangles = mesh.triangles.len();
+    stats.vertices = mesh.vertices.len();
+    stats.peak_bytes = handler_bytes + band.heap_bytes() + values_bytes + mesh.heap_bytes();
+    stats.heap_peak = stats.stage_heap.max();
+    Reconstruction { mesh, stats }
+}

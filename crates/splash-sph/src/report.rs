@@ -1,0 +1,244 @@
+//! The report of one reconstruction: counts, the reconstruction's own array bytes, and (when
+//! the caller passes an [`Observer`]) the time and heap of each stage of Algorithm 1.
+
+use std::fmt;
+use std::time::{Duration, Instant};
+
+use serde::Serialize;
+
+/// Times of the stages of Algorithm 1 (Akinci et al. 2012), plus I/O.
+#[derive(Debug, Clone, Copy, Default, Serialize)]
+pub struct Timings {
+    pub read: Duration,
+    /// Sorting the handler array (Sec. 4.1, "Identification of the contributing particles").
+    pub handler_array: Duration,
+    /// t_sp: colour field and neighbour counts.
+    pub surface_particles: Duration,
+    pub band: Duration,
+    /// t_sf.
+    pub scalar_field: Duration,
+    /// t_tri.
+    pub triangulation: Duration,
+    pub write: Duration,
+}
+
+impl Timings {
+    pub fn reconstruction(&self) -> Duration {
+        self.handler_array
+            + self.surface_particles
+            + self.band
+            + self.scalar_field
+            + self.triangulation
+    }
+}
+
+/// A stage of Algorithm 1, for its time and peak heap.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Stage {
+    HandlerArray,
+    SurfaceParticles,
+    Band,
+    ScalarField,
+    Triangulation,
+}
+
+/// What an [`Observer`] measured of one run of a stage.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct StageFigures {
+    pub time: Duration,
+    /// Peak heap bytes during the stage above the heap held when the reconstruction started.
+    pub heap_peak: usize,
+}
+
+/// Measures the stages of a reconstruction for its report. The library itself reads no clock
+/// and no allocator: without an observer the report's times and heap figures are zero.
+pub trait Observer: Send {
+    /// A stage starts (stages may run more than once; figures of one stage add up).
+    fn stage_started(&mut self, stage: Stage);
+    /// The stage that started last has ended.
+    fn stage_finished(&mut self, stage: Stage) -> StageFigures;
+}
+
+/// An [`Observer`] of stage wall times only.
+#[derive(Debug, Default)]
+pub struct Clock {
+    started: Option<Instant>,
+}
+
+impl Observer for Clock {
+    fn stage_started(&mut self, _stage: Stage) {
+        self.started = Some(Instant::now());
+    }
+
+    fn stage_finished(&mut self, _stage: Stage) -> StageFigures {
+        StageFigures {
+            time: self.started.take().map_or(Duration::ZERO, |t| t.elapsed()),
+            heap_peak: 0,
+        }
+    }
+}
+
+/// Runs the stages of one reconstruction, recording each one's figures in `stats`.
+pub(crate) struct Stages<'a> {
+    pub stats: FrameStats,
+    observer: Option<&'a mut dyn Observer>,
+}
+
+impl<'a> Stages<'a> {
+    pub fn start(stats: FrameStats, observer: Option<&'a mut dyn Observer>) -> Stages<'a> {
+        Stages { stats, observer }
+    }
+
+    pub fn run<T>(&mut self, stage: Stage, f: impl FnOnce() -> T) -> T {
+        let Some(observer) = self.observer.as_deref_mut() else {
+            return f();
+        };
+        observer.stage_started(stage);
+        let out = f();
+        let figures = observer.stage_finished(stage);
+        let (t, h) = (&mut self.stats.timings, &mut self.stats.stage_heap);
+        let (time, heap) = match stage {
+            Stage::HandlerArray => (&mut t.handler_array, &mut h.handler_array),
+            Stage::SurfaceParticles => (&mut t.surface_particles, &mut h.surface_particles),
+            Stage::Band => (&mut t.band, &mut h.band),
+            Stage::ScalarField => (&mut t.scalar_field, &mut h.scalar_field),
+            Stage::Triangulation => (&mut t.triangulation, &mut h.triangulation),
+        };
+        *time += figures.time;
+        *heap = (*heap).max(figures.heap_peak);
+        out
+    }
+}
+
+/// Peak heap bytes per stage, above the heap held when the reconstruction started (the input
+/// particles are not counted). Each includes what earlier stages still hold.
+#[derive(Debug, Clone, Copy, Default, Serialize)]
+pub struct StageHeap {
+    pub handler_array: usize,
+    pub surface_particles: usize,
+    pub band: usize,
+    pub scalar_field: usize,
+    pub triangulation: usize,
+}
+
+impl StageHeap {
+    pub fn max(&self) -> usize {
+        [
+            self.handler_array,
+            self.surface_particles,
+            self.band,
+            self.scalar_field,
+            self.triangulation,
+        ]
+        .into_iter()
+        .max()
+        .unwrap_or(0)
+    }
+}
+
+/// Counts and memory of one reconstructed frame.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct FrameStats {
+    /// Particle spacing r and cell size of the frame, in world units.
+    pub spacing: f32,
+    pub cell: f32,
+    pub particles: usize,
+    pub surface_particles: usize,
+    /// Bricks of 8³ vertices holding surface vertices.
+    pub bricks: usize,
+    pub surface_vertices: usize,
+    /// Vertices added to close the band where the surface left it (included above).
+    pub closure_vertices: usize,
+    pub surface_cells: usize,
+    pub triangles: usize,
+    pub vertices: usize,
+    /// Largest sum of the bytes held at once by the reconstruction's own arrays (handler array,
+    /// band, field values, mesh), measured from their capacities.
+    pub peak_bytes: usize,
+    /// Peak heap of the reconstruction, the largest of the observer's stage figures (0 without
+    /// an observer that measures heap).
+    pub heap_peak: usize,
+    pub stage_heap: StageHeap,
+    /// Peak resident set size of the process after the frame, set by callers that measure it
+    /// (the CLI: VmHWM), else 0.
+    pub peak_rss: u64,
+    /// Vertices per axis of the full grid: the particles' box widened by the support.
+    pub grid: [u64; 3],
+    /// Worker threads of the pool that reconstructed the frame.
+    pub threads: usize,
+    pub timings: Timings,
+    /// The slices engine's blocks (zeros for the other engines).
+    pub slices: SlicesFigures,
+}
+
+/// The Marching Slices engine's memory per block, as in Fig. 7 of Rosenberg & Birdwell 2008.
+#[derive(Debug, Clone, Copy, Default, Serialize)]
+pub struct SlicesFigures {
+    pub blocks: usize,
+    /// Most slices cached at once in any block.
+    pub peak_slices: usize,
+    /// Largest and mean peak "render memory" of a block: slice and corner caches, todo lists.
+    pub render_bytes_max: usize,
+    pub render_bytes_mean: usize,
+    /// Largest and mean "cache memory" of a block: lookup cache and particle list.
+    pub cache_bytes_max: usize,
+    pub cache_bytes_mean: usize,
+    /// Peak of both, summed over the blocks being marched at once.
+    pub in_flight_peak: usize,
+}
+
+impl fmt::Display for SlicesFigures {
+    /// Nothing for the engines without blocks.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.blocks == 0 {
+            return Ok(());
+        }
+        let mb = |b: usize| b as f64 / 1e6;
+        write!(
+            f,
+            "; {} blocks: render memory ≤ {:.2} MB (mean {:.2}), cache memory ≤ {:.2} MB \
+             (mean {:.2}), ≤ {} slices, {:.1} MB in flight",
+            self.blocks,
+            mb(self.render_bytes_max),
+            mb(self.render_bytes_mean),
+            mb(self.cache_bytes_max),
+            mb(self.cache_bytes_mean),
+            self.peak_slices,
+            mb(self.in_flight_peak)
+        )
+    }
+}
+
+impl FrameStats {
+    pub fn grid_vertices(&self) -> u64 {
+        self.grid.iter().product()
+    }
+}
+
+impl fmt::Display for FrameStats {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let ms = |d: Duration| d.as_secs_f64() * 1e3;
+        let t = &self.timings;
+        write!(
+            f,
+            "{} particles ({} surface), {} surface vertices, {} triangles; \
+             read {:.0} ms, sort {:.0} ms, t_sp {:.0} ms, band {:.0} ms, t_sf {:.0} ms, \
+             t_tri {:.0} ms, write {:.0} ms; {:.1} MB arrays, {:.1} MB peak heap, {:.1} MB peak RSS{}",
+            self.particles,
+            self.surface_particles,
+            self.surface_vertices,
+            self.triangles,
+            ms(t.read),
+            ms(t.handler_array),
+            ms(t.surface_particles),
+            ms(t.band),
+            ms(t.scalar_field),
+            ms(t.triangulation),
+            ms(t.write),
+            self.peak_bytes as f64 / 1e6,
+            self.heap_peak as f64 / 1e6,
+            self.peak_rss as f64 / 1e6,
+            self.slices
+        )
+    }
+}

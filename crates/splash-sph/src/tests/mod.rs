@@ -1,0 +1,16 @@
+//! The library's tests that reach inside it: fields against brute force, the band and the
+//! triangulation, engines against each other, on analytic shapes and real frames.
+
+mod anisotropic;
+mod common;
+mod engines;
+mod field;
+mod fields;
+mod gradients;
+mod marching_cubes;
+mod reconstruction;
+mod slices;
+
+/// The helpers of the repository's tests/, which name this crate `splash_sph`.
+#[path = "../../../../tests/common/mod.rs"]
+mod shared;

@@ -1,0 +1,777 @@
+//! Particle input and mesh output: every format round-trips, bad input is reported precisely.
+
+use std::fmt::Write as _;
+#[path = "../../../tests/common/mod.rs"]
+mod common;
+
+use common::TempDir;
+use std::fs;
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use glam::Vec3;
+use ply_rs_bw::parser::Parser;
+use ply_rs_bw::ply::{DefaultElement, Property};
+use splash_sph::io::{InputFormat, MeshFormat, write_mesh, write_mesh_file};
+use splash_sph::mesh::TriMesh;
+
+/// The positions of a particle file.
+fn read_particles(path: &Path, format: Option<InputFormat>) -> splash_sph::Result<Vec<Vec3>> {
+    splash_sph::read_particles(path, format).map(|p| p.positions)
+}
+
+fn particles() -> Vec<Vec3> {
+    vec![
+        Vec3::new(0.1, -2.5, 3.75),
+        Vec3::new(1e-7, 12345.678, -0.0),
+        Vec3::new(-1.0e6, 0.333_333_34, 7.0),
+        Vec3::new(f32::MIN_POSITIVE, 3.0e38, -123.456),
+    ]
+}
+
+#[derive(Clone, Copy, Debug)]
+enum Encoding {
+    Ascii,
+    Le,
+    Be,
+}
+
+/// Appends `value` as PLY type `ty`; `list` stands for `list uchar int` holding [5, 6].
+fn encode(ty: &str, value: f64, encoding: Encoding, out: &mut Vec<u8>) {
+    macro_rules! put {
+        ($t:ty) => {{
+            let v = value as $t;
+            match encoding {
+                Encoding::Ascii => out.extend(format!("{v} ").bytes()),
+                Encoding::Le => out.extend(v.to_le_bytes()),
+                Encoding::Be => out.extend(v.to_be_bytes()),
+            }
+        }};
+    }
+    match ty {
+        "float" => put!(f32),
+        "double" => put!(f64),
+        "uchar" => put!(u8),
+        "short" => put!(i16),
+        "int" => put!(i32),
+        "list" => {
+            encode("uchar", 2.0, encoding, out);
+            encode("int", 5.0, encoding, out);
+            encode("int", 6.0, encoding, out);
+        }
+        _ => panic!("test encoder has no type {ty}"),
+    }
+}
+
+/// A PLY file with the given vertex properties (type, name): coordinates from `points`, 7 in the
+/// others. `prelude` puts an element with a list property before `vertex`; `trailer` puts a
+/// truncated element after it, which must not be read.
+fn ply_file(
+    encoding: Encoding,
+    props: &[(&str, &str)],
+    points: &[Vec3],
+    prelude: bool,
+    trailer: bool,
+) -> Vec<u8> {
+    let format = match encoding {
+        Encoding::Ascii => "ascii",
+        Encoding::Le => "binary_little_endian",
+        Encoding::Be => "binary_big_endian",
+    };
+    let mut header = format!("ply\nformat {format} 1.0\ncomment test file\n");
+    if prelude {
+        header += "element material 2\nproperty uchar id\nproperty list uchar int indices\n";
+    }
+    writeln!(header, "element vertex {}", points.len()).unwrap();
+    for (ty, name) in props {
+        let ty = if *ty == "list" { "list uchar int" } else { ty };
+        writeln!(header, "property {ty} {name}").unwrap();
+    }
+    if trailer {
+        header += "element face 1\nproperty list uchar int vertex_indices\n";
+    }
+    header += "end_header\n";
+    let mut out = header.into_bytes();
+    let end_record = |out: &mut Vec<u8>| {
+        if let Encoding::Ascii = encoding {
+            out.push(b'\n');
+        }
+    };
+    if prelude {
+        for (id, indices) in [(1.0, &[4.0, 5.0, 6.0][..]), (2.0, &[][..])] {
+            encode("uchar", id, encoding, &mut out);
+            encode("uchar", indices.len() as f64, encoding, &mut out);
+            for &i in indices {
+                encode("int", i, encoding, &mut out);
+            }
+            end_record(&mut out);
+        }
+    }
+    for p in points {
+        for (ty, name) in props {
+            let value = match *name {
+                "x" => p.x,
+                "y" => p.y,
+                "z" => p.z,
+                _ => 7.0,
+            };
+            encode(ty, f64::from(value), encoding, &mut out);
+        }
+        end_record(&mut out);
+    }
+    if trailer {
+        encode("uchar", 3.0, encoding, &mut out);
+    }
+    out
+}
+
+const FLOAT_XYZ: &[(&str, &str)] = &[("float", "x"), ("float", "y"), ("float", "z")];
+const DOUBLE_XYZ: &[(&str, &str)] = &[("double", "x"), ("double", "y"), ("double", "z")];
+const ODD_LAYOUT: &[(&str, &str)] = &[
+    ("double", "density"),
+    ("float", "z"),
+    ("uchar", "flag"),
+    ("float", "x"),
+    ("int", "id"),
+    ("double", "y"),
+    ("short", "phase"),
+];
+const WITH_LIST: &[(&str, &str)] = &[
+    ("float", "x"),
+    ("list", "neighbours"),
+    ("float", "y"),
+    ("float", "z"),
+    ("float", "vx"),
+];
+
+fn raw_file(points: &[Vec3]) -> Vec<u8> {
+    points
+        .iter()
+        .flat_map(|p| p.to_array())
+        .flat_map(f32::to_le_bytes)
+        .collect()
+}
+
+fn csv_rows(points: &[Vec3], row: impl Fn(&Vec3) -> String) -> String {
+    points.iter().map(row).collect()
+}
+
+/// Every test input format, each holding `particles()`.
+fn input_files(dir: &TempDir) -> Vec<PathBuf> {
+    let points = particles();
+    let mut files = vec![
+        dir.file(
+            "ascii.ply",
+            ply_file(Encoding::Ascii, FLOAT_XYZ, &points, false, false),
+        ),
+        dir.file(
+            "le.ply",
+            ply_file(Encoding::Le, FLOAT_XYZ, &points, false, false),
+        ),
+        dir.file(
+            "be-double.ply",
+            ply_file(Encoding::Be, DOUBLE_XYZ, &points, false, false),
+        ),
+    ];
+    for encoding in [Encoding::Ascii, Encoding::Le, Encoding::Be] {
+        let odd = ply_file(encoding, ODD_LAYOUT, &points, true, true);
+        files.push(dir.file(&format!("odd-{encoding:?}.ply"), odd));
+        let list = ply_file(encoding, WITH_LIST, &points, true, false);
+        files.push(dir.file(&format!("list-{encoding:?}.ply"), list));
+    }
+    let reordered = "id,Z , \"y\",X,extra\r\n".to_owned()
+        + &csv_rows(&points, |p| format!("9,{},{},{},abc\r\n", p.z, p.y, p.x));
+    files.push(dir.file("header-crlf.csv", reordered));
+    let plain = "# exported particles\n\n".to_owned()
+        + &csv_rows(&points, |p| format!("{}, {}, {}\n\n", p.x, p.y, p.z));
+    files.push(dir.file("plain.csv", plain));
+    let semicolons = "\u{feff}x;y;z;rho\n".to_owned()
+        + &csv_rows(&points, |p| format!("\"{}\";{};{};1000\n", p.x, p.y, p.z));
+    files.push(dir.file("semicolons.csv", semicolons));
+    let whitespace = csv_rows(&points, |p| format!("  {}\t{}   {} 0.5\n", p.x, p.y, p.z));
+    files.push(dir.file("whitespace.txt", whitespace));
+    files.push(dir.file("particles.bin", raw_file(&points)));
+    files
+}
+
+#[test]
+fn every_input_format_reads_the_same_particles() {
+    let dir = TempDir::new("formats");
+    let files = input_files(&dir);
+    assert_eq!(files.len(), 14);
+    for path in files {
+        let read = read_particles(&path, None).unwrap_or_else(|e| panic!("{e:#}"));
+        assert_eq!(read, particles(), "{}", path.display());
+    }
+    let renamed = dir.file("frame.dat", raw_file(&particles()));
+    assert_eq!(
+        read_particles(&renamed, Some(InputFormat::Raw)).unwrap(),
+        particles()
+    );
+}
+
+#[test]
+fn format_names_and_extensions() {
+    assert_eq!(
+        InputFormat::from_path(Path::new("a/f.PLY")).unwrap(),
+        InputFormat::Ply
+    );
+    assert_eq!(
+        InputFormat::from_path(Path::new("f.txt")).unwrap(),
+        InputFormat::Csv
+    );
+    assert_eq!(
+        InputFormat::from_path(Path::new("f.raw")).unwrap(),
+        InputFormat::Raw
+    );
+    assert!(InputFormat::from_path(Path::new("ply")).is_err());
+    assert_eq!(InputFormat::parse("CSV").unwrap(), InputFormat::Csv);
+    let err = InputFormat::parse("vtk").unwrap_err().to_string();
+    assert!(
+        err.contains("'vtk'") && err.contains("ply, csv or raw"),
+        "{err}"
+    );
+
+    assert_eq!(MeshFormat::parse("ply").unwrap(), MeshFormat::PlyBinary);
+    assert_eq!(
+        MeshFormat::parse("ply-ascii").unwrap(),
+        MeshFormat::PlyAscii
+    );
+    assert_eq!(MeshFormat::parse("obj").unwrap(), MeshFormat::Obj);
+    assert!(MeshFormat::parse("stl").is_err());
+    assert_eq!(MeshFormat::PlyAscii.extension(), "ply");
+    assert_eq!(MeshFormat::Obj.extension(), "obj");
+    assert_eq!(
+        MeshFormat::from_path(Path::new("m.OBJ")),
+        Some(MeshFormat::Obj)
+    );
+    assert_eq!(
+        MeshFormat::from_path(Path::new("m.ply")),
+        Some(MeshFormat::PlyBinary)
+    );
+    assert_eq!(MeshFormat::from_path(Path::new("m.stl")), None);
+}
+
+#[test]
+fn empty_frames_are_valid() {
+    let dir = TempDir::new("empty");
+    let files = [
+        dir.file(
+            "ascii.ply",
+            ply_file(Encoding::Ascii, FLOAT_XYZ, &[], true, true),
+        ),
+        dir.file(
+            "le.ply",
+            ply_file(Encoding::Le, ODD_LAYOUT, &[], true, true),
+        ),
+        dir.file(
+            "list.ply",
+            ply_file(Encoding::Be, WITH_LIST, &[], false, false),
+        ),
+        dir.file("header.csv", "x,y,z\n"),
+        dir.file("nothing.csv", ""),
+        dir.file("nothing.bin", ""),
+    ];
+    for path in files {
+        let read = read_particles(&path, None).unwrap_or_else(|e| panic!("{e:#}"));
+        assert!(read.is_empty(), "{}", path.display());
+    }
+}
+
+fn header(format: &str, vertices: &str, props: &str) -> String {
+    format!("ply\nformat {format} 1.0\nelement vertex {vertices}\n{props}end_header\n")
+}
+
+const XYZ_PROPS: &str = "property float x\nproperty float y\nproperty float z\n";
+
+/// Reads `path`, which must fail with a message naming the file and holding every `expected`.
+fn assert_fails(path: &Path, format: Option<InputFormat>, expected: &[&str]) {
+    let start = Instant::now();
+    let result = read_particles(path, format);
+    let elapsed = start.elapsed();
+    let message = match result {
+        Ok(points) => panic!("{} read {} particles", path.display(), points.len()),
+        Err(e) => e.to_string(),
+    };
+    let name = path.file_name().unwrap().to_string_lossy();
+    assert!(message.contains(&*name), "no file name in: {message}");
+    for want in expected {
+        assert!(message.contains(want), "no '{want}' in: {message}");
+    }
+    // A huge allocation or a scan of a declared count would take far longer.
+    assert!(
+        elapsed < Duration::from_secs(1),
+        "{message}: took {elapsed:?}"
+    );
+}
+
+#[test]
+fn bad_ply_files_are_reported() {
+    let dir = TempDir::new("bad-ply");
+    let le = "binary_little_endian";
+    let points = raw_file(&particles());
+    let with_payload = |text: String, payload: &[u8]| [text.as_bytes(), payload].concat();
+
+    assert_fails(&dir.path("missing.ply"), None, &["cannot open"]);
+    let is_dir = dir.path("folder.ply");
+    fs::create_dir(&is_dir).unwrap();
+    assert_fails(&is_dir, None, &["directory"]);
+    assert_fails(
+        &dir.file("frame.xyz", "1 2 3\n"),
+        None,
+        &["extension", ".ply, .csv"],
+    );
+    assert_fails(&dir.file("empty.ply", ""), None, &["not a PLY file"]);
+    assert_fails(
+        &dir.file("magic.ply", "PLY?\nformat ascii 1.0\n"),
+        None,
+        &["not a PLY file"],
+    );
+    let typo = header(
+        "ascii",
+        "1",
+        "property float x\nproperty flaot y\nproperty float z\n",
+    );
+    assert_fails(
+        &dir.file("typo.ply", typo),
+        None,
+        &["malformed PLY header", "Line 5"],
+    );
+    assert_fails(
+        &dir.file("no-end.ply", "ply\nformat ascii 1.0\nelement vertex 1\n"),
+        None,
+        &["malformed PLY header", "'end_header'"],
+    );
+    assert_fails(
+        &dir.file("no-format.ply", "ply\nelement vertex 0\nend_header\n"),
+        None,
+        &["malformed PLY header", "format"],
+    );
+    let twice = header(
+        "ascii",
+        "0",
+        "property float x\nproperty float x\nproperty float y\n",
+    );
+    assert_fails(&dir.file("twice.ply", twice), None, &["same name"]);
+    let no_z = header(
+        le,
+        "4",
+        "property float x\nproperty float y\nproperty float w\n",
+    );
+    assert_fails(
+        &dir.file("no-z.ply", with_payload(no_z, &points)),
+        None,
+        &["no property 'z'"],
+    );
+    let list_x = header(
+        "ascii",
+        "0",
+        "property list uchar float x\nproperty float y\nproperty float z\n",
+    );
+    assert_fails(&dir.file("list-x.ply", list_x), None, &["'x' is a list"]);
+    let float_len = header(
+        "ascii",
+        "0",
+        &format!("property list float int n\n{XYZ_PROPS}"),
+    );
+    assert_fails(
+        &dir.file("float-len.ply", float_len),
+        None,
+        &["non-integer length"],
+    );
+    let faces = "ply\nformat ascii 1.0\nelement face 0\nproperty list uchar int v\nend_header\n";
+    assert_fails(
+        &dir.file("faces.ply", faces),
+        None,
+        &["no 'vertex' element", "face"],
+    );
+
+    // Binary payloads: 4 vertices of 12 bytes after a header of `header_len` bytes.
+    let truncated = header(le, "4", XYZ_PROPS);
+    let header_len = truncated.len();
+    let cut = with_payload(truncated, &points[..42]);
+    assert_fails(
+        &dir.file("cut.ply", cut),
+        None,
+        &[
+            "truncated",
+            &format!("byte offset {}", header_len + 42),
+            "after 3 complete vertex records",
+        ],
+    );
+    let overcount = with_payload(header(le, "5", XYZ_PROPS), &points);
+    assert_fails(
+        &dir.file("overcount.ply", overcount),
+        None,
+        &["expected 5 vertex records"],
+    );
+    let huge = with_payload(header(le, "10000000000000", XYZ_PROPS), &points);
+    assert_fails(
+        &dir.file("huge.ply", huge),
+        None,
+        &["truncated", "10000000000000"],
+    );
+    let huge_list = header(
+        le,
+        "10000000000000",
+        &format!("property list uchar int n\n{XYZ_PROPS}"),
+    );
+    let huge_list = with_payload(huge_list, &points);
+    assert_fails(
+        &dir.file("huge-list.ply", huge_list),
+        None,
+        &["truncated", "vertex record"],
+    );
+    let mut nan = points.clone();
+    nan[16..20].copy_from_slice(&f32::NAN.to_le_bytes());
+    let nan = with_payload(header(le, "4", XYZ_PROPS), &nan);
+    assert_fails(
+        &dir.file("nan.ply", nan),
+        None,
+        &["vertex 1 (byte offset", "non-finite"],
+    );
+    let prelude = ply_file(Encoding::Le, FLOAT_XYZ, &particles(), true, false);
+    let payload_start = prelude
+        .windows(11)
+        .position(|w| w == b"end_header\n")
+        .unwrap()
+        + 11;
+    // Inside the list of the first `material` record.
+    let cut_prelude = &prelude[..payload_start + 5];
+    assert_fails(
+        &dir.file("cut-prelude.ply", cut_prelude),
+        None,
+        &["truncated", "material record"],
+    );
+    let negative = header(le, "1", &format!("property list char int n\n{XYZ_PROPS}"));
+    let negative = with_payload(negative, &[0xff]);
+    assert_fails(
+        &dir.file("negative.ply", negative),
+        None,
+        &["negative list length", "'n'"],
+    );
+
+    // Ascii payloads: the first data line is line 8.
+    let short = header("ascii", "5", XYZ_PROPS) + "1 2 3\n4 5 6\n\n7 8 9\n";
+    assert_fails(
+        &dir.file("short.ply", short),
+        None,
+        &["after 3 of 5 vertices"],
+    );
+    let huge = header("ascii", "10000000000000", XYZ_PROPS) + "1 2 3\n";
+    assert_fails(
+        &dir.file("huge-ascii.ply", huge),
+        None,
+        &["after 1 of 10000000000000"],
+    );
+    let word = header("ascii", "2", XYZ_PROPS) + "1 2 3\n4 abc 6\n";
+    assert_fails(
+        &dir.file("word.ply", word),
+        None,
+        &["line 9 (vertex 1)", "cannot parse 'abc' as property 'y'"],
+    );
+    let few = header("ascii", "1", XYZ_PROPS) + "1 2\n";
+    assert_fails(
+        &dir.file("few.ply", few),
+        None,
+        &["line 8 (vertex 0)", "too few values"],
+    );
+    let inf = header("ascii", "1", XYZ_PROPS) + "1 inf 3\n";
+    assert_fails(
+        &dir.file("inf.ply", inf),
+        None,
+        &["line 8 (vertex 0)", "non-finite"],
+    );
+}
+
+#[test]
+fn bad_text_and_raw_files_are_reported() {
+    let dir = TempDir::new("bad-text");
+    let word = "x,y,z\n1,2,3\n4,abc,6\n";
+    assert_fails(
+        &dir.file("word.csv", word),
+        None,
+        &["line 3, column 2 ('y'): 'abc' is not a number"],
+    );
+    let short = "1,2,3\n\n4,5\n";
+    assert_fails(
+        &dir.file("short.csv", short),
+        None,
+        &["line 3: the row has only 2 columns; missing column 3 ('z')"],
+    );
+    let no_z = "# comment\nx,y,w\n1,2,3\n";
+    assert_fails(
+        &dir.file("no-z.csv", no_z),
+        None,
+        &["line 2", "no column 'z'", "x, y, w"],
+    );
+    let nan = "x y z\n1 NaN 3\n";
+    assert_fails(
+        &dir.file("nan.txt", nan),
+        None,
+        &["line 2 has a non-finite coordinate"],
+    );
+    assert_fails(
+        &dir.file("latin1.csv", b"x,y,z\n1,2,\xe9\n"),
+        None,
+        &["line 2", "UTF-8"],
+    );
+    assert_fails(
+        &dir.file("odd.bin", [0; 25]),
+        None,
+        &["25 bytes", "remainder 1"],
+    );
+    let mut inf = raw_file(&particles());
+    inf[32..36].copy_from_slice(&f32::NEG_INFINITY.to_le_bytes());
+    assert_fails(
+        &dir.file("inf.raw", inf),
+        None,
+        &["particle 2 (byte offset 24)", "-inf"],
+    );
+    let text = dir.file("text.ply", "1,2,3\n");
+    assert_eq!(
+        read_particles(&text, Some(InputFormat::Csv)).unwrap(),
+        [Vec3::new(1.0, 2.0, 3.0)]
+    );
+    assert_fails(&text, Some(InputFormat::Raw), &["6 bytes long"]);
+}
+
+/// Cutting or corrupting valid files anywhere gives errors (or particles), never a panic.
+#[test]
+fn damaged_files_never_panic() {
+    let dir = TempDir::new("damaged");
+    let originals = input_files(&dir);
+    // One file per reader path: binary with skipped elements, binary with lists, ascii with
+    // lists, CSV with a header, raw.
+    for name in [
+        "odd-Le.ply",
+        "list-Be.ply",
+        "list-Ascii.ply",
+        "header-crlf.csv",
+        "particles.bin",
+    ] {
+        let original = originals.iter().find(|p| p.ends_with(name)).unwrap();
+        let bytes = fs::read(original).unwrap();
+        let mut variants: Vec<Vec<u8>> =
+            (0..bytes.len()).map(|len| bytes[..len].to_vec()).collect();
+        for (i, junk) in (0..bytes.len()).zip([0xff, 0x00, b'\n', b'-', 0x80].iter().cycle()) {
+            let mut corrupt = bytes.clone();
+            corrupt[i] = *junk;
+            variants.push(corrupt);
+        }
+        for (i, variant) in variants.iter().enumerate() {
+            let damaged = dir.file(&format!("damaged-{i}-{name}"), variant);
+            let _ = read_particles(&damaged, None);
+        }
+    }
+}
+
+/// A tetrahedron with per-vertex normals.
+fn tetrahedron() -> TriMesh {
+    let vertices = vec![
+        Vec3::new(0.0, 0.0, 0.0),
+        Vec3::new(1.5, 0.0, 0.0),
+        Vec3::new(0.0, 0.1, 0.0),
+        Vec3::new(0.0, 0.0, -2.25),
+    ];
+    let normals = vertices
+        .iter()
+        .map(|v| (*v - Vec3::new(0.3, 0.03, -0.5)).normalize())
+        .collect();
+    TriMesh {
+        vertices,
+        normals,
+        triangles: vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]],
+    }
+}
+
+fn mesh_bytes(mesh: &TriMesh, format: MeshFormat) -> Vec<u8> {
+    let mut out = Vec::new();
+    write_mesh(mesh, format, &mut out).unwrap();
+    out
+}
+
+#[test]
+fn obj_reads_back_with_tobj() {
+    let dir = TempDir::new("obj");
+    for mesh in [
+        tetrahedron(),
+        TriMesh {
+            normals: Vec::new(),
+            ..tetrahedron()
+        },
+    ] {
+        let path = dir.path("mesh.obj");
+        write_mesh_file(&path, &mesh, MeshFormat::Obj).unwrap();
+        let options = tobj::LoadOptions {
+            single_index: true,
+            ..Default::default()
+        };
+        let (models, _) = tobj::load_obj(&path, &options).unwrap();
+        assert_eq!(models.len(), 1);
+        let read = &models[0].mesh;
+        let corners: Vec<u32> = mesh.triangles.iter().flatten().copied().collect();
+        assert_eq!(read.indices.len(), corners.len());
+        // tobj renumbers vertices in order of first use, so compare corner by corner.
+        for (&i, &j) in corners.iter().zip(&read.indices) {
+            let (i, j) = (i as usize, j as usize);
+            assert_eq!(Vec3::from_slice(&read.positions[3 * j..]), mesh.vertices[i]);
+            if mesh.normals.is_empty() {
+                assert!(read.normals.is_empty());
+            } else {
+                assert_eq!(Vec3::from_slice(&read.normals[3 * j..]), mesh.normals[i]);
+            }
+        }
+    }
+}
+
+fn float(p: &Property) -> f32 {
+    match p {
+        Property::Float(v) => *v,
+        other => panic!("not a float: {other:?}"),
+    }
+}
+
+#[test]
+fn ply_reads_back_in_both_encodings() {
+    let dir = TempDir::new("ply-out");
+    let mesh = tetrahedron();
+    for format in [MeshFormat::PlyBinary, MeshFormat::PlyAscii] {
+        let bytes = mesh_bytes(&mesh, format);
+        let ply = Parser::<DefaultElement>::new()
+            .read_ply(&mut bytes.as_slice())
+            .unwrap();
+        let vertices = &ply.payload["vertex"];
+        assert_eq!(vertices.len(), mesh.vertices.len());
+        for ((read, v), n) in vertices.iter().zip(&mesh.vertices).zip(&mesh.normals) {
+            let xyz = Vec3::new(float(&read["x"]), float(&read["y"]), float(&read["z"]));
+            let normal = Vec3::new(float(&read["nx"]), float(&read["ny"]), float(&read["nz"]));
+            assert_eq!((xyz, normal), (*v, *n), "{format:?}");
+        }
+        let faces: Vec<[u32; 3]> = ply.payload["face"]
+            .iter()
+            .map(|f| match &f["vertex_indices"] {
+                Property::ListInt(l) => [l[0], l[1], l[2]].map(|i| i as u32),
+                other => panic!("not a list of int: {other:?}"),
+            })
+            .collect();
+        assert_eq!(faces, mesh.triangles, "{format:?}");
+
+        // The particle reader accepts meshes too: their vertices.
+        let path = dir.file("mesh.ply", &bytes);
+        assert_eq!(read_particles(&path, None).unwrap(), mesh.vertices);
+    }
+    let text = String::from_utf8(mesh_bytes(&mesh, MeshFormat::PlyAscii)).unwrap();
+    assert!(
+        text.contains("property list uchar int vertex_indices\n"),
+        "{text}"
+    );
+    assert!(text.contains("\n3 0 2 1\n"), "{text}");
+}
+
+#[test]
+fn invalid_meshes_are_not_written() {
+    let mut out = Vec::new();
+    let bad_index = TriMesh {
+        triangles: vec![[0, 1, 2], [1, 9, 2]],
+        ..tetrahedron()
+    };
+    let err = write_mesh(&bad_index, MeshFormat::Obj, &mut out).unwrap_err();
+    assert!(
+        err.to_string().contains("triangle 1 refers to vertex 9"),
+        "{err}"
+    );
+    let mut bad_normals = tetrahedron();
+    bad_normals.normals.pop();
+    let err = write_mesh(&bad_normals, MeshFormat::PlyBinary, &mut out).unwrap_err();
+    assert!(
+        err.to_string().contains("3 normals for 4 vertices"),
+        "{err}"
+    );
+    assert!(out.is_empty());
+}
+
+#[test]
+fn mesh_files_are_replaced_atomically() {
+    let dir = TempDir::new("atomic");
+    let mesh = tetrahedron();
+
+    let nested = dir.path("a/b/mesh.ply");
+    write_mesh_file(&nested, &mesh, MeshFormat::PlyBinary).unwrap();
+    assert_eq!(
+        fs::read(&nested).unwrap(),
+        mesh_bytes(&mesh, MeshFormat::PlyBinary)
+    );
+
+    // A shorter file replaces a longer one whole.
+    let path = dir.file("mesh.obj", vec![b'#'; 100_000]);
+    write_mesh_file(&path, &mesh, MeshFormat::Obj).unwrap();
+    assert_eq!(fs::read(&path).unwrap(), mesh_bytes(&mesh, MeshFormat::Obj));
+
+    // A failure after the temporary file exists leaves the old file.
+    let bad = TriMesh {
+        triangles: vec![[0, 1, 7]],
+        ..tetrahedron()
+    };
+    let err = write_mesh_file(&path, &bad, MeshFormat::Obj).unwrap_err();
+    assert!(err.to_string().contains("mesh.obj"), "{err}");
+    assert_eq!(fs::read(&path).unwrap(), mesh_bytes(&mesh, MeshFormat::Obj));
+
+    // The parent is a file.
+    dir.file("plain-file", "x");
+    let err = write_mesh_file(&dir.path("plain-file/mesh.obj"), &mesh, MeshFormat::Obj)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains("plain-file/mesh.obj") && err.contains("directory"),
+        "{err}"
+    );
+
+    // The target is a directory: the rename fails.
+    fs::create_dir(dir.path("taken.ply")).unwrap();
+    let err = write_mesh_file(&dir.path("taken.ply"), &mesh, MeshFormat::PlyAscii)
+        .unwrap_err()
+        .to_string();
+    assert!(err.contains("taken.ply") && err.contains("rename"), "{err}");
+    assert!(dir.path("taken.ply").is_dir());
+
+    assert_eq!(dir.entries(), ["a", "mesh.obj", "plain-file", "taken.ply"]);
+}
+
+/// Reads a frame of the shared data set, if it is there.
+fn real_frame(path: &str) -> Option<(Vec<Vec3>, Duration)> {
+    if !Path::new(path).exists() {
+        println!("skipped: {path} is not there");
+        return None;
+    }
+    let start = Instant::now();
+    let particles = read_particles(Path::new(path), None).unwrap();
+    Some((particles, start.elapsed()))
+}
+
+#[test]
+fn reads_a_real_frame() {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../shared/data/cbd-small/frame_0040.ply"
+    );
+    let Some((particles, _)) = real_frame(path) else {
+        return;
+    };
+    assert_eq!(particles.len(), 44_064);
+    assert!(particles.iter().all(|p| p.is_finite()));
+}
+
+#[test]
+fn reads_a_million_particles() {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../shared/data/cbd-large/frame_0023.ply"
+    );
+    let Some((particles, elapsed)) = real_frame(path) else {
+        return;
+    };
+    println!("read {} particles in {elapsed:?}", particles.len());
+    assert_eq!(particles.len(), 1_054_872);
+    assert!(particles.iter().all(|p| p.is_finite()));
+}
