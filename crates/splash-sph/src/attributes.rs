@@ -9,7 +9,7 @@ use crate::error::Result;
 use glam::Vec3;
 use rayon::prelude::*;
 
-use crate::recon::handler_array::HandlerArray;
+use crate::neighbours::handler_array::HandlerArray;
 
 /// Velocities of `vertices`, interpolated from the particles' with support `support`. A vertex
 /// with no particle within the support (which the field's surface never has) gets zero.

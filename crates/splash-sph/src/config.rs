@@ -3,13 +3,15 @@
 //! Lengths are given in units of the particle spacing `r` (Akinci et al. 2012 Sec. 3: cell sizes
 //! 2r, r, r/2; support 4r; band 2r) and resolved to world lengths once `r` is known.
 
+use std::fmt;
 use std::path::Path;
+use std::sync::Arc;
 
 use serde::{Deserialize, Serialize};
 
 use crate::bytes::{Bytes, default_limit};
 use crate::error::{Error, Result};
-use crate::field::FieldConfig;
+use crate::field::{FieldConfig, ScalarField};
 use crate::io::{MeshFormat, UpAxis};
 use crate::length::{Length, positive};
 
@@ -297,8 +299,9 @@ impl Config {
     }
 }
 
-/// World-unit parameters of one reconstruction, resolved from a [`Config`] and the spacing r.
-#[derive(Debug, Clone, PartialEq)]
+/// World-unit parameters of one reconstruction, resolved from a [`Config`] and the spacing r,
+/// with the field built for that spacing (once: every engine samples this one).
+#[derive(Clone)]
 pub struct Params {
     pub spacing: f32,
     pub cell: f32,
@@ -307,15 +310,30 @@ pub struct Params {
     pub min_neighbours: u32,
     /// Band half-width after widening for large cells (see [`Params::resolve`]).
     pub band_half_width: f32,
-    pub field: FieldConfig,
+    /// The scalar field in world units.
+    pub field: Arc<dyn ScalarField>,
+    /// Its kind, as configured (`ssp07`, …).
+    pub field_kind: &'static str,
     pub normals: Normals,
     /// Cubes per side of a Marching Slices block.
     pub block: u32,
-    /// The field's support radius in world units.
+    /// The field's support radius in world units (the field's own, kept for the gathers).
     pub support: f32,
     pub engine: Engine,
     /// Heap bytes a full-grid engine may plan to use.
     pub max_memory: u64,
+}
+
+impl fmt::Debug for Params {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.debug_struct("Params")
+            .field("spacing", &self.spacing)
+            .field("cell", &self.cell)
+            .field("field", &self.field_kind)
+            .field("support", &self.support)
+            .field("engine", &self.engine)
+            .finish_non_exhaustive()
+    }
 }
 
 impl Params {
@@ -326,6 +344,7 @@ impl Params {
     /// Wherever the surface still leaves the band, the band closure follows it.
     pub fn resolve(config: &Config, r: f32) -> Params {
         let cell = config.cell.resolve(r);
+        let field: Arc<dyn ScalarField> = config.field.build(r).into();
         Params {
             spacing: r,
             cell,
@@ -333,8 +352,9 @@ impl Params {
             colour_threshold: config.surface_particles.colour_threshold,
             min_neighbours: config.surface_particles.min_neighbours,
             band_half_width: config.band.half_width.resolve(r).max(r + cell),
-            support: config.field.build(r).support(),
-            field: config.field.clone(),
+            support: field.support(),
+            field,
+            field_kind: config.field.kind(),
             normals: config.normals,
             block: config.slices.block,
             engine: config.engine,

@@ -28,6 +28,7 @@ mod error;
 mod attributes;
 mod config;
 mod length;
+mod neighbours;
 mod reconstructor;
 mod spacing;
 

@@ -116,7 +116,7 @@ impl Reconstructor {
     pub fn planned_memory(&self, positions: &[Vec3]) -> Result<Option<u64>> {
         let p = &self.params;
         let grid = Grid::around(positions, p.cell, p.support)?;
-        Ok(full_grid::needed_bytes(p.engine, &grid, positions.len()))
+        full_grid::needed_bytes(p, &grid, positions.len())
     }
 
     fn install<T: Send>(&self, f: impl FnOnce() -> T + Send) -> T {

@@ -37,8 +37,8 @@ use serde::{Deserialize, Serialize};
 use super::density::{cubic_spline, cubic_spline_slope_over_q, particle_volumes};
 use super::{Fitted, ScalarField};
 use crate::length::Length;
-use crate::recon::handler_array::HandlerArray;
-use crate::recon::neighbourhood::{Neighbourhood, map_particles};
+use crate::neighbours::handler_array::HandlerArray;
+use crate::neighbours::neighbourhood::{Neighbourhood, map_particles};
 
 /// `[field] kind = "anisotropic"`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

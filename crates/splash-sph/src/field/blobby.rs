@@ -8,7 +8,7 @@ use serde::{Deserialize, Serialize};
 
 use super::ScalarField;
 use crate::length::Length;
-use crate::recon::neighbourhood::Neighbourhood;
+use crate::neighbours::neighbourhood::Neighbourhood;
 
 /// `[field] kind = "blobby"`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

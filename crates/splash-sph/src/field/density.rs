@@ -11,8 +11,8 @@ use serde::{Deserialize, Serialize};
 
 use super::ScalarField;
 use crate::length::Length;
-use crate::recon::handler_array::HandlerArray;
-use crate::recon::neighbourhood::{Neighbourhood, map_particles};
+use crate::neighbours::handler_array::HandlerArray;
+use crate::neighbours::neighbourhood::{Neighbourhood, map_particles};
 
 /// `[field] kind = "density"`: splashsurf's usual settings (smoothing length of two particle
 /// radii, i.e. compact support 2r, and iso 0.6).

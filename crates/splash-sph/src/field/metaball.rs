@@ -8,7 +8,7 @@ use serde::{Deserialize, Serialize};
 
 use super::ScalarField;
 use crate::length::Length;
-use crate::recon::neighbourhood::Neighbourhood;
+use crate::neighbours::neighbourhood::Neighbourhood;
 
 /// `[field] kind = "metaball"`: Rosenberg's R_c = 3 and T = 0.2 in units of the particle
 /// radius r/2, for which a lone particle's surface lies at one particle radius.

@@ -12,10 +12,10 @@ use crate::error::Result;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
-use crate::recon::handler_array::HandlerArray;
-use crate::recon::neighbourhood::Neighbourhood;
+use crate::neighbours::handler_array::HandlerArray;
+use crate::neighbours::neighbourhood::Neighbourhood;
 
-pub trait ScalarField: Sync {
+pub trait ScalarField: Send + Sync {
     /// Particles farther than this from a point do not change the field there.
     fn support(&self) -> f32;
 
@@ -48,6 +48,26 @@ pub trait ScalarField: Sync {
     fn reach_channel(&self) -> Option<usize> {
         None
     }
+
+    /// For fields whose value follows from per-vertex sums that each particle adds to on its
+    /// own: that form, for the scatter engine. `None` for the others.
+    fn scattering(&self) -> Option<&dyn Scattering> {
+        None
+    }
+}
+
+/// A field as per-vertex kernel sums that particles add to one at a time (SSP07's sums of
+/// eqs. 4–5), then turned into the field's value: the form the scatter engine needs.
+pub trait Scattering: Sync {
+    /// `f32` sums per grid vertex.
+    fn sums_per_vertex(&self) -> usize;
+
+    /// Adds the particle at `p` to the vertices (`xs[i]`, `y`, `z`) of one grid row; `sums`
+    /// holds theirs, [`sums_per_vertex`](Self::sums_per_vertex) each, in the order of `xs`.
+    fn add_to_row(&self, sums: &mut [f32], p: Vec3, xs: &[f32], y: f32, z: f32);
+
+    /// The field at a vertex from its sums.
+    fn value_of_sums(&self, sums: &[f32]) -> f32;
 }
 
 /// A field fitted to one frame, with the particles its kernels sit on: their handler array,

@@ -5,9 +5,9 @@ use crate::error::Result;
 use glam::{DMat3, DVec3, Vec3};
 use serde::{Deserialize, Serialize};
 
-use super::ScalarField;
+use super::{ScalarField, Scattering};
 use crate::length::Length;
-use crate::recon::neighbourhood::Neighbourhood;
+use crate::neighbours::neighbourhood::Neighbourhood;
 
 /// `[field] kind = "ssp07"`: the paper's defaults.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -71,8 +71,12 @@ impl ScalarField for Ssp07 {
         self.support
     }
 
+    fn scattering(&self) -> Option<&dyn Scattering> {
+        Some(self)
+    }
+
     fn value(&self, near: &Neighbourhood, x: Vec3) -> f32 {
-        self.value_of_sums(&Sums::over(near, x, 1.0 / (self.support * self.support)))
+        self.value_of(&Sums::over(near, x, 1.0 / (self.support * self.support)))
     }
 
     /// ∇φ = (∇x̄ − I)ᵀ m̂ − r̄ f'(λ) ∇λ from eq. 1, with m = x̄ − x and λ = EV_max; ∇λ follows
@@ -92,10 +96,29 @@ impl ScalarField for Ssp07 {
     }
 }
 
+impl Scattering for Ssp07 {
+    fn sums_per_vertex(&self) -> usize {
+        size_of::<Sums>() / size_of::<f32>()
+    }
+
+    fn add_to_row(&self, sums: &mut [f32], p: Vec3, xs: &[f32], y: f32, z: f32) {
+        let inv_r2 = 1.0 / (self.support * self.support);
+        let sums: &mut [Sums] = bytemuck::cast_slice_mut(sums);
+        let (dy, dz) = (p.y - y, p.z - z);
+        for (s, &x) in sums.iter_mut().zip(xs) {
+            s.add(Vec3::new(p.x - x, dy, dz), inv_r2);
+        }
+    }
+
+    fn value_of_sums(&self, sums: &[f32]) -> f32 {
+        self.value_of(bytemuck::from_bytes(bytemuck::cast_slice(sums)))
+    }
+}
+
 impl Ssp07 {
     /// eq. 1 from the kernel sums at a point, however they were accumulated (the gather above,
     /// or the scatter engine adding one particle at a time with [`Sums::add`]).
-    pub fn value_of_sums(&self, s: &Sums) -> f32 {
+    fn value_of(&self, s: &Sums) -> f32 {
         if s.k <= 0.0 {
             // No particle in reach: the limit of eq. 1 as the last particle leaves the support
             // (x̄ at distance R, ∇x̄ = 0, f = 1).
@@ -133,7 +156,8 @@ impl Ssp07 {
 
 /// Kernel sums over the neighbours, with s_j = |d_j|/R, t_j = 1 − s_j² clamped at 0,
 /// k_j = t_j³ (eq. 5) and w_j = t_j².
-#[derive(Debug, Clone, Copy, Default)]
+#[derive(Debug, Clone, Copy, Default, bytemuck::Pod, bytemuck::Zeroable)]
+#[repr(C)]
 pub struct Sums {
     k: f32,
     kd: [f32; 3],
@@ -565,7 +589,7 @@ mod tests {
             for &p in &pts {
                 s.add(p - x, 1.0 / 16.0);
             }
-            let (a, b) = (f.value_of_sums(&s), f.value(&n, x));
+            let (a, b) = (f.value_of(&s), f.value(&n, x));
             assert!((a - b).abs() < 1e-5, "at {x}: scatter {a}, gather {b}");
         }
     }

@@ -8,7 +8,7 @@ use serde::{Deserialize, Serialize};
 use super::ScalarField;
 use super::ssp07::{MeanDistance, Sums};
 use crate::length::Length;
-use crate::recon::neighbourhood::Neighbourhood;
+use crate::neighbours::neighbourhood::Neighbourhood;
 
 /// `[field] kind = "zb05"`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

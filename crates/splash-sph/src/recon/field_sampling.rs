@@ -6,9 +6,9 @@ use glam::{IVec3, Vec3};
 use rayon::prelude::*;
 
 use super::band::{BRICK, BRICK_VERTICES, Band, local_index};
-use super::handler_array::HandlerArray;
-use super::neighbourhood::Neighbourhood;
 use crate::field::ScalarField;
+use crate::neighbours::handler_array::HandlerArray;
+use crate::neighbours::neighbourhood::Neighbourhood;
 
 /// Field values per brick, NaN at vertices outside the band.
 pub type BrickValues = Vec<[f32; BRICK_VERTICES]>;

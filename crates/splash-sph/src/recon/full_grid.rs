@@ -8,8 +8,8 @@ use crate::error::Result;
 use glam::{IVec3, Vec3};
 
 use super::band::{BRICK_VERTICES, Band, brick_of};
+use super::scatter::scattering;
 use crate::bytes::human;
-use crate::field::ssp07::Sums;
 
 /// The vertices of the particles' bounding box widened by the field's support.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -52,19 +52,23 @@ const PER_PARTICLE: u64 = 48;
 /// and is not known beforehand: on fixtures/frame_0040 at r/2 the full gather's measured peak
 /// is 1.45× this figure, the scatter's 0.98×, its sums dominating); None for the narrow band
 /// and the slices engine, whose memory follows the surface.
-pub fn needed_bytes(engine: Engine, grid: &Grid, particles: usize) -> Option<u64> {
+pub fn needed_bytes(params: &Params, grid: &Grid, particles: usize) -> Result<Option<u64>> {
     let band = grid.bricks() * (BRICK_VERTICES as u64 * 4 + BRICK_OVERHEAD);
-    match engine {
+    Ok(match params.engine {
         Engine::NarrowBand | Engine::Slices => None,
         Engine::FullGather => Some(band + particles as u64 * PER_PARTICLE),
-        // One set of kernel sums per vertex, then the values per brick.
-        Engine::Scatter => Some(band + grid.vertices() * size_of::<Sums>() as u64),
-    }
+        // One set of the field's sums per vertex, then the values per brick.
+        Engine::Scatter => {
+            let sums = scattering(params)?.sums_per_vertex() * size_of::<f32>();
+            Some(band + grid.vertices() * sums as u64)
+        }
+    })
 }
 
-/// Refuses a full-grid engine whose grid needs more than `limit` bytes.
-pub fn check(engine: Engine, grid: &Grid, particles: usize, limit: u64) -> Result<()> {
-    let Some(need) = needed_bytes(engine, grid, particles) else {
+/// Refuses a full-grid engine whose grid needs more than the memory limit.
+pub fn check(params: &Params, grid: &Grid, particles: usize) -> Result<()> {
+    let (engine, limit) = (params.engine, params.max_memory);
+    let Some(need) = needed_bytes(params, grid, particles)? else {
         return Ok(());
     };
     if need > limit {

@@ -7,10 +7,8 @@ pub(crate) mod band_closure;
 pub(crate) mod field_sampling;
 pub(crate) mod full_grid;
 pub(crate) mod halo;
-pub(crate) mod handler_array;
 pub(crate) mod marching_slices;
 pub(crate) mod narrow_band;
-pub(crate) mod neighbourhood;
 pub(crate) mod normals;
 pub(crate) mod prepared;
 pub(crate) mod scatter;
@@ -67,7 +65,7 @@ pub(crate) fn reconstruct(
         }
         engine @ (Engine::FullGather | Engine::Scatter) => {
             let grid = grid?;
-            full_grid::check(engine, &grid, particles.len(), params.max_memory)?;
+            full_grid::check(params, &grid, particles.len())?;
             if engine == Engine::Scatter {
                 scatter::reconstruct(particles, params, &grid, stages)
             } else {

@@ -13,11 +13,11 @@ use crate::error::Result;
 use glam::{IVec3, Vec3};
 use rayon::prelude::*;
 
-use super::handler_array::HandlerArray;
-use super::neighbourhood::Neighbourhood;
 use crate::config::Normals;
 use crate::field::ScalarField;
 use crate::mesh::TriMesh;
+use crate::neighbours::handler_array::HandlerArray;
+use crate::neighbours::neighbourhood::Neighbourhood;
 
 /// Gives an engine's mesh, which comes with its grid normals, the normals `kind` asks for.
 /// `bricks` are the ranges of vertices that each lie within one brick; `handlers` gives the

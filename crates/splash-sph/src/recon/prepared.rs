@@ -1,22 +1,24 @@
 //! What every engine shares: the field and the handler array of the frame before the field is
 //! sampled, and the counts and memory figures once the mesh exists.
 
+use std::sync::Arc;
+
 use glam::Vec3;
 
 use super::Reconstruction;
 use super::band::{BRICK_VERTICES, Band};
 use super::field_sampling::BrickValues;
-use super::handler_array::HandlerArray;
 use super::triangulation::Triangulation;
 use crate::config::Params;
 use crate::error::Result;
 use crate::field::{Fitted, ScalarField};
+use crate::neighbours::handler_array::HandlerArray;
 use crate::report::{FrameStats, Stage, Stages};
 
 /// The field, and the handler array of the frame with the field's channels; fields with
 /// adaptive kernels also come fitted to the frame, with their own handler array.
 pub(super) struct Prepared {
-    field: Box<dyn ScalarField>,
+    field: Arc<dyn ScalarField>,
     pub handlers: HandlerArray,
     fitted: Option<Fitted>,
 }
@@ -40,7 +42,7 @@ pub(super) fn prepare(
     params: &Params,
     stages: &mut Stages<'_>,
 ) -> Result<Prepared> {
-    let field = params.field.build(params.spacing);
+    let field = Arc::clone(&params.field);
     // The handler array comes first here, as the colour field needs the neighbours too.
     let mut handlers = stages.run(Stage::HandlerArray, || {
         HandlerArray::new(particles, lookup_cell(params))

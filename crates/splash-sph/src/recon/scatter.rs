@@ -3,8 +3,8 @@
 //! full grid; the field value of every vertex follows from its sums, and every cell is
 //! triangulated by the same code as the other engines.
 //!
-//! Only the SSP07 field scatters so far: its value is a function of per-vertex sums
-//! ([`Sums`]), which a particle can add to one at a time.
+//! A field scatters when its value is a function of per-vertex sums that a particle can add to
+//! one at a time ([`Scattering`]; SSP07 so far).
 
 use crate::error::{Error, Result};
 use glam::{IVec3, Vec3};
@@ -13,13 +13,12 @@ use super::Reconstruction;
 use super::band::{BRICK, BRICK_VERTICES, Band, local_index};
 use super::field_sampling::BrickValues;
 use super::full_grid::{self, Grid};
-use super::handler_array::HandlerArray;
 use super::normals::set_normals;
 use super::prepared::finish;
 use super::triangulation::triangulate;
 use crate::config::Params;
-use crate::field::FieldConfig;
-use crate::field::ssp07::{Ssp07, Sums};
+use crate::field::Scattering;
+use crate::neighbours::handler_array::HandlerArray;
 use crate::report::{Stage, Stages};
 
 /// The scatter engine's reconstruction: the scatter needs no neighbour search, only the
@@ -30,42 +29,49 @@ pub fn reconstruct(
     grid: &Grid,
     mut stages: Stages<'_>,
 ) -> Result<Reconstruction> {
-    // Only SSP07's value is a function of sums a particle can add to, so far.
-    let FieldConfig::Ssp07(ssp07) = &params.field else {
-        bail_config!(
-            "the scatter engine supports the ssp07 field only, not {}: use the narrow-band or full-gather engine",
-            params.field.kind()
-        );
-    };
-    let field = ssp07.resolve(params.spacing);
+    let field = params.field.as_ref();
+    let scattering = scattering(params)?;
     let band = stages.run(Stage::Band, || full_grid::band(particles, params))?;
     let values = stages.run(Stage::ScalarField, || {
-        scatter_field(particles, &band, grid, &field)
+        scatter_field(particles, &band, grid, field.support(), scattering)
     })?;
     // The field's normals gather the particles around each vertex, like the other engines:
     // only they need a handler array.
     let triangulation = stages.run(Stage::Triangulation, || -> Result<_> {
         let mut t = triangulate(&band, &values);
-        let handlers = || HandlerArray::new(particles, field.support / 2.0);
+        let handlers = || HandlerArray::new(particles, field.support() / 2.0);
         set_normals(
             params.normals,
             &mut t.mesh,
             &t.brick_vertices,
             band.cell,
             handlers,
-            &field,
+            field,
         )?;
         Ok(t)
     })?;
     Ok(finish(stages.stats, &band, &values, 0, triangulation))
 }
 
-/// Field values on every vertex of `band` (the full band of `grid`), by scattering.
+/// The field's scattering form, or an error for the fields that have none.
+pub fn scattering(params: &Params) -> Result<&dyn Scattering> {
+    match params.field.scattering() {
+        Some(s) => Ok(s),
+        None => bail_config!(
+            "the scatter engine supports the ssp07 field only, not {}: use the narrow-band or full-gather engine",
+            params.field_kind
+        ),
+    }
+}
+
+/// Field values on every vertex of `band` (the full band of `grid`), by scattering each
+/// particle into the vertices within `support`.
 pub fn scatter_field(
     particles: &[Vec3],
     band: &Band,
     grid: &Grid,
-    field: &Ssp07,
+    support: f32,
+    field: &dyn Scattering,
 ) -> Result<BrickValues> {
     let cell = band.cell;
     let [nx, ny, nz] = grid.resolution();
@@ -74,11 +80,14 @@ pub fn scatter_field(
             "{nx} × {ny} × {nz} grid vertices do not fit in memory"
         ))
     })?;
-    let mut sums: Vec<Sums> = Vec::new();
-    if sums.try_reserve_exact(n).is_err() {
+    let stride = field.sums_per_vertex();
+    let mut sums: Vec<f32> = Vec::new();
+    if n.checked_mul(stride)
+        .is_none_or(|len| sums.try_reserve_exact(len).is_err())
+    {
         bail_limit!("cannot allocate the kernel sums of {n} grid vertices");
     }
-    sums.resize(n, Sums::default());
+    sums.resize(n * stride, 0.0);
     // World coordinates of the grid planes, computed as `vertex_position` does.
     let axis = |a: usize, len: u64| -> Vec<f32> {
         (0..len as i32)
@@ -86,9 +95,7 @@ pub fn scatter_field(
             .collect()
     };
     let (xs, ys, zs) = (axis(0, nx), axis(1, ny), axis(2, nz));
-    let support = field.support;
     let r2 = support * support;
-    let inv_r2 = 1.0 / r2;
     let (nx, ny) = (nx as usize, ny as usize);
     // Indices of the planes within `s` of `c` on axis `a`, empty when none.
     let range = |a: usize, c: f32, s: f32, len: usize| -> std::ops::Range<usize> {
@@ -112,9 +119,9 @@ pub fn scatter_field(
                     continue;
                 }
                 let row = (k * ny + j) * nx;
-                for i in range(0, p.x, rest.sqrt(), nx) {
-                    sums[row + i].add(Vec3::new(p.x - xs[i], dy, dz), inv_r2);
-                }
+                let xr = range(0, p.x, rest.sqrt(), nx);
+                let vertices = &mut sums[(row + xr.start) * stride..(row + xr.end) * stride];
+                field.add_to_row(vertices, p, &xs[xr], ys[j], zs[k]);
             }
         }
     }
@@ -138,7 +145,7 @@ pub fn scatter_field(
                     }
                     let g = (base + l - grid.lo).as_uvec3();
                     let at = (g.z as usize * ny + g.y as usize) * nx + g.x as usize;
-                    v[i] = field.value_of_sums(&sums[at]);
+                    v[i] = field.value_of_sums(&sums[at * stride..(at + 1) * stride]);
                 }
             }
         }

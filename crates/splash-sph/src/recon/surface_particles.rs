@@ -6,9 +6,9 @@ use std::f32::consts::PI;
 
 use glam::Vec3;
 
-use super::handler_array::HandlerArray;
-use super::neighbourhood::{LANES, Neighbourhood, map_particles};
 use crate::config::Params;
+use crate::neighbours::handler_array::HandlerArray;
+use crate::neighbours::neighbourhood::{LANES, Neighbourhood, map_particles};
 
 pub struct SurfaceCriteria {
     /// Colour field support h; also the neighbour count radius.

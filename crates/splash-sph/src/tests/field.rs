@@ -3,10 +3,10 @@
 use super::common::lattice_ball;
 use crate::field::ScalarField;
 use crate::field::ssp07::Ssp07;
+use crate::neighbours::handler_array::HandlerArray;
+use crate::neighbours::neighbourhood::Neighbourhood;
 use crate::recon::band::{BRICK, Band, local_index};
 use crate::recon::field_sampling::{sample_field, vertex_position};
-use crate::recon::handler_array::HandlerArray;
-use crate::recon::neighbourhood::Neighbourhood;
 use glam::{IVec3, Vec3};
 
 #[test]

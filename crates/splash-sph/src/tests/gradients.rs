@@ -2,8 +2,8 @@
 
 use super::common::{Jitter, lattice_ball};
 use crate::field::{FieldConfig, ScalarField};
-use crate::recon::handler_array::HandlerArray;
-use crate::recon::neighbourhood::Neighbourhood;
+use crate::neighbours::handler_array::HandlerArray;
+use crate::neighbours::neighbourhood::Neighbourhood;
 use glam::Vec3;
 
 /// Spacing 1, so that values and gradients are of order 1 and f32 rounding stays far below the

@@ -11,8 +11,8 @@ use glam::{IVec3, Vec3};
 use rayon::prelude::*;
 use rustc_hash::FxHashSet;
 
-use crate::recon::handler_array::HandlerArray;
-use crate::recon::neighbourhood;
+use crate::neighbours::handler_array::HandlerArray;
+use crate::neighbours::neighbourhood;
 
 pub struct Block {
     /// Global index of the block's first cube (cube k spans corners k to k + 1).

@@ -13,10 +13,10 @@ use super::lookup_cache::LookupCache;
 use super::slice_cache::{Corner, DONE_ABOVE, DONE_BELOW, NO_VERTEX, SliceCache};
 use crate::field::ScalarField;
 use crate::mesh::marching_cubes::{case_index, cases, corner_offset, edge_axis, edge_corners};
+use crate::neighbours::handler_array::HandlerArray;
+use crate::neighbours::neighbourhood::{Neighbourhood, reach};
 use crate::recon::field_sampling::vertex_position;
 use crate::recon::halo::offset;
-use crate::recon::handler_array::HandlerArray;
-use crate::recon::neighbourhood::{Neighbourhood, reach};
 
 /// What one block's marching needs besides the block.
 pub struct Setting<'a, F: ScalarField + ?Sized> {

@@ -249,14 +249,14 @@ macro_rules! lane_sums {
     ($(#[$attr:meta])* $vis:vis fn $name:ident($p:ident: $ty:ty) -> [$n:expr] |$dx:ident, $dy:ident, $dz:ident $(, $v:ident)?| $term:block) => {
         $(#[$attr])*
         $vis fn $name(
-            near: &$crate::recon::neighbourhood::Neighbourhood,
+            near: &$crate::neighbours::neighbourhood::Neighbourhood,
             x: glam::Vec3,
             $p: $ty,
         ) -> [f32; $n] {
-            use $crate::recon::neighbourhood::LANES;
+            use $crate::neighbours::neighbourhood::LANES;
             #[inline(always)]
             fn lanes(
-                near: &$crate::recon::neighbourhood::Neighbourhood,
+                near: &$crate::neighbours::neighbourhood::Neighbourhood,
                 x: glam::Vec3,
                 $p: $ty,
             ) -> [f32; $n] {
@@ -286,7 +286,7 @@ macro_rules! lane_sums {
             #[cfg(target_arch = "x86_64")]
             #[target_feature(enable = "avx2")]
             unsafe fn lanes_avx2(
-                near: &$crate::recon::neighbourhood::Neighbourhood,
+                near: &$crate::neighbours::neighbourhood::Neighbourhood,
                 x: glam::Vec3,
                 $p: $ty,
             ) -> [f32; $n] {
