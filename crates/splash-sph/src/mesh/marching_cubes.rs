@@ -12,6 +12,26 @@
 
 use std::sync::LazyLock;
 
+use glam::{IVec3, Vec3};
+
+/// The vertex where the surface crosses the grid edge from `p0` along `axis` (of length
+/// `cell`) whose ends have field values `v0` and `v1` of opposite signs: linear interpolation,
+/// `t` of the way along. Every engine places its vertices with it, so their meshes agree.
+pub fn edge_crossing(p0: Vec3, axis: usize, cell: f32, v0: f32, v1: f32) -> (Vec3, f32) {
+    let t = v0 / (v0 - v1);
+    let mut p = p0;
+    p[axis] += t * cell;
+    (p, t)
+}
+
+/// The unit normal at a crossing `t` of the way from the end gradients `g0` to `g1`; where
+/// they cancel, the edge's direction towards its outside (positive) end.
+pub fn crossing_normal(g0: Vec3, g1: Vec3, t: f32, axis: usize, v0: f32, v1: f32) -> Vec3 {
+    g0.lerp(g1, t)
+        .try_normalize()
+        .unwrap_or(IVec3::AXES[axis].as_vec3() * (v1 - v0).signum())
+}
+
 /// Offset of corner `c` along each axis.
 pub const fn corner_offset(c: usize) -> [usize; 3] {
     [c & 1, (c >> 1) & 1, (c >> 2) & 1]

@@ -9,8 +9,7 @@ use super::band::Band;
 use super::band_closure::close_band;
 use super::field_sampling::sample_field;
 use super::full_grid;
-use super::normals::set_normals;
-use super::prepared::{finish, prepare};
+use super::prepared::{finish, prepare, triangles_and_normals};
 use super::surface_particles::{SurfaceCriteria, surface_particles};
 use super::triangulation::triangulate;
 use crate::config::{Engine, Params};
@@ -47,19 +46,13 @@ pub(crate) fn gather(
             sample_field(grown, samples, field)
         })
     });
-    let triangulation = stages.run(Stage::Triangulation, || -> Result<_> {
-        let mut t = triangulate(&band, &values);
-        let cell = band.cell;
-        set_normals(
-            params.normals,
-            &mut t.mesh,
-            &t.brick_vertices,
-            cell,
-            || Ok(samples),
-            field,
-        )?;
-        Ok(t)
-    })?;
+    let triangulation = triangles_and_normals(
+        &mut stages,
+        params,
+        field,
+        || triangulate(&band, &values),
+        || Ok(samples),
+    )?;
     Ok(finish(
         stages.stats,
         &band,

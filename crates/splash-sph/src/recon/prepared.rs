@@ -1,6 +1,7 @@
 //! What every engine shares: the field and the handler array of the frame before the field is
 //! sampled, and the counts and memory figures once the mesh exists.
 
+use std::borrow::Borrow;
 use std::sync::Arc;
 
 use glam::Vec3;
@@ -8,6 +9,7 @@ use glam::Vec3;
 use super::Reconstruction;
 use super::band::{BRICK_VERTICES, Band};
 use super::field_sampling::BrickValues;
+use super::normals::set_normals;
 use super::triangulation::Triangulation;
 use crate::config::Params;
 use crate::error::Result;
@@ -65,6 +67,23 @@ pub(super) fn prepare(
 /// (2r for SSP07) so that a brick's reach spans few cells.
 fn lookup_cell(params: &Params) -> f32 {
     params.colour_support.max(params.support / 2.0)
+}
+
+/// The last stage of every engine, timed as t_tri: the triangles, then the vertex normals that
+/// `params.normals` asks for (only the field's normals gather particles: `handlers`).
+pub(super) fn triangles_and_normals<H: Borrow<HandlerArray>>(
+    stages: &mut Stages<'_>,
+    params: &Params,
+    field: &dyn ScalarField,
+    triangles: impl FnOnce() -> Triangulation,
+    handlers: impl FnOnce() -> Result<H>,
+) -> Result<Triangulation> {
+    stages.run(Stage::Triangulation, || {
+        let mut t = triangles();
+        let (mesh, bricks) = (&mut t.mesh, &t.brick_vertices);
+        set_normals(params.normals, mesh, bricks, params.cell, handlers, field)?;
+        Ok(t)
+    })
 }
 
 /// Counts and memory figures once the mesh exists.

@@ -13,8 +13,7 @@ use super::Reconstruction;
 use super::band::{BRICK, BRICK_VERTICES, Band, local_index};
 use super::field_sampling::BrickValues;
 use super::full_grid::{self, Grid};
-use super::normals::set_normals;
-use super::prepared::finish;
+use super::prepared::{finish, triangles_and_normals};
 use super::triangulation::triangulate;
 use crate::config::Params;
 use crate::field::Scattering;
@@ -37,19 +36,13 @@ pub fn reconstruct(
     })?;
     // The field's normals gather the particles around each vertex, like the other engines:
     // only they need a handler array.
-    let triangulation = stages.run(Stage::Triangulation, || -> Result<_> {
-        let mut t = triangulate(&band, &values);
-        let handlers = || HandlerArray::new(particles, field.support() / 2.0);
-        set_normals(
-            params.normals,
-            &mut t.mesh,
-            &t.brick_vertices,
-            band.cell,
-            handlers,
-            field,
-        )?;
-        Ok(t)
-    })?;
+    let triangulation = triangles_and_normals(
+        &mut stages,
+        params,
+        field,
+        || triangulate(&band, &values),
+        || HandlerArray::new(particles, field.support() / 2.0),
+    )?;
     Ok(finish(stages.stats, &band, &values, 0, triangulation))
 }
 

@@ -16,7 +16,9 @@ use super::band::{BRICK, Band, brick_of, local_index};
 use super::field_sampling::{BrickValues, vertex_position};
 use super::halo::{Halo, neighbour_slot, offset};
 use crate::mesh::TriMesh;
-use crate::mesh::marching_cubes::{case_index, cases, edge_axis, edge_corners};
+use crate::mesh::marching_cubes::{
+    case_index, cases, crossing_normal, edge_axis, edge_corners, edge_crossing,
+};
 
 /// The edge vertices owned by one brick: bit `3 * local_index + axis` marks an edge that holds
 /// one, numbered in bit order from `first`.
@@ -122,16 +124,11 @@ fn edge_vertices(halo: &Halo, brick: IVec3, cell: f32) -> BrickEdges {
                     }
                     let bit = 3 * local_index(l) + axis;
                     edges.bits[bit / 64] |= 1 << (bit % 64);
-                    let t = v0 / (v0 - v1);
                     let p0 = vertex_position(brick * BRICK + l, cell);
-                    let mut p = p0;
-                    p[axis] += t * cell;
+                    let (p, t) = edge_crossing(p0, axis, cell, v0, v1);
                     edges.positions.push(p);
-                    let g = halo.gradient(l, cell).lerp(halo.gradient(l + e, cell), t);
-                    edges.normals.push(
-                        g.try_normalize()
-                            .unwrap_or(e.as_vec3() * (v1 - v0).signum()),
-                    );
+                    let (g0, g1) = (halo.gradient(l, cell), halo.gradient(l + e, cell));
+                    edges.normals.push(crossing_normal(g0, g1, t, axis, v0, v1));
                 }
             }
         }

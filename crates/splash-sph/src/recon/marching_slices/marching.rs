@@ -12,7 +12,9 @@ use super::blocks::Block;
 use super::lookup_cache::LookupCache;
 use super::slice_cache::{Corner, DONE_ABOVE, DONE_BELOW, NO_VERTEX, SliceCache};
 use crate::field::ScalarField;
-use crate::mesh::marching_cubes::{case_index, cases, corner_offset, edge_axis, edge_corners};
+use crate::mesh::marching_cubes::{
+    case_index, cases, corner_offset, crossing_normal, edge_axis, edge_corners, edge_crossing,
+};
 use crate::neighbours::handler_array::HandlerArray;
 use crate::neighbours::neighbourhood::{Neighbourhood, reach};
 use crate::recon::field_sampling::vertex_position;
@@ -302,20 +304,18 @@ impl<F: ScalarField + ?Sized> Marcher<'_, F> {
             return existing;
         }
         let (v0, v1) = (values[c0], values[c1]);
-        let t = v0 / (v0 - v1);
         let global = self.origin + at;
-        let mut p = vertex_position(global, self.set.cell);
-        p[axis] += t * self.set.cell;
+        let p0 = vertex_position(global, self.set.cell);
+        let (p, t) = edge_crossing(p0, axis, self.set.cell, v0, v1);
         let id = self.mesh.positions.len() as u32;
         self.mesh.positions.push(p);
         self.mesh.edges.push((global, axis as u8));
         if self.set.corner_gradients {
             let end = cube + offset(c1);
             let (g0, g1) = (self.gradient(at, ids[c0]), self.gradient(end, ids[c1]));
-            let fallback = IVec3::AXES[axis].as_vec3() * (v1 - v0).signum();
             self.mesh
                 .normals
-                .push(g0.lerp(g1, t).try_normalize().unwrap_or(fallback));
+                .push(crossing_normal(g0, g1, t, axis, v0, v1));
         }
         self.slices[z].as_mut().unwrap().corners[ids[c0] as usize].vertices[axis] = id;
         id

@@ -18,8 +18,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use super::Reconstruction;
-use super::normals::set_normals;
-use super::prepared::prepare;
+use super::prepared::{prepare, triangles_and_normals};
 use crate::config::{Normals, Params};
 use crate::report::{SlicesFigures, Stage, Stages};
 use marching::{BlockStats, InFlight, Setting, march};
@@ -78,18 +77,14 @@ pub fn reconstruct(
     });
     let blocks_bytes: usize = blocks.iter().map(|b| b.heap_bytes()).sum();
     drop(blocks);
-    let welded = stages.run(Stage::Triangulation, || -> Result<_> {
-        let mut w = weld::weld(meshes);
-        set_normals(
-            params.normals,
-            &mut w.mesh,
-            &w.brick_vertices,
-            cell,
-            || Ok(samples),
-            field,
-        )?;
-        Ok(w)
-    })?;
+    let surface_cells = stats.iter().map(|b| b.cubes_visited).sum();
+    let welded = triangles_and_normals(
+        &mut stages,
+        params,
+        field,
+        || weld::weld(meshes, surface_cells),
+        || Ok(samples),
+    )?;
     let report = SlicesReport {
         in_flight_peak: in_flight.peak.load(Ordering::Relaxed),
         blocks: stats,
@@ -108,7 +103,7 @@ pub fn reconstruct(
     };
     s.bricks = welded.brick_vertices.len();
     s.surface_vertices = report.blocks.iter().map(|b| b.corners).sum();
-    s.surface_cells = report.blocks.iter().map(|b| b.cubes_visited).sum();
+    s.surface_cells = welded.surface_cells;
     s.triangles = mesh.triangles.len();
     s.vertices = mesh.vertices.len();
     s.peak_bytes = prepared.heap_bytes() + blocks_bytes + report.in_flight_peak + mesh.heap_bytes();

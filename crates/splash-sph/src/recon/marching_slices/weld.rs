@@ -12,12 +12,7 @@ use rayon::prelude::*;
 use super::marching::BlockMesh;
 use crate::mesh::TriMesh;
 use crate::recon::band::{BRICK, brick_of, local_index};
-
-pub struct Welded {
-    pub mesh: TriMesh,
-    /// The vertices of each brick of 8³ corners, as the triangulation gives them.
-    pub brick_vertices: Vec<Range<usize>>,
-}
+use crate::recon::triangulation::Triangulation;
 
 /// Sort key of an edge: its brick in (z, y, x) order, then its lower corner in the brick,
 /// then its axis.
@@ -29,7 +24,8 @@ fn key((corner, axis): (IVec3, u8)) -> EdgeKey {
     (b.z, b.y, b.x, local * 3 + u32::from(axis))
 }
 
-pub fn weld(blocks: Vec<BlockMesh>) -> Welded {
+/// The blocks' meshes as one, with the `surface_cells` the blocks visited.
+pub fn weld(blocks: Vec<BlockMesh>, surface_cells: usize) -> Triangulation {
     let with_normals = blocks.iter().any(|b| !b.normals.is_empty());
     // (edge key, block, vertex in block), in block order.
     let mut order: Vec<(EdgeKey, u32, u32)> = blocks
@@ -81,8 +77,9 @@ pub fn weld(blocks: Vec<BlockMesh>) -> Welded {
                 .map(move |t| t.map(|v| remap[base + v as usize]))
         })
         .collect();
-    Welded {
+    Triangulation {
         mesh,
         brick_vertices,
+        surface_cells,
     }
 }
