@@ -302,7 +302,7 @@ impl Config {
 /// World-unit parameters of one reconstruction, resolved from a [`Config`] and the spacing r,
 /// with the field built for that spacing (once: every engine samples this one).
 #[derive(Clone)]
-pub struct Params {
+pub(crate) struct Params {
     pub spacing: f32,
     pub cell: f32,
     pub colour_support: f32,

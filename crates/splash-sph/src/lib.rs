@@ -41,8 +41,7 @@ pub mod report;
 
 pub use bytes::Bytes;
 pub use config::{
-    ATTRIBUTES, BandConfig, Config, Engine, Normals, OutputConfig, Params, SlicesConfig,
-    SurfaceParticles,
+    ATTRIBUTES, BandConfig, Config, Engine, Normals, OutputConfig, SlicesConfig, SurfaceParticles,
 };
 pub use error::{Error, Result};
 pub use glam::Vec3;

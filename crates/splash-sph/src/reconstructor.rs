@@ -55,9 +55,10 @@ impl Reconstructor {
         &self.config
     }
 
-    /// The parameters in world units that the configuration resolves to.
-    pub fn params(&self) -> &Params {
-        &self.params
+    /// The field's support radius in world units: particles farther than this from a point do
+    /// not change the field there (and do not reach [`interpolate`](Self::interpolate)d values).
+    pub fn support(&self) -> f32 {
+        self.params.support
     }
 
     /// The closed, outward-oriented surface mesh of `positions`, with its report (counts and

@@ -104,7 +104,7 @@ impl AnisotropicConfig {
         Ok(())
     }
 
-    pub fn resolve(&self, r: f32) -> Anisotropic {
+    pub(crate) fn resolve(&self, r: f32) -> Anisotropic {
         let h = self.neighbourhood.resolve(r);
         Anisotropic {
             h,

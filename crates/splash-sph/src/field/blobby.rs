@@ -53,7 +53,7 @@ impl BlobbyConfig {
         Ok(())
     }
 
-    pub fn resolve(&self, r: f32) -> Blobby {
+    pub(crate) fn resolve(&self, r: f32) -> Blobby {
         let radius = self.radius.resolve(r);
         // exp(B(1 − s²)) = ε at s² = 1 + ln(1/ε)/B.
         let cutoff_s2 = 1.0 + (1.0 / self.epsilon).ln() / self.blobbiness;

@@ -46,7 +46,7 @@ impl DensityConfig {
         Ok(())
     }
 
-    pub fn resolve(&self, r: f32) -> Density {
+    pub(crate) fn resolve(&self, r: f32) -> Density {
         Density {
             support: self.support.resolve(r),
             iso: self.iso,

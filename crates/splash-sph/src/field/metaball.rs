@@ -58,7 +58,7 @@ impl MetaballConfig {
         Ok(())
     }
 
-    pub fn resolve(&self, r: f32) -> Metaball {
+    pub(crate) fn resolve(&self, r: f32) -> Metaball {
         Metaball {
             cutoff: self.cutoff.resolve(r),
             threshold: self.threshold,

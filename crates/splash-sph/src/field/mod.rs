@@ -1,12 +1,20 @@
-//! Scalar fields whose zero level set is the fluid surface. Every engine samples a field through
-//! [`ScalarField`], and the Marching Cubes code never asks which one it is.
+//! Scalar fields whose zero level set is the fluid surface, chosen and tuned by [`FieldConfig`]
+//! (the `[field]` table of a configuration). Every engine samples a field through one internal
+//! trait, and the Marching Cubes code never asks which one it is.
 
-pub mod anisotropic;
-pub mod blobby;
-pub mod density;
-pub mod metaball;
-pub mod ssp07;
-pub mod zb05;
+pub(crate) mod anisotropic;
+pub(crate) mod blobby;
+pub(crate) mod density;
+pub(crate) mod metaball;
+pub(crate) mod ssp07;
+pub(crate) mod zb05;
+
+pub use anisotropic::AnisotropicConfig;
+pub use blobby::BlobbyConfig;
+pub use density::DensityConfig;
+pub use metaball::MetaballConfig;
+pub use ssp07::Ssp07Config;
+pub use zb05::Zb05Config;
 
 use crate::error::Result;
 use glam::Vec3;
@@ -15,7 +23,7 @@ use serde::{Deserialize, Serialize};
 use crate::neighbours::handler_array::HandlerArray;
 use crate::neighbours::neighbourhood::Neighbourhood;
 
-pub trait ScalarField: Send + Sync {
+pub(crate) trait ScalarField: Send + Sync {
     /// Particles farther than this from a point do not change the field there.
     fn support(&self) -> f32;
 
@@ -58,7 +66,7 @@ pub trait ScalarField: Send + Sync {
 
 /// A field as per-vertex kernel sums that particles add to one at a time (SSP07's sums of
 /// eqs. 4–5), then turned into the field's value: the form the scatter engine needs.
-pub trait Scattering: Sync {
+pub(crate) trait Scattering: Sync {
     /// `f32` sums per grid vertex.
     fn sums_per_vertex(&self) -> usize;
 
@@ -72,7 +80,7 @@ pub trait Scattering: Sync {
 
 /// A field fitted to one frame, with the particles its kernels sit on: their handler array,
 /// with the per-particle data the field reads in its channels.
-pub struct Fitted {
+pub(crate) struct Fitted {
     pub field: Box<dyn ScalarField>,
     pub handlers: HandlerArray,
 }
@@ -144,7 +152,7 @@ impl FieldConfig {
     }
 
     /// The field in world units for particle spacing `r`.
-    pub fn build(&self, r: f32) -> Box<dyn ScalarField> {
+    pub(crate) fn build(&self, r: f32) -> Box<dyn ScalarField> {
         match self {
             FieldConfig::Ssp07(c) => Box::new(c.resolve(r)),
             FieldConfig::Zb05(c) => Box::new(c.resolve(r)),

@@ -47,7 +47,7 @@ impl Ssp07Config {
         Ok(())
     }
 
-    pub fn resolve(&self, r: f32) -> Ssp07 {
+    pub(crate) fn resolve(&self, r: f32) -> Ssp07 {
         Ssp07 {
             support: self.support.resolve(r),
             radius: self.radius.resolve(r),

@@ -35,7 +35,7 @@ impl Zb05Config {
         self.radius.check_positive("field.radius")
     }
 
-    pub fn resolve(&self, r: f32) -> Zb05 {
+    pub(crate) fn resolve(&self, r: f32) -> Zb05 {
         Zb05 {
             support: self.support.resolve(r),
             radius: self.radius.resolve(r),

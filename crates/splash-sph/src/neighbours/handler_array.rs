@@ -132,7 +132,8 @@ impl HandlerArray {
     }
 
     /// The particles of one cell, in handler order.
-    pub fn cell(&self, cell: IVec3) -> &[Vec3] {
+    #[cfg(test)]
+    fn cell(&self, cell: IVec3) -> &[Vec3] {
         &self.positions[self.cell_range(cell)]
     }
 

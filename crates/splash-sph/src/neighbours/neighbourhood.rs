@@ -147,7 +147,8 @@ impl Neighbourhood {
         self.pad();
     }
 
-    /// Holds exactly `points`, relative to `anchor`, without channels.
+    /// Holds exactly `points`, relative to `anchor`, without channels (the tests' brute force).
+    #[cfg(test)]
     pub fn set(&mut self, anchor: Vec3, points: &[Vec3]) {
         self.clear(anchor);
         self.channels.clear();
@@ -193,10 +194,6 @@ impl Neighbourhood {
 
     pub fn len(&self) -> usize {
         self.x.len()
-    }
-
-    pub fn is_empty(&self) -> bool {
-        self.x.is_empty()
     }
 }
 
