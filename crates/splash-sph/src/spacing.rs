@@ -4,6 +4,8 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
+use crate::neighbours::bucket_grid::BucketGrid;
+
 /// Cells per axis stay below 2^20 + 1 so that a cell's coordinates pack into 21 bits each for
 /// hashing, and shells stay bounded whatever the outliers.
 const MAX_CELLS_PER_AXIS: f32 = (1 << 20) as f32;
@@ -76,11 +78,16 @@ const SAMPLES: usize = 20_000;
 
 /// [`estimate_spacing`] from at most `max_samples` particles.
 fn estimate_sampled(particles: &[Vec3], max_samples: usize) -> Option<f32> {
-    let grid = Grid::build(particles)?;
-    let nearest = median(grid.nearest_distances(particles, max_samples))?;
+    let grid = grid_for(particles)?;
+    let nearest = median(nearest_distances(&grid, particles, max_samples))?;
     Some(
-        grid.density_spacing(particles, max_samples.min(DENSITY_SAMPLES), BALL * nearest)
-            .unwrap_or(nearest),
+        density_spacing(
+            &grid,
+            particles,
+            max_samples.min(DENSITY_SAMPLES),
+            BALL * nearest,
+        )
+        .unwrap_or(nearest),
     )
 }
 
@@ -119,283 +126,169 @@ fn upper_quartile(mut values: Vec<f32>) -> Option<f32> {
     Some(*values.select_nth_unstable_by(at, f32::total_cmp).1)
 }
 
-/// Uniform grid over the bounding box, stored as a spatial hash: each cell maps to one of a
-/// power-of-two number of buckets, and the particles are counting-sorted by bucket into one
-/// array. A bucket may also hold particles of other cells; that only costs a few extra distance
-/// checks, never correctness, and saves a hash map and a comparison sort.
-struct Grid {
-    min: Vec3,
-    cell: f32,
-    dims: [i32; 3],
-    /// 64 minus log2 of the bucket count: the hash keeps the top bits.
-    shift: u32,
-    points: Vec<Vec3>,
-    /// Bucket `b` holds `points[offsets[b]..offsets[b + 1]]`.
-    offsets: Vec<u32>,
-    occupied: usize,
-}
-
-impl Grid {
-    /// A grid sized for nearest-neighbour queries on `particles`; None when fewer than two of
-    /// them are finite or all of those coincide.
-    fn build(particles: &[Vec3]) -> Option<Self> {
-        let (min, max, finite) = particles
-            .par_iter()
-            .filter(|p| p.is_finite())
-            .fold(
-                || (Vec3::INFINITY, Vec3::NEG_INFINITY, 0usize),
-                |(lo, hi, n), &p| (lo.min(p), hi.max(p), n + 1),
-            )
-            .reduce(
-                || (Vec3::INFINITY, Vec3::NEG_INFINITY, 0),
-                |a, b| (a.0.min(b.0), a.1.max(b.1), a.2 + b.2),
-            );
-        let extent = max - min;
-        let largest = extent.max_element();
-        if finite < 2 || largest <= 0.0 {
-            return None;
-        }
-        let min_cell = largest / MAX_CELLS_PER_AXIS;
-
-        // Axes much thinner than the box (a sheet, a line) don't count as dimensions, or the
-        // volume would vanish and density scaling would use the wrong power.
-        let thin = largest * 1e-3;
-        let (volume, dims) = extent
-            .to_array()
-            .iter()
-            .filter(|&&e| e > thin)
-            .fold((1.0f64, 0i32), |(v, d), &e| (v * f64::from(e), d + 1));
-        let spread = |count: usize| (volume / count as f64).powf(1.0 / f64::from(dims)) as f32;
-
-        // Cells of about twice the spacing hold ~8 particles and usually settle a query within
-        // the first shell. The bounding box alone misjudges the spacing when the particles fill
-        // little of it (fluid in a corner, far outliers), so size the cells from the nearest
-        // neighbours in a stratified subset instead, scaled from its density to the full one.
-        let pool: Vec<Vec3> = stratified(particles, POOL)
-            .filter(|p| p.is_finite())
-            .collect();
-        let pool_grid = Grid::new(
-            &pool,
-            pool.len(),
-            min,
-            extent,
-            (2.0 * spread(pool.len())).max(min_cell),
+/// A grid sized for nearest-neighbour queries on `particles`; None when fewer than two of
+/// them are finite or all of those coincide.
+fn grid_for(particles: &[Vec3]) -> Option<BucketGrid> {
+    let (min, max, finite) = particles
+        .par_iter()
+        .filter(|p| p.is_finite())
+        .fold(
+            || (Vec3::INFINITY, Vec3::NEG_INFINITY, 0usize),
+            |(lo, hi, n), &p| (lo.min(p), hi.max(p), n + 1),
+        )
+        .reduce(
+            || (Vec3::INFINITY, Vec3::NEG_INFINITY, 0),
+            |a, b| (a.0.min(b.0), a.1.max(b.1), a.2 + b.2),
         );
-        let cell = match median(pool_grid.nearest_distances(&pool, POOL_QUERIES)) {
-            Some(d) => 2.0 * d * (pool.len() as f32 / finite as f32).powf(1.0 / dims as f32),
-            None => 2.0 * spread(finite),
-        };
-        drop(pool_grid);
-        Some(Grid::new(
-            particles,
-            finite,
-            min,
-            extent,
-            cell.max(min_cell),
-        ))
+    let extent = max - min;
+    let largest = extent.max_element();
+    if finite < 2 || largest <= 0.0 {
+        return None;
     }
+    let min_cell = largest / MAX_CELLS_PER_AXIS;
 
-    fn new(particles: &[Vec3], finite: usize, min: Vec3, extent: Vec3, cell: f32) -> Self {
-        assert!(finite < u32::MAX as usize, "offsets are u32");
-        // Half a bucket per particle: with ~8 particles per occupied cell collisions stay rare,
-        // and the table stays small enough for the caches (random access dominates the build).
-        let buckets = (finite / 2).next_power_of_two().max(8);
-        let mut grid = Self {
-            min,
-            cell,
-            dims: (extent / cell).to_array().map(|e| e as i32 + 1),
-            shift: 64 - buckets.trailing_zeros(),
-            points: vec![Vec3::ZERO; finite],
-            offsets: vec![0; buckets + 1],
-            occupied: 0,
-        };
-        let bucket_of: Vec<u32> = particles
-            .par_iter()
-            .map(|&p| {
-                if p.is_finite() {
-                    grid.bucket(grid.cell_of(p)) as u32
-                } else {
-                    u32::MAX
-                }
-            })
-            .collect();
-        // Counting sort: counts shifted by one, exclusive prefix sum, then scattering advances
-        // each bucket's start to its end, which is where the next bucket starts.
-        for &b in bucket_of.iter().filter(|&&b| b != u32::MAX) {
-            grid.offsets[b as usize + 1] += 1;
-        }
-        let mut start = 0;
-        for offset in &mut grid.offsets[1..] {
-            grid.occupied += usize::from(*offset > 0);
-            (*offset, start) = (start, start + *offset);
-        }
-        for (&b, &p) in bucket_of.iter().zip(particles) {
-            if b != u32::MAX {
-                let slot = &mut grid.offsets[b as usize + 1];
-                grid.points[*slot as usize] = p;
-                *slot += 1;
-            }
-        }
-        grid
-    }
+    // Axes much thinner than the box (a sheet, a line) don't count as dimensions, or the
+    // volume would vanish and density scaling would use the wrong power.
+    let thin = largest * 1e-3;
+    let (volume, dims) = extent
+        .to_array()
+        .iter()
+        .filter(|&&e| e > thin)
+        .fold((1.0f64, 0i32), |(v, d), &e| (v * f64::from(e), d + 1));
+    let spread = |count: usize| (volume / count as f64).powf(1.0 / f64::from(dims)) as f32;
 
-    fn cell_of(&self, p: Vec3) -> [i32; 3] {
-        let c = ((p - self.min) / self.cell).to_array();
-        std::array::from_fn(|a| (c[a] as i32).clamp(0, self.dims[a] - 1))
-    }
-
-    /// Fibonacci hashing of the packed cell coordinates (21 bits each), with z in groups of 4
-    /// cells that take 4 consecutive buckets: queries scan columns of cells along z, and read
-    /// memory mostly in sequence.
-    fn bucket(&self, c: [i32; 3]) -> usize {
-        let key = (c[0] as u64) << 42 | (c[1] as u64) << 21 | (c[2] >> 2) as u64;
-        let group = key.wrapping_mul(0x9E37_79B9_7F4A_7C15) >> (self.shift + 2);
-        (group << 2 | (c[2] & 3) as u64) as usize
-    }
-
-    /// Nearest non-zero distance from each of at most `max_samples` stratified samples.
-    fn nearest_distances(&self, particles: &[Vec3], max_samples: usize) -> Vec<f32> {
-        let samples: Vec<Vec3> = stratified(particles, max_samples).collect();
-        samples
-            .par_iter()
-            .filter(|p| p.is_finite())
-            .filter_map(|&p| self.nearest(p).map(f32::sqrt))
-            .collect()
-    }
-
-    /// Squared distance from `p` to the nearest particle not coincident with it, searching
-    /// shells of cells at growing Chebyshev distance `k` around `p`'s cell. Anything beyond
-    /// shell `k` is at least `k` cells away, so a candidate within `k * cell` is final.
-    fn nearest(&self, p: Vec3) -> Option<f32> {
-        let c = self.cell_of(p);
-        let mut best = f32::INFINITY;
-        let mut visited = 0;
-        for k in 0.. {
-            let lo: [i32; 3] = std::array::from_fn(|a| (c[a] - k).max(0));
-            let hi: [i32; 3] = std::array::from_fn(|a| (c[a] + k).min(self.dims[a] - 1));
-            for x in lo[0]..=hi[0] {
-                for y in lo[1]..=hi[1] {
-                    // Inside the shell's x/y faces only the two z layers at distance k are new.
-                    let side = (x - c[0]).abs() == k || (y - c[1]).abs() == k;
-                    let layers = if side {
-                        (lo[2]..=hi[2]).step_by(1)
-                    } else {
-                        (c[2] - k..=c[2] + k).step_by(2 * k as usize)
-                    };
-                    for z in layers.filter(|z| (lo[2]..=hi[2]).contains(z)) {
-                        visited += 1;
-                        let b = self.bucket([x, y, z]);
-                        let range = self.offsets[b] as usize..self.offsets[b + 1] as usize;
-                        best = best.min(nearest_in(p, &self.points[range]));
-                    }
-                }
-            }
-            let reach = k as f32 * self.cell;
-            if best <= reach * reach {
-                break;
-            }
-            let covered = (0..3).all(|a| lo[a] == 0 && hi[a] == self.dims[a] - 1);
-            if covered {
-                break;
-            }
-            // An isolated particle (a far outlier) would need ever larger shells: once they
-            // cost more than the occupied buckets, scanning everything is cheaper.
-            if visited > self.occupied {
-                best = nearest_in(p, &self.points);
-                break;
-            }
-        }
-        best.is_finite().then_some(best)
-    }
+    // Cells of about twice the spacing hold ~8 particles and usually settle a query within
+    // the first shell. The bounding box alone misjudges the spacing when the particles fill
+    // little of it (fluid in a corner, far outliers), so size the cells from the nearest
+    // neighbours in a stratified subset instead, scaled from its density to the full one.
+    let pool: Vec<Vec3> = stratified(particles, POOL)
+        .filter(|p| p.is_finite())
+        .collect();
+    let pool_grid = BucketGrid::new(
+        &pool,
+        pool.len(),
+        min,
+        extent,
+        (2.0 * spread(pool.len())).max(min_cell),
+    );
+    let cell = match median(nearest_distances(&pool_grid, &pool, POOL_QUERIES)) {
+        Some(d) => 2.0 * d * (pool.len() as f32 / finite as f32).powf(1.0 / dims as f32),
+        None => 2.0 * spread(finite),
+    };
+    drop(pool_grid);
+    Some(BucketGrid::new(
+        particles,
+        finite,
+        min,
+        extent,
+        cell.max(min_cell),
+    ))
 }
 
-impl Grid {
-    /// The spacing from the upper-quartile particle count in balls of `radius` around the
-    /// samples; None when the counts don't grow like a 3-D volume (see [`estimate_spacing`]).
-    fn density_spacing(&self, particles: &[Vec3], max_samples: usize, radius: f32) -> Option<f32> {
-        let counts = self.ball_counts(particles, max_samples, radius);
-        let full = upper_quartile(counts.iter().map(|c| c[0]).collect())?;
-        let half = upper_quartile(counts.iter().map(|c| c[1]).collect())?;
-        let dimension = (full / half).log2();
-        // Scaled from the unit ball, so that tiny radii don't underflow when cubed.
-        let spacing = radius * (Ball::unit_volume() / full).cbrt();
-        (dimension >= MIN_DIMENSION && spacing.is_normal()).then_some(spacing)
-    }
+/// Nearest non-zero distance from each of at most `max_samples` stratified samples.
+fn nearest_distances(grid: &BucketGrid, particles: &[Vec3], max_samples: usize) -> Vec<f32> {
+    let samples: Vec<Vec3> = stratified(particles, max_samples).collect();
+    samples
+        .par_iter()
+        .filter(|p| p.is_finite())
+        .filter_map(|&p| grid.nearest(p).map(f32::sqrt))
+        .collect()
+}
 
-    /// Soft counts of the distinct positions within `radius` and `radius / 2` of each of at most
-    /// `max_samples` stratified samples, the sample itself included.
-    fn ball_counts(&self, particles: &[Vec3], max_samples: usize, radius: f32) -> Vec<[f32; 2]> {
-        let full = Ball::new(radius);
-        let half = Ball::new(radius / 2.0);
-        let samples: Vec<Vec3> = stratified(particles, max_samples).collect();
-        samples
-            .par_iter()
-            .filter(|p| p.is_finite())
-            .map_init(Vec::new, |crowded: &mut Vec<Vec3>, &p| {
-                let mut counts = [1.0, 1.0];
-                let mut add = |d: f32| {
-                    counts[0] += full.weight(d);
-                    counts[1] += half.weight(d);
+/// The spacing from the upper-quartile particle count in balls of `radius` around the
+/// samples; None when the counts don't grow like a 3-D volume (see [`estimate_spacing`]).
+fn density_spacing(
+    grid: &BucketGrid,
+    particles: &[Vec3],
+    max_samples: usize,
+    radius: f32,
+) -> Option<f32> {
+    let counts = ball_counts(grid, particles, max_samples, radius);
+    let full = upper_quartile(counts.iter().map(|c| c[0]).collect())?;
+    let half = upper_quartile(counts.iter().map(|c| c[1]).collect())?;
+    let dimension = (full / half).log2();
+    // Scaled from the unit ball, so that tiny radii don't underflow when cubed.
+    let spacing = radius * (Ball::unit_volume() / full).cbrt();
+    (dimension >= MIN_DIMENSION && spacing.is_normal()).then_some(spacing)
+}
+
+/// Soft counts of the distinct positions within `radius` and `radius / 2` of each of at most
+/// `max_samples` stratified samples, the sample itself included.
+fn ball_counts(
+    grid: &BucketGrid,
+    particles: &[Vec3],
+    max_samples: usize,
+    radius: f32,
+) -> Vec<[f32; 2]> {
+    let full = Ball::new(radius);
+    let half = Ball::new(radius / 2.0);
+    let samples: Vec<Vec3> = stratified(particles, max_samples).collect();
+    samples
+        .par_iter()
+        .filter(|p| p.is_finite())
+        .map_init(Vec::new, |crowded: &mut Vec<Vec3>, &p| {
+            let mut counts = [1.0, 1.0];
+            let mut add = |d: f32| {
+                counts[0] += full.weight(d);
+                counts[1] += half.weight(d);
+            };
+            // Particles of `cell` (all of them when None) in bucket `b` and in the ball. A
+            // bucket may hold several cells of the ball's box: each particle counts only from
+            // its own. Coincident particles share a cell, so a bucket: they count once.
+            let mut count = |b: usize, cell: Option<[i32; 3]>| {
+                let points = grid.bucket_points(b);
+                let inside = |q: Vec3| {
+                    let d = q.distance_squared(p);
+                    let own = cell.is_none_or(|c| grid.cell_of(q) == c);
+                    (d > 0.0 && d < full.outer && own).then_some(d)
                 };
-                // Particles of `cell` (all of them when None) in bucket `b` and in the ball. A
-                // bucket may hold several cells of the ball's box: each particle counts only from
-                // its own. Coincident particles share a cell, so a bucket: they count once.
-                let mut count = |b: usize, cell: Option<[i32; 3]>| {
-                    let points =
-                        &self.points[self.offsets[b] as usize..self.offsets[b + 1] as usize];
-                    let inside = |q: Vec3| {
-                        let d = q.distance_squared(p);
-                        let own = cell.is_none_or(|c| self.cell_of(q) == c);
-                        (d > 0.0 && d < full.outer && own).then_some(d)
-                    };
-                    if points.len() <= CROWDED {
-                        for (i, &q) in points.iter().enumerate() {
-                            if let Some(d) = inside(q)
-                                && !points[..i].contains(&q)
-                            {
-                                add(d);
-                            }
+                if points.len() <= CROWDED {
+                    for (i, &q) in points.iter().enumerate() {
+                        if let Some(d) = inside(q)
+                            && !points[..i].contains(&q)
+                        {
+                            add(d);
                         }
-                    } else {
-                        // Sorted, so that a clump of coincident particles doesn't take a
-                        // quadratic search.
-                        crowded.clear();
-                        crowded.extend(points.iter().copied().filter(|&q| inside(q).is_some()));
-                        crowded.sort_unstable_by(lexicographic);
-                        crowded.dedup();
-                        crowded.iter().for_each(|&q| add(q.distance_squared(p)));
                     }
-                };
-                let lo = self.cell_of(p - full.reach);
-                let hi = self.cell_of(p + full.reach);
-                let cells: u64 = (0..3).map(|a| (hi[a] - lo[a] + 1) as u64).product();
-                if cells > self.occupied as u64 {
-                    // Cells tiny next to the ball (outliers stretched the grid): cheaper to
-                    // scan everything.
-                    (0..self.offsets.len() - 1).for_each(|b| count(b, None));
                 } else {
-                    // Particles in a cell `k` cells from `p`'s along an axis are at least
-                    // `k - 1` cells away along it: skip the columns, and the ends of columns,
-                    // that lie wholly outside the ball.
-                    let c = self.cell_of(p);
-                    let gap = |a: usize, i: i32| ((i - c[a]).abs() - 1).max(0) as f32 * self.cell;
-                    for x in lo[0]..=hi[0] {
-                        for y in lo[1]..=hi[1] {
-                            let column = gap(0, x).powi(2) + gap(1, y).powi(2);
-                            if column >= full.outer {
-                                continue;
-                            }
-                            let k = ((full.outer - column).sqrt() / self.cell) as i32 + 1;
-                            for z in lo[2].max(c[2] - k)..=hi[2].min(c[2] + k) {
-                                count(self.bucket([x, y, z]), Some([x, y, z]));
-                            }
+                    // Sorted, so that a clump of coincident particles doesn't take a
+                    // quadratic search.
+                    crowded.clear();
+                    crowded.extend(points.iter().copied().filter(|&q| inside(q).is_some()));
+                    crowded.sort_unstable_by(lexicographic);
+                    crowded.dedup();
+                    crowded.iter().for_each(|&q| add(q.distance_squared(p)));
+                }
+            };
+            let lo = grid.cell_of(p - full.reach);
+            let hi = grid.cell_of(p + full.reach);
+            let cells: u64 = (0..3).map(|a| (hi[a] - lo[a] + 1) as u64).product();
+            if cells > grid.occupied as u64 {
+                // Cells tiny next to the ball (outliers stretched the grid): cheaper to
+                // scan everything.
+                (0..grid.buckets()).for_each(|b| count(b, None));
+            } else {
+                // Particles in a cell `k` cells from `p`'s along an axis are at least
+                // `k - 1` cells away along it: skip the columns, and the ends of columns,
+                // that lie wholly outside the ball.
+                let c = grid.cell_of(p);
+                let gap = |a: usize, i: i32| ((i - c[a]).abs() - 1).max(0) as f32 * grid.cell;
+                for x in lo[0]..=hi[0] {
+                    for y in lo[1]..=hi[1] {
+                        let column = gap(0, x).powi(2) + gap(1, y).powi(2);
+                        if column >= full.outer {
+                            continue;
+                        }
+                        let k = ((full.outer - column).sqrt() / grid.cell) as i32 + 1;
+                        for z in lo[2].max(c[2] - k)..=hi[2].min(c[2] + k) {
+                            count(grid.bucket([x, y, z]), Some([x, y, z]));
                         }
                     }
                 }
-                counts
-            })
-            .collect()
-    }
+            }
+            counts
+        })
+        .collect()
 }
 
 /// Buckets with more particles than this are deduplicated by sorting.
@@ -436,15 +329,6 @@ impl Ball {
             / (b * b - a * a);
         4.0 * std::f32::consts::PI * (a.powi(3) / 3.0 + ramp)
     }
-}
-
-/// Smallest non-zero squared distance from `p` to `points`.
-fn nearest_in(p: Vec3, points: &[Vec3]) -> f32 {
-    points
-        .iter()
-        .map(|q| q.distance_squared(p))
-        .filter(|&d| d > 0.0)
-        .fold(f32::INFINITY, f32::min)
 }
 
 #[cfg(test)]
@@ -494,7 +378,11 @@ mod tests {
 
     /// The median nearest-neighbour distance: what the estimate falls back to.
     fn nearest_median(particles: &[Vec3], max_samples: usize) -> Option<f32> {
-        median(Grid::build(particles)?.nearest_distances(particles, max_samples))
+        median(nearest_distances(
+            &grid_for(particles)?,
+            particles,
+            max_samples,
+        ))
     }
 
     #[test]
@@ -714,11 +602,11 @@ mod tests {
     fn grid_queries_are_exact() {
         let particles = uneven_cloud();
         let expected = brute_force(&particles, usize::MAX);
-        let auto = Grid::build(&particles).unwrap();
+        let auto = grid_for(&particles).unwrap();
         let finite = particles.iter().filter(|p| p.is_finite());
         let min = finite.clone().fold(Vec3::INFINITY, |a, &p| a.min(p));
         let max = finite.fold(Vec3::NEG_INFINITY, |a, &p| a.max(p));
-        assert_eq!(auto.nearest_distances(&particles, usize::MAX), expected);
+        assert_eq!(nearest_distances(&auto, &particles, usize::MAX), expected);
         let radii = [0.004, 0.03, 0.4];
         let expected_counts: Vec<_> = radii
             .iter()
@@ -727,17 +615,17 @@ mod tests {
         // Whatever the cell size: tiny cells force many shells and the full-scan fallbacks, huge
         // ones put everything in a few buckets.
         let grids = [1e-4, 3e-3, 0.05, 1.0, 100.0]
-            .map(|cell| Grid::new(&particles, particles.len() - 1, min, max - min, cell));
+            .map(|cell| BucketGrid::new(&particles, particles.len() - 1, min, max - min, cell));
         for grid in grids.iter().chain([&auto]) {
             let cell = grid.cell;
             assert_eq!(
-                grid.nearest_distances(&particles, usize::MAX),
+                nearest_distances(grid, &particles, usize::MAX),
                 expected,
                 "cell {cell}"
             );
             for (&r, counts) in radii.iter().zip(&expected_counts) {
                 assert_counts_eq(
-                    &grid.ball_counts(&particles, 1000, r),
+                    &ball_counts(grid, &particles, 1000, r),
                     counts,
                     &format!("cell {cell}, radius {r}"),
                 );
@@ -745,7 +633,7 @@ mod tests {
         }
         for samples in [1, 2, 7, 64, 1000] {
             assert_eq!(
-                auto.nearest_distances(&particles, samples),
+                nearest_distances(&auto, &particles, samples),
                 brute_force(&particles, samples),
                 "{samples} samples"
             );
@@ -786,19 +674,18 @@ mod tests {
     /// the simulator's spacing `r` (within 5%); prints the estimate with its timing. Skipped
     /// when the file is absent.
     fn real_frame(file: &str, stride: usize, count: usize, r: f32) {
-        let path = format!("{}/../shared/data/{file}", env!("CARGO_MANIFEST_DIR"));
-        let Some(particles) = read_ply_positions(&path, stride) else {
-            eprintln!("{path} not found, skipped");
+        let Some(path) = crate::tests::common::shared_data(file) else {
             return;
         };
+        let particles = read_ply_positions(path.to_str().unwrap(), stride).unwrap();
         assert_eq!(particles.len(), count);
-        let grid = Grid::build(&particles).unwrap();
+        let grid = grid_for(&particles).unwrap();
         assert_eq!(
-            grid.nearest_distances(&particles, 300),
+            nearest_distances(&grid, &particles, 300),
             brute_force(&particles, 300)
         );
         assert_counts_eq(
-            &grid.ball_counts(&particles, 100, BALL * 0.8 * r),
+            &ball_counts(&grid, &particles, 100, BALL * 0.8 * r),
             &brute_force_counts(&particles, 100, BALL * 0.8 * r),
             file,
         );

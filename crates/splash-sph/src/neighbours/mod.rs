@@ -2,5 +2,6 @@
 //! them: the handler array of Akinci et al. 2012 (Sec. 4.1, eq. 8) and the neighbourhoods
 //! gathered from it, narrowed per brick, block and vertex.
 
+pub(crate) mod bucket_grid;
 pub(crate) mod handler_array;
 pub(crate) mod neighbourhood;

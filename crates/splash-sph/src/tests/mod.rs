@@ -2,7 +2,7 @@
 //! triangulation, engines against each other, on analytic shapes and real frames.
 
 mod anisotropic;
-mod common;
+pub(crate) mod common;
 mod engines;
 mod field;
 mod fields;
