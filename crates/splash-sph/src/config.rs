@@ -11,7 +11,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::bytes::{Bytes, default_limit};
 use crate::error::{Error, Result};
-use crate::field::{FieldConfig, ScalarField};
+use crate::field::{FieldConfig, ScalarField, Scattering};
 use crate::io::{MeshFormat, UpAxis};
 use crate::length::{Length, positive};
 
@@ -337,6 +337,17 @@ impl fmt::Debug for Params {
 }
 
 impl Params {
+    /// The field's form for the scatter engine, or an error for the fields that have none.
+    pub fn scattering(&self) -> Result<&dyn Scattering> {
+        match self.field.scattering() {
+            Some(s) => Ok(s),
+            None => bail_config!(
+                "the scatter engine supports the ssp07 field only, not {}: use the narrow-band or full-gather engine",
+                self.field_kind
+            ),
+        }
+    }
+
     /// The band is widened to r + cell when that exceeds the configured half-width: the fields'
     /// surfaces lie within about r of the particles (SSP07: f ≤ 1 in eq. 1 with r̄ = r), and
     /// every corner of a cell that the surface crosses lies within one cell of it on each axis.

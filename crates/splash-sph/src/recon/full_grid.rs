@@ -8,7 +8,6 @@ use crate::error::Result;
 use glam::{IVec3, Vec3};
 
 use super::band::{BRICK_VERTICES, Band, brick_of};
-use super::scatter::scattering;
 use crate::bytes::human;
 
 /// The vertices of the particles' bounding box widened by the field's support.
@@ -59,7 +58,7 @@ pub fn needed_bytes(params: &Params, grid: &Grid, particles: usize) -> Result<Op
         Engine::FullGather => Some(band + particles as u64 * PER_PARTICLE),
         // One set of the field's sums per vertex, then the values per brick.
         Engine::Scatter => {
-            let sums = scattering(params)?.sums_per_vertex() * size_of::<f32>();
+            let sums = params.scattering()?.sums_per_vertex() * size_of::<f32>();
             Some(band + grid.vertices() * sums as u64)
         }
     })

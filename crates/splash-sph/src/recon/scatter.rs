@@ -29,7 +29,7 @@ pub fn reconstruct(
     mut stages: Stages<'_>,
 ) -> Result<Reconstruction> {
     let field = params.field.as_ref();
-    let scattering = scattering(params)?;
+    let scattering = params.scattering()?;
     let band = stages.run(Stage::Band, || full_grid::band(particles, params))?;
     let values = stages.run(Stage::ScalarField, || {
         scatter_field(particles, &band, grid, field.support(), scattering)
@@ -44,17 +44,6 @@ pub fn reconstruct(
         || HandlerArray::new(particles, field.support() / 2.0),
     )?;
     Ok(finish(stages.stats, &band, &values, 0, triangulation))
-}
-
-/// The field's scattering form, or an error for the fields that have none.
-pub fn scattering(params: &Params) -> Result<&dyn Scattering> {
-    match params.field.scattering() {
-        Some(s) => Ok(s),
-        None => bail_config!(
-            "the scatter engine supports the ssp07 field only, not {}: use the narrow-band or full-gather engine",
-            params.field_kind
-        ),
-    }
 }
 
 /// Field values on every vertex of `band` (the full band of `grid`), by scattering each
