@@ -31,7 +31,9 @@ pub struct Config {
     pub threads: Option<usize>,
     /// Heap a full-grid engine may plan to use; half the machine's memory when absent.
     pub max_memory: Option<Bytes>,
+    /// Which particles are on the surface.
     pub surface_particles: SurfaceParticles,
+    /// How far the band of sampled vertices reaches around them.
     pub band: BandConfig,
     /// Where the mesh's vertex normals come from.
     pub normals: Normals,
@@ -61,6 +63,7 @@ pub enum Engine {
 }
 
 impl Engine {
+    /// Every engine, in the order of the paper's tables.
     pub const ALL: [Engine; 4] = [
         Engine::NarrowBand,
         Engine::FullGather,
@@ -68,6 +71,7 @@ impl Engine {
         Engine::Slices,
     ];
 
+    /// The engine's name in configs and on the command line (`narrow-band`, …).
     pub fn name(self) -> &'static str {
         match self {
             Engine::NarrowBand => "narrow-band",
@@ -77,6 +81,7 @@ impl Engine {
         }
     }
 
+    /// The engine of a [`name`](Self::name).
     pub fn parse(text: &str) -> Result<Engine> {
         match Engine::ALL.into_iter().find(|e| e.name() == text.trim()) {
             Some(e) => Ok(e),
@@ -192,6 +197,7 @@ pub struct SurfaceParticles {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct BandConfig {
+    /// Half-width of the box around each surface particle.
     pub half_width: Length,
 }
 

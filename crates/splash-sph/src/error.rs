@@ -11,14 +11,22 @@ pub enum Error {
     /// A file could not be opened, read or written; `message` names the file.
     #[error("{message}")]
     Io {
+        /// The file.
         path: PathBuf,
+        /// What failed, naming the file.
         message: String,
         #[source]
+        /// The operating system's error.
         source: std::io::Error,
     },
     /// A particle file whose content is not a valid frame of its format.
     #[error("cannot read particles from '{}': {message}", path.display())]
-    Format { path: PathBuf, message: String },
+    Format {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong with it, with the line or byte where that helps.
+        message: String,
+    },
     /// A configuration that cannot be used: unknown keys or names, values out of range.
     #[error("{0}")]
     Config(String),

@@ -11,11 +11,14 @@ use crate::error::{Error, Result};
 /// world units (a plain number).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Length {
+    /// Multiples of the particle spacing r.
     Spacings(f32),
+    /// World units.
     World(f32),
 }
 
 impl Length {
+    /// The length in world units for spacing `r`.
     pub fn resolve(self, r: f32) -> f32 {
         match self {
             Length::Spacings(k) => k * r,
@@ -35,6 +38,7 @@ impl Length {
         }
     }
 
+    /// `2r`, `r`, `r/2`, `0.5r` or a plain number (world units).
     pub fn parse(text: &str) -> Result<Length> {
         let t = text.trim();
         let bad = || {

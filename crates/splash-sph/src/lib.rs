@@ -22,6 +22,8 @@
 //! # Ok::<(), splash_sph::Error>(())
 //! ```
 
+#![warn(missing_docs)]
+
 #[macro_use]
 mod error;
 

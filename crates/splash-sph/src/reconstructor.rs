@@ -51,6 +51,7 @@ impl Reconstructor {
         })
     }
 
+    /// The configuration, as validated.
     pub fn config(&self) -> &Config {
         &self.config
     }

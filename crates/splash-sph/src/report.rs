@@ -9,20 +9,24 @@ use serde::Serialize;
 /// Times of the stages of Algorithm 1 (Akinci et al. 2012), plus I/O.
 #[derive(Debug, Clone, Copy, Default, Serialize)]
 pub struct Timings {
+    /// Reading the particle file (set by callers that read it).
     pub read: Duration,
     /// Sorting the handler array (Sec. 4.1, "Identification of the contributing particles").
     pub handler_array: Duration,
     /// t_sp: colour field and neighbour counts.
     pub surface_particles: Duration,
+    /// The band of surface vertices (Sec. 4.1), and its closure.
     pub band: Duration,
     /// t_sf.
     pub scalar_field: Duration,
     /// t_tri.
     pub triangulation: Duration,
+    /// Writing the mesh (set by callers that write it).
     pub write: Duration,
 }
 
 impl Timings {
+    /// The stages of the reconstruction together, without I/O.
     pub fn reconstruction(&self) -> Duration {
         self.handler_array
             + self.surface_particles
@@ -35,16 +39,22 @@ impl Timings {
 /// A stage of Algorithm 1, for its time and peak heap.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Stage {
+    /// Sorting the particles into the handler array.
     HandlerArray,
+    /// The surface particles (colour field and neighbour counts), t_sp.
     SurfaceParticles,
+    /// The band of surface vertices.
     Band,
+    /// The scalar field on the band, t_sf.
     ScalarField,
+    /// The triangles and their normals, t_tri.
     Triangulation,
 }
 
 /// What an [`Observer`] measured of one run of a stage.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct StageFigures {
+    /// Wall time.
     pub time: Duration,
     /// Peak heap bytes during the stage above the heap held when the reconstruction started.
     pub heap_peak: usize,
@@ -114,14 +124,20 @@ impl<'a> Stages<'a> {
 /// particles are not counted). Each includes what earlier stages still hold.
 #[derive(Debug, Clone, Copy, Default, Serialize)]
 pub struct StageHeap {
+    /// See [`Stage::HandlerArray`].
     pub handler_array: usize,
+    /// See [`Stage::SurfaceParticles`].
     pub surface_particles: usize,
+    /// See [`Stage::Band`].
     pub band: usize,
+    /// See [`Stage::ScalarField`].
     pub scalar_field: usize,
+    /// See [`Stage::Triangulation`].
     pub triangulation: usize,
 }
 
 impl StageHeap {
+    /// The largest of the stages'.
     pub fn max(&self) -> usize {
         [
             self.handler_array,
@@ -139,18 +155,25 @@ impl StageHeap {
 /// Counts and memory of one reconstructed frame.
 #[derive(Debug, Clone, Copy, Default)]
 pub struct FrameStats {
-    /// Particle spacing r and cell size of the frame, in world units.
+    /// Particle spacing r of the frame, in world units.
     pub spacing: f32,
+    /// Marching Cubes cell size, in world units.
     pub cell: f32,
+    /// Particles of the frame.
     pub particles: usize,
+    /// Surface particles (Sec. 4): 0 for the engines that do not look for them.
     pub surface_particles: usize,
     /// Bricks of 8³ vertices holding surface vertices.
     pub bricks: usize,
+    /// Grid vertices that got a field value.
     pub surface_vertices: usize,
     /// Vertices added to close the band where the surface left it (included above).
     pub closure_vertices: usize,
+    /// Cells triangulated (the surface crosses them).
     pub surface_cells: usize,
+    /// Triangles of the mesh.
     pub triangles: usize,
+    /// Vertices of the mesh.
     pub vertices: usize,
     /// Largest sum of the bytes held at once by the reconstruction's own arrays (handler array,
     /// band, field values, mesh), measured from their capacities.
@@ -158,6 +181,7 @@ pub struct FrameStats {
     /// Peak heap of the reconstruction, the largest of the observer's stage figures (0 without
     /// an observer that measures heap).
     pub heap_peak: usize,
+    /// Peak heap per stage, from the observer.
     pub stage_heap: StageHeap,
     /// Peak resident set size of the process after the frame, set by callers that measure it
     /// (the CLI: VmHWM), else 0.
@@ -166,6 +190,7 @@ pub struct FrameStats {
     pub grid: [u64; 3],
     /// Worker threads of the pool that reconstructed the frame.
     pub threads: usize,
+    /// Stage times, from the observer; read and write times from the caller.
     pub timings: Timings,
     /// The slices engine's blocks (zeros for the other engines).
     pub slices: SlicesFigures,
@@ -174,14 +199,17 @@ pub struct FrameStats {
 /// The Marching Slices engine's memory per block, as in Fig. 7 of Rosenberg & Birdwell 2008.
 #[derive(Debug, Clone, Copy, Default, Serialize)]
 pub struct SlicesFigures {
+    /// Blocks marched.
     pub blocks: usize,
     /// Most slices cached at once in any block.
     pub peak_slices: usize,
     /// Largest and mean peak "render memory" of a block: slice and corner caches, todo lists.
     pub render_bytes_max: usize,
+    /// See `render_bytes_max`.
     pub render_bytes_mean: usize,
     /// Largest and mean "cache memory" of a block: lookup cache and particle list.
     pub cache_bytes_max: usize,
+    /// See `cache_bytes_max`.
     pub cache_bytes_mean: usize,
     /// Peak of both, summed over the blocks being marched at once.
     pub in_flight_peak: usize,
@@ -210,6 +238,7 @@ impl fmt::Display for SlicesFigures {
 }
 
 impl FrameStats {
+    /// Vertices of the full grid: the product of [`grid`](Self::grid).
     pub fn grid_vertices(&self) -> u64 {
         self.grid.iter().product()
     }

@@ -78,6 +78,7 @@ impl Default for AnisotropicConfig {
 }
 
 impl AnisotropicConfig {
+    /// Checks the ranges the TOML types cannot express, naming the key.
     pub fn validate(&self) -> Result<()> {
         self.neighbourhood.check_positive("field.neighbourhood")?;
         self.volume_support.check_positive("field.volume_support")?;

@@ -36,6 +36,7 @@ impl Default for BlobbyConfig {
 }
 
 impl BlobbyConfig {
+    /// Checks the ranges the TOML types cannot express, naming the key.
     pub fn validate(&self) -> Result<()> {
         self.radius.check_positive("field.radius")?;
         if !(self.blobbiness > 0.0 && self.blobbiness.is_finite()) {

@@ -35,6 +35,7 @@ impl Default for DensityConfig {
 }
 
 impl DensityConfig {
+    /// Checks the ranges the TOML types cannot express, naming the key.
     pub fn validate(&self) -> Result<()> {
         self.support.check_positive("field.support")?;
         if !(self.iso > 0.0 && self.iso < 1.0) {

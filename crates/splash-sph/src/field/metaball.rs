@@ -37,6 +37,7 @@ impl Default for MetaballConfig {
 }
 
 impl MetaballConfig {
+    /// Checks the ranges the TOML types cannot express, naming the key.
     pub fn validate(&self) -> Result<()> {
         self.cutoff.check_positive("field.cutoff")?;
         if !(1..=8).contains(&self.exponent) {

@@ -89,11 +89,17 @@ pub(crate) struct Fitted {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "kind", rename_all = "lowercase")]
 pub enum FieldConfig {
+    /// Solenthaler et al. 2007: the default.
     Ssp07(ssp07::Ssp07Config),
+    /// Zhu & Bridson 2005.
     Zb05(zb05::Zb05Config),
+    /// The SPH colour field (splashsurf's).
     Density(density::DensityConfig),
+    /// Blinn 1982 Gaussian blobbies.
     Blobby(blobby::BlobbyConfig),
+    /// Polynomial metaballs (Triquet, Gourmel).
     Metaball(metaball::MetaballConfig),
+    /// Yu & Turk 2010 anisotropic kernels.
     Anisotropic(anisotropic::AnisotropicConfig),
 }
 
@@ -104,6 +110,7 @@ impl Default for FieldConfig {
 }
 
 impl FieldConfig {
+    /// The names of the kinds, as `kind` takes them.
     pub const KINDS: [&str; 6] = [
         "ssp07",
         "zb05",
@@ -129,6 +136,7 @@ impl FieldConfig {
         })
     }
 
+    /// The `kind` name of the field.
     pub fn kind(&self) -> &'static str {
         match self {
             FieldConfig::Ssp07(_) => "ssp07",
@@ -140,6 +148,7 @@ impl FieldConfig {
         }
     }
 
+    /// Checks the ranges the TOML types cannot express, naming the key.
     pub fn validate(&self) -> Result<()> {
         match self {
             FieldConfig::Ssp07(c) => c.validate(),

@@ -17,8 +17,10 @@ pub struct Ssp07Config {
     pub support: Length,
     /// r̄ of eq. 1 (the paper uses r).
     pub radius: Length,
-    /// Eigenvalue thresholds of eqs. 2–3 (SSP07 proposed t_high = 2; Akinci et al. use 3.5).
+    /// Eigenvalue thresholds of eqs. 2–3 (SSP07 proposed t_high = 2; Akinci et al. use 3.5):
+    /// below `t_low` the surface sits r̄ from the particles' mean…
     pub t_low: f32,
+    /// …and above `t_high` on it.
     pub t_high: f32,
 }
 
@@ -34,6 +36,7 @@ impl Default for Ssp07Config {
 }
 
 impl Ssp07Config {
+    /// Checks the ranges the TOML types cannot express, naming the key.
     pub fn validate(&self) -> Result<()> {
         self.support.check_positive("field.support")?;
         self.radius.check_positive("field.radius")?;

@@ -30,6 +30,7 @@ impl Default for Zb05Config {
 }
 
 impl Zb05Config {
+    /// Checks the ranges the TOML types cannot express, naming the key.
     pub fn validate(&self) -> Result<()> {
         self.support.check_positive("field.support")?;
         self.radius.check_positive("field.radius")

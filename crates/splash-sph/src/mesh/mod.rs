@@ -1,6 +1,6 @@
 //! Triangle meshes: the output of every engine.
 
-pub mod marching_cubes;
+pub(crate) mod marching_cubes;
 pub mod topology;
 
 use glam::Vec3;
@@ -9,12 +9,16 @@ use glam::Vec3;
 /// from outside the fluid.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct TriMesh {
+    /// Vertex positions.
     pub vertices: Vec<Vec3>,
+    /// One unit normal per vertex, pointing out of the fluid; empty when none were asked for.
     pub normals: Vec<Vec3>,
+    /// Indices into `vertices`, counter-clockwise seen from outside.
     pub triangles: Vec<[u32; 3]>,
 }
 
 impl TriMesh {
+    /// Whether the mesh has no triangles.
     pub fn is_empty(&self) -> bool {
         self.triangles.is_empty()
     }

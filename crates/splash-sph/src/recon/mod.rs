@@ -26,7 +26,9 @@ use full_grid::Grid;
 /// A mesh and the report of its reconstruction.
 #[derive(Debug, Clone, Default)]
 pub struct Reconstruction {
+    /// The closed, outward-oriented surface.
     pub mesh: TriMesh,
+    /// Counts, array bytes, and the stage figures of an [`Observer`](crate::Observer).
     pub stats: FrameStats,
 }
 
