@@ -139,3 +139,74 @@ fn normals_flag_chooses_what_the_obj_carries() {
     assert!(counts.iter().all(|c| c.1 == v && c.3 == f), "{counts:?}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn shown_configuration_records_the_whole_run() {
+    let dir = std::env::temp_dir().join(format!("splash-config-run-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let frame = concat!(env!("CARGO_MANIFEST_DIR"), "/fixtures/frame_0010.ply");
+    let run = [
+        "--spacing",
+        "0.014",
+        "--cell",
+        "r",
+        "--engine",
+        "slices",
+        "--threads",
+        "1",
+        "--max-memory",
+        "2G",
+        "--format",
+        "ply",
+        "--up-axis",
+        "z",
+        "--attributes",
+        "velocity",
+    ];
+    let shown = splash(&[&["config", "show"][..], &run].concat());
+    assert!(shown.status.success(), "{shown:?}");
+    let text = String::from_utf8(shown.stdout).unwrap();
+    for line in [
+        "engine = \"slices\"",
+        "threads = 1",
+        "max_memory = \"2G\"",
+        "format = \"ply\"",
+        "up_axis = \"z\"",
+        "attributes = [\"velocity\"]",
+    ] {
+        assert!(text.contains(line), "no '{line}' in\n{text}");
+    }
+    // The shown file alone runs the same job: same bytes as the flags.
+    let file = dir.join("run.toml");
+    std::fs::write(&file, &text).unwrap();
+    let (a, b) = (dir.join("a.ply"), dir.join("b.ply"));
+    let from_flags = splash(&[&["recon", frame, "-o", a.to_str().unwrap()][..], &run].concat());
+    let config = file.to_str().unwrap();
+    let from_file = splash(&[
+        "recon",
+        frame,
+        "--config",
+        config,
+        "-o",
+        b.to_str().unwrap(),
+    ]);
+    assert!(from_flags.status.success(), "{from_flags:?}");
+    assert!(from_file.status.success(), "{from_file:?}");
+    let bytes = std::fs::read(&b).unwrap();
+    assert_eq!(std::fs::read(&a).unwrap(), bytes);
+    let header = String::from_utf8_lossy(&bytes[..400.min(bytes.len())]).into_owned();
+    assert!(header.contains("property float vx"), "{header}");
+    // A bad value in the file is refused, naming the file and the key.
+    std::fs::write(
+        &file,
+        text.replace("engine = \"slices\"", "engine = \"fast\""),
+    )
+    .unwrap();
+    let bad = splash(&["config", "show", "--config", config]);
+    let err = String::from_utf8_lossy(&bad.stderr);
+    assert!(
+        !bad.status.success() && err.contains("run.toml") && err.contains("engine"),
+        "{err}"
+    );
+    std::fs::remove_dir_all(&dir).unwrap();
+}
