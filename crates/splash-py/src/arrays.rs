@@ -2,9 +2,10 @@
 //! their memory already is a `[Vec3]` (C-contiguous, aligned float32), copied once otherwise.
 //! Results are moved into numpy: the arrays own the library's `Vec`s.
 
-use ndarray::{Array1, Array2};
+use ndarray::{Array1, Array2, ArrayView2};
 use numpy::{
-    PyArray1, PyArray2, PyArrayMethods, PyReadonlyArray2, PyUntypedArray, PyUntypedArrayMethods,
+    PyArray1, PyArray2, PyArrayDescrMethods, PyArrayMethods, PyReadonlyArray2, PyUntypedArray,
+    PyUntypedArrayMethods, dtype,
 };
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
@@ -33,10 +34,10 @@ impl Points<'_> {
     }
 }
 
-/// The (N, 3) float32 or float64 array `obj` (or anything `numpy.asarray` turns into one) as
+/// The (N, 3) floating-point array `obj` (or anything `numpy.asarray` makes one of) as
 /// points; `what` names it in errors.
 pub fn points<'py>(obj: &Bound<'py, PyAny>, what: &str) -> PyResult<Points<'py>> {
-    let array = ndarray_of(obj)?;
+    let array = floats(ndarray_of(obj)?, what)?;
     check_shape(&array, what, Some(3))?;
     if let Ok(a) = array.cast::<PyArray2<f32>>() {
         let a = a.try_readonly()?;
@@ -46,31 +47,21 @@ pub fn points<'py>(obj: &Bound<'py, PyAny>, what: &str) -> PyResult<Points<'py>>
         if in_place {
             return Ok(Points::Borrowed(a));
         }
-        return Ok(Points::Owned(rows(&a.as_array())));
+        return Ok(Points::Owned(rows(a.as_array())));
     }
-    if let Ok(a) = array.cast::<PyArray2<f64>>() {
-        let a = a.try_readonly()?;
-        return Ok(Points::Owned(rows(&a.as_array().mapv(|v| v as f32).view())));
-    }
-    Err(wrong_dtype(&array, what, FLOATS))
+    let a = array.cast::<PyArray2<f64>>()?.try_readonly()?;
+    Ok(Points::Owned(rows(a.as_array().mapv(|v| v as f32).view())))
 }
 
-/// The (N,) float32 or float64 array `obj` as a `Vec<f32>`.
+/// The (N,) floating-point array `obj` as a `Vec<f32>`.
 pub fn scalars(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<f32>> {
-    let array = ndarray_of(obj)?;
+    let array = floats(ndarray_of(obj)?, what)?;
     check_shape(&array, what, None)?;
     if let Ok(a) = array.cast::<PyArray1<f32>>() {
         return Ok(a.try_readonly()?.as_array().to_vec());
     }
-    if let Ok(a) = array.cast::<PyArray1<f64>>() {
-        return Ok(a
-            .try_readonly()?
-            .as_array()
-            .iter()
-            .map(|&v| v as f32)
-            .collect());
-    }
-    Err(wrong_dtype(&array, what, FLOATS))
+    let a = array.cast::<PyArray1<f64>>()?.try_readonly()?;
+    Ok(a.as_array().iter().map(|&v| v as f32).collect())
 }
 
 /// The (F, 3) uint32 array `obj` as triangles (copied).
@@ -93,11 +84,28 @@ pub fn is_scalar(obj: &Bound<'_, PyAny>) -> PyResult<bool> {
     Ok(ndarray_of(obj)?.ndim() == 1)
 }
 
-fn rows(a: &ndarray::ArrayView2<'_, f32>) -> Vec<Vec3> {
+fn rows(a: ArrayView2<'_, f32>) -> Vec<Vec3> {
     a.rows()
         .into_iter()
         .map(|r| Vec3::new(r[0], r[1], r[2]))
         .collect()
+}
+
+/// `array` when it holds native float32 or float64; other floating-point types (half or
+/// extended precision, the other byte order) converted to float32 by numpy.
+fn floats<'py>(
+    array: Bound<'py, PyUntypedArray>,
+    what: &str,
+) -> PyResult<Bound<'py, PyUntypedArray>> {
+    let py = array.py();
+    let d = array.dtype();
+    if d.is_equiv_to(&dtype::<f32>(py)) || d.is_equiv_to(&dtype::<f64>(py)) {
+        return Ok(array);
+    }
+    if d.kind() != b'f' {
+        return Err(wrong_dtype(&array, what, "floating-point"));
+    }
+    Ok(array.call_method1("astype", ("float32",))?.cast_into()?)
 }
 
 fn ndarray_of<'py>(obj: &Bound<'py, PyAny>) -> PyResult<Bound<'py, PyUntypedArray>> {
@@ -126,8 +134,6 @@ fn check_shape(a: &Bound<'_, PyUntypedArray>, what: &str, columns: Option<usize>
         a.shape()
     )))
 }
-
-const FLOATS: &str = "float32 or float64";
 
 fn wrong_dtype(a: &Bound<'_, PyUntypedArray>, what: &str, expected: &str) -> PyErr {
     PyValueError::new_err(format!(

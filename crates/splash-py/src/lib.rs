@@ -16,7 +16,7 @@ use crate::settings::Overrides;
 
 /// The particle spacing r estimated from the particles' number density.
 ///
-/// ``positions``: an (N, 3) float32 or float64 array. Deterministic: the same particles give
+/// ``positions``: an (N, 3) floating-point array. Deterministic: the same particles give
 /// the same estimate. Raises ValueError when fewer than 2 particles are given or all of them
 /// coincide. The GIL is released while estimating.
 #[pyfunction]

@@ -30,9 +30,9 @@ struct Output {
 
 /// The closed surface mesh of SPH particles.
 ///
-/// ``positions``: an (N, 3) float32 or float64 array, C- or F-ordered or a strided view (a
-/// C-contiguous float32 array is read in place, others are copied once; anything that
-/// ``numpy.asarray`` makes such an array of is accepted, integer arrays are refused).
+/// ``positions``: an (N, 3) floating-point array, C- or F-ordered or a strided view (a
+/// C-contiguous float32 array is read in place, others are copied once as float32; anything
+/// that ``numpy.asarray`` makes such an array of is accepted, integer arrays are refused).
 /// Coordinates must be finite. An empty (0, 3) array gives an empty mesh.
 ///
 /// ``spacing``: the particle spacing r (the simulator's equilibrium distance), in world units.
