@@ -6,6 +6,7 @@ mod arrays;
 mod errors;
 mod mesh;
 mod particles;
+mod pools;
 mod recon;
 mod settings;
 

@@ -10,6 +10,7 @@ use splash_sph::{Clock, Config, FrameStats, Reconstruction, Reconstructor, Vec3}
 use crate::arrays::{self, Points};
 use crate::errors::to_py;
 use crate::mesh::Mesh;
+use crate::pools;
 use crate::settings::{self, Overrides};
 
 /// A per-particle attribute to carry onto the vertices. Scalars ride in the x of a vector:
@@ -46,7 +47,7 @@ struct Output {
 /// ``"full-gather"``, ``"scatter"`` or ``"slices"``; all give the same mesh. ``normals``:
 /// ``"field"`` (default, the field's gradient), ``"grid"`` (central differences) or
 /// ``"none"``. ``threads``: worker threads, all cores by default; the mesh does not depend on
-/// it. ``max_memory``: the heap a full-grid engine may plan to use, in bytes or as ``"8G"``.
+/// it (each calling thread keeps its workers for its next calls). ``max_memory``: the heap a full-grid engine may plan to use, in bytes or as ``"8G"``.
 ///
 /// ``config``: a TOML file's path (as ``splash recon --config`` reads) or a dict shaped like
 /// it (see ``default_config``). Its ``output.format`` and ``output.up_axis`` become the
@@ -132,21 +133,29 @@ pub fn reconstruct<'py>(
     ))
 }
 
-fn run(config: Config, positions: &[Vec3], attributes: &[&[Vec3]]) -> splash_sph::Result<Output> {
+fn run(
+    mut config: Config,
+    positions: &[Vec3],
+    attributes: &[&[Vec3]],
+) -> splash_sph::Result<Output> {
     let start = Instant::now();
+    // The library would start a pool of its own for every call.
+    let threads = config.threads.take();
     let reconstructor = Reconstructor::new(config)?;
-    let rec = reconstructor.reconstruct_observed(positions, &mut Clock::default())?;
-    let interpolation = Instant::now();
-    let attributes = attributes
-        .iter()
-        .map(|values| reconstructor.interpolate(&rec.mesh, positions, values))
-        .collect::<splash_sph::Result<_>>()?;
-    Ok(Output {
-        rec,
-        attributes,
-        interpolation: interpolation.elapsed(),
-        total: start.elapsed(),
-    })
+    pools::install(threads, || {
+        let rec = reconstructor.reconstruct_observed(positions, &mut Clock::default())?;
+        let interpolation = Instant::now();
+        let attributes = attributes
+            .iter()
+            .map(|values| reconstructor.interpolate(&rec.mesh, positions, values))
+            .collect::<splash_sph::Result<_>>()?;
+        Ok(Output {
+            rec,
+            attributes,
+            interpolation: interpolation.elapsed(),
+            total: start.elapsed(),
+        })
+    })?
 }
 
 /// The report's counts, lengths and times (seconds).

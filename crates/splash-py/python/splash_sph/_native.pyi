@@ -120,7 +120,7 @@ def reconstruct(
     ``"full-gather"``, ``"scatter"`` or ``"slices"``; all give the same mesh. ``normals``:
     ``"field"`` (default, the field's gradient), ``"grid"`` (central differences) or
     ``"none"``. ``threads``: worker threads, all cores by default; the mesh does not depend on
-    it. ``max_memory``: the heap a full-grid engine may plan to use, in bytes or as ``"8G"``.
+    it (each calling thread keeps its workers for its next calls). ``max_memory``: the heap a full-grid engine may plan to use, in bytes or as ``"8G"``.
 
     ``config``: a TOML file's path (as ``splash recon --config`` reads) or a dict shaped like
     it (see ``default_config``). Its ``output.format`` and ``output.up_axis`` become the
