@@ -113,7 +113,9 @@ def test_config_of_the_wrong_type():
 
 def test_memory_limit():
     with pytest.raises(ValueError, match="memory"):
-        splash_sph.reconstruct(ball(SPACING), spacing=SPACING, engine="full-gather", max_memory=1000)
+        splash_sph.reconstruct(
+            ball(SPACING), spacing=SPACING, engine="full-gather", max_memory=1000
+        )
 
 
 def test_write_errors(tmp_path):

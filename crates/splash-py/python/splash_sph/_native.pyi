@@ -103,24 +103,26 @@ def reconstruct(
 ) -> Mesh:
     """The closed surface mesh of SPH particles.
 
-    ``positions``: an (N, 3) floating-point array, C- or F-ordered or a strided view (a
-    C-contiguous float32 array is read in place, others are copied once as float32; anything
-    that ``numpy.asarray`` makes such an array of is accepted, integer arrays are refused).
-    Coordinates must be finite. An empty (0, 3) array gives an empty mesh.
+    ``positions``: an (N, 3) floating-point array, C- or F-ordered or a strided view. A
+    C-contiguous float32 array is read in place (leave it unchanged until the call returns),
+    others are copied once as float32; anything that ``numpy.asarray`` makes such an array
+    of is accepted, integer arrays are refused. Coordinates must be finite. An empty (0, 3)
+    array gives an empty mesh.
 
     ``spacing``: the particle spacing r (the simulator's equilibrium distance), in world
     units. Required unless the config gives it: it is never guessed (see
     ``estimate_spacing``).
 
-    Keyword arguments override the config (None leaves its value):
-    ``cell``: the Marching Cubes cell, ``"r/2"`` (default), ``"r"``, ``"2r"``, ``"0.5r"`` or a
-    number in world units. ``field``: ``"ssp07"`` (default), ``"zb05"``, ``"density"``,
-    ``"blobby"``, ``"metaball"`` or ``"anisotropic"`` with its default parameters (a config's
-    field of the same kind keeps its own). ``engine``: ``"narrow-band"`` (default),
-    ``"full-gather"``, ``"scatter"`` or ``"slices"``; all give the same mesh. ``normals``:
-    ``"field"`` (default, the field's gradient), ``"grid"`` (central differences) or
-    ``"none"``. ``threads``: worker threads, all cores by default; the mesh does not depend on
-    it (each calling thread keeps its workers for its next calls). ``max_memory``: the heap a full-grid engine may plan to use, in bytes or as ``"8G"``.
+    Keyword arguments override the config (None leaves its value): ``cell``: the Marching
+    Cubes cell, ``"r/2"`` (default), ``"r"``, ``"2r"``, ``"0.5r"`` or a number in world
+    units. ``field``: ``"ssp07"`` (default), ``"zb05"``, ``"density"``, ``"blobby"``,
+    ``"metaball"`` or ``"anisotropic"`` with its default parameters (a config's field of the
+    same kind keeps its own). ``engine``: ``"narrow-band"`` (default), ``"full-gather"``,
+    ``"scatter"`` or ``"slices"``; all give the same mesh. ``normals``: ``"field"``
+    (default, the field's gradient), ``"grid"`` (central differences) or ``"none"``.
+    ``threads``: worker threads, all cores by default; the mesh does not depend on it (each
+    calling thread keeps its workers for its next calls). ``max_memory``: the heap a
+    full-grid engine may plan to use, in bytes or as ``"8G"``.
 
     ``config``: a TOML file's path (as ``splash recon --config`` reads) or a dict shaped like
     it (see ``default_config``). Its ``output.format`` and ``output.up_axis`` become the
