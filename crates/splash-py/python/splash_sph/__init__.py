@@ -1,0 +1,35 @@
+"""Closed triangle meshes from SPH particle frames.
+
+The narrow-band surface reconstruction of Akinci et al. 2012 with six scalar fields (SSP07 by
+default), as the ``splash`` command line runs it, on numpy arrays::
+
+    import splash_sph
+
+    p = splash_sph.read_particles("frame_0040.ply")
+    mesh = splash_sph.reconstruct(p.positions, spacing=0.014, cell="r/2")
+    mesh.write("frame_0040.obj")
+
+Lengths are multiples of the particle spacing r (``"2r"``, ``"r"``, ``"r/2"``) or plain
+numbers in world units. Library errors raise OSError (files) or ValueError (data, settings)
+with the message the command line prints.
+"""
+
+from ._native import (
+    Mesh,
+    Particles,
+    config_toml,
+    default_config,
+    estimate_spacing,
+    read_particles,
+    reconstruct,
+)
+
+__all__ = [
+    "Mesh",
+    "Particles",
+    "config_toml",
+    "default_config",
+    "estimate_spacing",
+    "read_particles",
+    "reconstruct",
+]

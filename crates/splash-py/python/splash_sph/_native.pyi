@@ -1,0 +1,174 @@
+"""Type stubs of the native extension; the ``splash_sph`` package re-exports all of it."""
+
+import os
+from typing import Any, Dict, Mapping, Optional, Union
+
+import numpy as np
+import numpy.typing as npt
+
+_Path = Union[str, "os.PathLike[str]"]
+_Array = npt.ArrayLike
+
+class Particles:
+    """One particle frame: positions and per-particle attributes.
+
+    ``len(p)`` is the number of particles, ``p["velocity"]`` an attribute and
+    ``"velocity" in p`` tells whether the file has it.
+    """
+
+    @property
+    def positions(self) -> npt.NDArray[np.float32]:
+        """Particle positions, shape (N, 3), float32."""
+    @property
+    def attributes(self) -> Dict[str, npt.NDArray[np.float32]]:
+        """Per-particle attributes by name (``velocity``, ``density``, ...): arrays of shape
+        (N, 3) for vectors and (N,) for scalars, float32."""
+    def __len__(self) -> int:
+        """The number of particles."""
+    def __getitem__(self, name: str) -> npt.NDArray[np.float32]:
+        """The attribute ``name``; KeyError when the frame has none of that name."""
+    def __contains__(self, name: str) -> bool:
+        """Whether the frame has the attribute ``name``."""
+
+class Mesh:
+    """A closed triangle mesh whose triangles wind counter-clockwise seen from outside the
+    fluid.
+
+    The arrays are the mesh: edit them in place (to move or scale it, say) and ``write``
+    writes the edited mesh.
+    """
+
+    @property
+    def vertices(self) -> npt.NDArray[np.float32]:
+        """Vertex positions, shape (V, 3), float32."""
+    @property
+    def faces(self) -> npt.NDArray[np.uint32]:
+        """Triangles as vertex indices, shape (F, 3), uint32."""
+    @property
+    def normals(self) -> npt.NDArray[np.float32]:
+        """Unit vertex normals pointing out of the fluid, shape (V, 3), float32; shape (0, 3)
+        when reconstructed with ``normals="none"``."""
+    @property
+    def attributes(self) -> Dict[str, npt.NDArray[np.float32]]:
+        """Per-vertex values interpolated from the particles' ``attributes``: name -> array of
+        shape (V, 3) or (V,), float32."""
+    @property
+    def report(self) -> Dict[str, Any]:
+        """Counts, lengths and stage times of the reconstruction (see ``reconstruct``)."""
+    def write(
+        self,
+        path: _Path,
+        format: Optional[str] = None,
+        up_axis: Optional[str] = None,
+    ) -> None:
+        """Writes the mesh to ``path`` atomically (a reader sees the old file or the new one),
+        creating missing directories.
+
+        ``format``: ``"obj"``, ``"ply"`` (binary), ``"ply-ascii"`` or ``"pov"``; by default the
+        configuration's ``output.format``, else the one the extension implies (``.obj``,
+        ``.ply``, ``.inc``), else OBJ. ``up_axis``: ``"z"`` or ``"y"`` turns the written
+        coordinates so that that axis is up (the arrays are left as they are); by default the
+        configuration's ``output.up_axis``. PLY files get the ``velocity`` attribute, when the
+        mesh has one, as the vertex properties ``vx vy vz``. The GIL is released while
+        writing.
+
+        Raises OSError when the file cannot be written, ValueError for an unknown format or
+        one that contradicts the extension.
+        """
+
+def read_particles(path: _Path, format: Optional[str] = None) -> Particles:
+    """Reads one particle frame: PLY (ascii or binary), CSV/TXT tables, or raw little-endian
+    float32 x y z triples (``.bin``/``.raw``).
+
+    ``format`` (``"ply"``, ``"csv"`` or ``"raw"``) overrides the guess from the extension.
+    The GIL is released while reading.
+
+    Raises FileNotFoundError for a missing file, OSError when it cannot be read, and
+    ValueError when its content is not a valid frame (the message names the file and says
+    what is wrong where).
+    """
+
+def reconstruct(
+    positions: _Array,
+    spacing: Optional[float] = None,
+    *,
+    cell: Union[str, float, None] = None,
+    field: Optional[str] = None,
+    engine: Optional[str] = None,
+    normals: Optional[str] = None,
+    threads: Optional[int] = None,
+    max_memory: Union[str, int, None] = None,
+    config: Union[_Path, Mapping[str, Any], None] = None,
+    attributes: Optional[Mapping[str, _Array]] = None,
+) -> Mesh:
+    """The closed surface mesh of SPH particles.
+
+    ``positions``: an (N, 3) floating-point array, C- or F-ordered or a strided view. A
+    C-contiguous float32 array is read in place (leave it unchanged until the call returns),
+    others are copied once as float32; anything that ``numpy.asarray`` makes such an array
+    of is accepted, integer arrays are refused. Coordinates must be finite. An empty (0, 3)
+    array gives an empty mesh.
+
+    ``spacing``: the particle spacing r (the simulator's equilibrium distance), in world
+    units. Required unless the config gives it: it is never guessed (see
+    ``estimate_spacing``).
+
+    Keyword arguments override the config (None leaves its value): ``cell``: the Marching
+    Cubes cell, ``"r/2"`` (default), ``"r"``, ``"2r"``, ``"0.5r"`` or a number in world
+    units. ``field``: ``"ssp07"`` (default), ``"zb05"``, ``"density"``, ``"blobby"``,
+    ``"metaball"`` or ``"anisotropic"`` with its default parameters (a config's field of the
+    same kind keeps its own). ``engine``: ``"narrow-band"`` (default), ``"full-gather"``,
+    ``"scatter"`` or ``"slices"``; all give the same mesh. ``normals``: ``"field"``
+    (default, the field's gradient), ``"grid"`` (central differences) or ``"none"``.
+    ``threads``: worker threads, all cores by default; the mesh does not depend on it (each
+    calling thread keeps its workers for its next calls). ``max_memory``: the heap a
+    full-grid engine may plan to use, in bytes or as ``"8G"``.
+
+    ``config``: a TOML file's path (as ``splash recon --config`` reads) or a dict shaped like
+    it (see ``default_config``). Its ``output.format`` and ``output.up_axis`` become the
+    defaults of ``Mesh.write``.
+
+    ``attributes``: per-particle values to carry onto the vertices, name -> (N, 3) or (N,)
+    array, interpolated as ``splash recon --attributes velocity`` does (the mean of the
+    particles within the field's support, weighted by the SSP07 kernel); they come back in
+    ``Mesh.attributes``.
+
+    ``Mesh.report`` holds the counts (``particles``, ``surface_particles``, ``vertices``,
+    ``triangles``, ...), ``spacing`` and ``cell`` in world units, ``engine``, ``field``,
+    ``threads``, and ``times``: seconds per stage (``handler_array``, ``surface_particles``,
+    ``band``, ``scalar_field``, ``triangulation``, their sum ``reconstruction``,
+    ``attributes``, and ``total`` for all the native work).
+
+    The GIL is released while the library works: Python threads can reconstruct frames in
+    parallel. Raises ValueError for a bad array, bad settings (naming the key or value),
+    non-finite coordinates (naming the particle) or a grid over the memory limit; OSError
+    when the config file cannot be read.
+    """
+
+def estimate_spacing(positions: _Array) -> float:
+    """The particle spacing r estimated from the particles' number density.
+
+    ``positions``: an (N, 3) floating-point array. Deterministic: the same particles give
+    the same estimate. Raises ValueError when fewer than 2 particles are given or all of
+    them coincide. The GIL is released while estimating.
+    """
+
+def default_config() -> Dict[str, Any]:
+    """The default configuration as a dict shaped like the TOML file (keys without a default,
+    such as ``spacing``, ``threads`` and ``max_memory``, are absent). Edit it and pass it as
+    ``reconstruct(..., config=d)``."""
+
+def config_toml(
+    config: Union[_Path, Mapping[str, Any], None] = None,
+    *,
+    spacing: Optional[float] = None,
+    cell: Union[str, float, None] = None,
+    field: Optional[str] = None,
+    engine: Optional[str] = None,
+    normals: Optional[str] = None,
+    threads: Optional[int] = None,
+    max_memory: Union[str, int, None] = None,
+) -> str:
+    """The configuration that ``reconstruct`` would use with the same ``config`` and keyword
+    arguments, as TOML text (what ``splash config show`` prints; save it to reuse it with
+    ``splash recon --config``). Raises ValueError as ``reconstruct`` does for bad settings."""

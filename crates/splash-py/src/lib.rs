@@ -1,0 +1,86 @@
+//! The Python extension `splash_sph._native`: SPH particles (numpy arrays) to triangle meshes
+//! with the splash-sph library. The Python package `splash_sph` re-exports it; its documented
+//! API is in `python/splash_sph/_native.pyi`.
+
+mod arrays;
+mod errors;
+mod mesh;
+mod particles;
+mod pools;
+mod recon;
+mod settings;
+
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+
+use crate::settings::Overrides;
+
+/// The particle spacing r estimated from the particles' number density.
+///
+/// ``positions``: an (N, 3) floating-point array. Deterministic: the same particles give
+/// the same estimate. Raises ValueError when fewer than 2 particles are given or all of them
+/// coincide. The GIL is released while estimating.
+#[pyfunction]
+fn estimate_spacing(py: Python<'_>, positions: &Bound<'_, PyAny>) -> PyResult<f32> {
+    let points = arrays::points(positions, "positions")?;
+    let points = points.as_slice();
+    py.detach(|| splash_sph::estimate_spacing(points))
+        .ok_or_else(|| {
+            PyValueError::new_err(format!(
+                "cannot estimate the particle spacing from {} particles: it needs at least 2 \
+                 distinct positions",
+                points.len()
+            ))
+        })
+}
+
+/// The default configuration as a dict shaped like the TOML file (keys without a default,
+/// such as ``spacing``, ``threads`` and ``max_memory``, are absent). Edit it and pass it as
+/// ``reconstruct(..., config=d)``.
+#[pyfunction]
+fn default_config(py: Python<'_>) -> PyResult<Bound<'_, PyAny>> {
+    settings::to_dict(py, &splash_sph::Config::default())
+}
+
+/// The configuration that ``reconstruct`` would use with the same ``config`` and keyword
+/// arguments, as TOML text (what ``splash config show`` prints; save it to reuse it with
+/// ``splash recon --config``). Raises ValueError as ``reconstruct`` does for bad settings.
+#[allow(clippy::too_many_arguments)]
+#[pyfunction]
+#[pyo3(signature = (config=None, *, spacing=None, cell=None, field=None, engine=None,
+    normals=None, threads=None, max_memory=None))]
+fn config_toml<'py>(
+    config: Option<&Bound<'py, PyAny>>,
+    spacing: Option<f32>,
+    cell: Option<Bound<'py, PyAny>>,
+    field: Option<String>,
+    engine: Option<String>,
+    normals: Option<String>,
+    threads: Option<i64>,
+    max_memory: Option<Bound<'py, PyAny>>,
+) -> PyResult<String> {
+    let overrides = Overrides {
+        spacing,
+        cell,
+        field,
+        engine,
+        normals,
+        threads,
+        max_memory,
+    };
+    Ok(settings::resolve(config, overrides)?.to_toml())
+}
+
+/// Closed triangle meshes from SPH particles (native part; use the ``splash_sph`` package).
+#[pymodule]
+#[pyo3(name = "_native")]
+fn native(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(recon::reconstruct, m)?)?;
+    m.add_function(wrap_pyfunction!(particles::read_particles, m)?)?;
+    m.add_function(wrap_pyfunction!(estimate_spacing, m)?)?;
+    m.add_function(wrap_pyfunction!(default_config, m)?)?;
+    m.add_function(wrap_pyfunction!(config_toml, m)?)?;
+    m.add_class::<mesh::Mesh>()?;
+    m.add_class::<particles::Particles>()?;
+    Ok(())
+}

@@ -1,0 +1,156 @@
+//! The `Mesh` that `reconstruct` returns: numpy arrays, the report, and `write`.
+
+use std::path::PathBuf;
+
+use numpy::{PyArray2, PyUntypedArrayMethods};
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use splash_sph::io::{self, VertexAttributes};
+use splash_sph::{MeshFormat, TriMesh, UpAxis};
+
+use crate::arrays;
+use crate::errors::to_py;
+
+/// A closed triangle mesh whose triangles wind counter-clockwise seen from outside the fluid.
+///
+/// The arrays are the mesh: edit them in place (to move or scale it, say) and ``write``
+/// writes the edited mesh.
+#[pyclass(frozen, module = "splash_sph")]
+pub struct Mesh {
+    /// Vertex positions, shape (V, 3), float32.
+    #[pyo3(get)]
+    vertices: Py<PyArray2<f32>>,
+    /// Triangles as vertex indices, shape (F, 3), uint32.
+    #[pyo3(get)]
+    faces: Py<PyArray2<u32>>,
+    /// Unit vertex normals pointing out of the fluid, shape (V, 3), float32; shape (0, 3)
+    /// when reconstructed with ``normals="none"``.
+    #[pyo3(get)]
+    normals: Py<PyArray2<f32>>,
+    /// Per-vertex values interpolated from the particles' ``attributes``: name -> array of
+    /// shape (V, 3) or (V,), float32.
+    #[pyo3(get)]
+    attributes: Py<PyDict>,
+    /// Counts, lengths and stage times of the reconstruction (see ``reconstruct``).
+    #[pyo3(get)]
+    report: Py<PyDict>,
+    /// The configuration's `[output]` choices, the defaults of `write`.
+    format: Option<MeshFormat>,
+    up_axis: Option<UpAxis>,
+}
+
+impl Mesh {
+    pub fn new(
+        py: Python<'_>,
+        mesh: TriMesh,
+        attributes: Bound<'_, PyDict>,
+        report: Bound<'_, PyDict>,
+        format: Option<MeshFormat>,
+        up_axis: Option<UpAxis>,
+    ) -> Mesh {
+        Mesh {
+            vertices: arrays::points_array(py, mesh.vertices).unbind(),
+            faces: arrays::triangles_array(py, mesh.triangles).unbind(),
+            normals: arrays::points_array(py, mesh.normals).unbind(),
+            attributes: attributes.unbind(),
+            report: report.unbind(),
+            format,
+            up_axis,
+        }
+    }
+
+    /// The format `path` is written in: `format`, else the configuration's, else the one its
+    /// extension implies, else OBJ; refused when it contradicts the extension (as the CLI does).
+    fn format_for(&self, path: &std::path::Path, format: Option<&str>) -> PyResult<MeshFormat> {
+        let format = format.map(MeshFormat::parse).transpose().map_err(to_py)?;
+        let hint = MeshFormat::from_path(path);
+        match (format.or(self.format), hint) {
+            (Some(f), Some(h)) if f.extension() != h.extension() => {
+                Err(PyValueError::new_err(format!(
+                    "format {} does not match the file name's .{} extension",
+                    f.extension(),
+                    h.extension()
+                )))
+            }
+            (Some(f), _) => Ok(f),
+            (None, hint) => Ok(hint.unwrap_or(MeshFormat::Obj)),
+        }
+    }
+}
+
+#[pymethods]
+impl Mesh {
+    /// Writes the mesh to ``path`` atomically (a reader sees the old file or the new one),
+    /// creating missing directories.
+    ///
+    /// ``format``: ``"obj"``, ``"ply"`` (binary), ``"ply-ascii"`` or ``"pov"``; by default the
+    /// configuration's ``output.format``, else the one the extension implies (``.obj``,
+    /// ``.ply``, ``.inc``), else OBJ. ``up_axis``: ``"z"`` or ``"y"`` turns the written
+    /// coordinates so that that axis is up (the arrays are left as they are); by default the
+    /// configuration's ``output.up_axis``. PLY files get the ``velocity`` attribute, when
+    /// the mesh has one, as the vertex properties ``vx vy vz``. The GIL is released while
+    /// writing.
+    ///
+    /// Raises OSError when the file cannot be written, ValueError for an unknown format or
+    /// one that contradicts the extension.
+    #[pyo3(signature = (path, format=None, up_axis=None))]
+    fn write(
+        &self,
+        py: Python<'_>,
+        path: PathBuf,
+        format: Option<&str>,
+        up_axis: Option<&str>,
+    ) -> PyResult<()> {
+        let format = self.format_for(&path, format)?;
+        let up_axis = match up_axis {
+            Some(a) => Some(UpAxis::parse(a).map_err(to_py)?),
+            None => self.up_axis,
+        };
+        let vertices = self.vertices.bind(py);
+        let normals = self.normals.bind(py);
+        let mut mesh = TriMesh {
+            vertices: arrays::points(vertices.as_any(), "mesh.vertices")?.into_vec(),
+            normals: arrays::points(normals.as_any(), "mesh.normals")?.into_vec(),
+            triangles: arrays::triangles(self.faces.bind(py).as_any(), "mesh.faces")?,
+        };
+        let velocity = self.attributes.bind(py).get_item("velocity")?;
+        let mut velocities = match velocity {
+            Some(v) if format.holds_velocities() => {
+                Some(arrays::points(&v, "mesh.attributes['velocity']")?.into_vec())
+            }
+            _ => None,
+        };
+        if let Some(v) = &velocities
+            && v.len() != mesh.vertices.len()
+        {
+            return Err(PyValueError::new_err(format!(
+                "mesh.attributes['velocity'] has {} rows for {} vertices",
+                v.len(),
+                mesh.vertices.len()
+            )));
+        }
+        py.detach(|| {
+            if let Some(axis) = up_axis {
+                axis.rotate(&mut mesh.vertices);
+                axis.rotate(&mut mesh.normals);
+                if let Some(v) = &mut velocities {
+                    axis.rotate(v);
+                }
+            }
+            let attributes = VertexAttributes {
+                velocities: velocities.as_deref(),
+            };
+            io::write_mesh_file_with(&path, &mesh, &attributes, format)
+        })
+        .map_err(to_py)
+    }
+
+    fn __repr__(&self, py: Python<'_>) -> String {
+        format!(
+            "Mesh({} vertices, {} faces)",
+            self.vertices.bind(py).shape()[0],
+            self.faces.bind(py).shape()[0]
+        )
+    }
+}

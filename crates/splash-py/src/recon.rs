@@ -1,0 +1,248 @@
+//! `reconstruct`: numpy positions to a `Mesh`, with the GIL released while the library works.
+
+use std::time::{Duration, Instant};
+
+use pyo3::exceptions::{PyTypeError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use splash_sph::{Clock, Config, FrameStats, Reconstruction, Reconstructor, Vec3};
+
+use crate::arrays::{self, Points};
+use crate::errors::to_py;
+use crate::mesh::Mesh;
+use crate::pools;
+use crate::settings::{self, Overrides};
+
+/// A per-particle attribute to carry onto the vertices. Scalars ride in the x of a vector:
+/// the interpolation is a weighted mean per component.
+struct Attribute<'py> {
+    name: String,
+    values: Points<'py>,
+    scalar: bool,
+}
+
+/// What the library computed, with the times the report adds to its stage times.
+struct Output {
+    rec: Reconstruction,
+    attributes: Vec<Vec<Vec3>>,
+    interpolation: Duration,
+    total: Duration,
+}
+
+/// The closed surface mesh of SPH particles.
+///
+/// ``positions``: an (N, 3) floating-point array, C- or F-ordered or a strided view. A
+/// C-contiguous float32 array is read in place (leave it unchanged until the call returns),
+/// others are copied once as float32; anything that ``numpy.asarray`` makes such an array of is
+/// accepted, integer arrays are refused. Coordinates must be finite. An empty (0, 3) array
+/// gives an empty mesh.
+///
+/// ``spacing``: the particle spacing r (the simulator's equilibrium distance), in world units.
+/// Required unless the config gives it: it is never guessed (see ``estimate_spacing``).
+///
+/// Keyword arguments override the config (None leaves its value): ``cell``: the Marching Cubes
+/// cell, ``"r/2"`` (default), ``"r"``, ``"2r"``, ``"0.5r"`` or a number in world units.
+/// ``field``: ``"ssp07"`` (default), ``"zb05"``, ``"density"``, ``"blobby"``, ``"metaball"`` or
+/// ``"anisotropic"`` with its default parameters (a config's field of the same kind keeps its
+/// own). ``engine``: ``"narrow-band"`` (default), ``"full-gather"``, ``"scatter"`` or
+/// ``"slices"``; all give the same mesh. ``normals``: ``"field"`` (default, the field's
+/// gradient), ``"grid"`` (central differences) or ``"none"``. ``threads``: worker threads, all
+/// cores by default; the mesh does not depend on it (each calling thread keeps its workers for
+/// its next calls). ``max_memory``: the heap a full-grid engine may plan to use, in bytes or as
+/// ``"8G"``.
+///
+/// ``config``: a TOML file's path (as ``splash recon --config`` reads) or a dict shaped like
+/// it (see ``default_config``). Its ``output.format`` and ``output.up_axis`` become the
+/// defaults of ``Mesh.write``.
+///
+/// ``attributes``: per-particle values to carry onto the vertices, name -> (N, 3) or (N,)
+/// array, interpolated as ``splash recon --attributes velocity`` does (the mean of the
+/// particles within the field's support, weighted by the SSP07 kernel); they come back in
+/// ``Mesh.attributes``.
+///
+/// ``Mesh.report`` holds the counts (``particles``, ``surface_particles``, ``vertices``,
+/// ``triangles``, ...), ``spacing`` and ``cell`` in world units, ``engine``, ``field``,
+/// ``threads``, and ``times``: seconds per stage (``handler_array``, ``surface_particles``,
+/// ``band``, ``scalar_field``, ``triangulation``, their sum ``reconstruction``,
+/// ``attributes``, and ``total`` for all the native work).
+///
+/// The GIL is released while the library works: Python threads can reconstruct frames in
+/// parallel. Raises ValueError for a bad array, bad settings (naming the key or value),
+/// non-finite coordinates (naming the particle) or a grid over the memory limit; OSError when
+/// the config file cannot be read.
+#[allow(clippy::too_many_arguments)]
+#[pyfunction]
+#[pyo3(signature = (positions, spacing=None, *, cell=None, field=None, engine=None, normals=None,
+    threads=None, max_memory=None, config=None, attributes=None))]
+pub fn reconstruct<'py>(
+    py: Python<'py>,
+    positions: &Bound<'py, PyAny>,
+    spacing: Option<f32>,
+    cell: Option<Bound<'py, PyAny>>,
+    field: Option<String>,
+    engine: Option<String>,
+    normals: Option<String>,
+    threads: Option<i64>,
+    max_memory: Option<Bound<'py, PyAny>>,
+    config: Option<&Bound<'py, PyAny>>,
+    attributes: Option<&Bound<'py, PyAny>>,
+) -> PyResult<Mesh> {
+    let overrides = Overrides {
+        spacing,
+        cell,
+        field,
+        engine,
+        normals,
+        threads,
+        max_memory,
+    };
+    let config = settings::resolve(config, overrides)?;
+    if config.spacing.is_none() {
+        return Err(PyValueError::new_err(
+            "the particle spacing is not set: pass spacing=r (the simulation's particle \
+             spacing) or give spacing in the config; splash_sph.estimate_spacing(positions) \
+             estimates it",
+        ));
+    }
+    let points = arrays::points(positions, "positions")?;
+    let attributes = attribute_values(attributes, points.as_slice().len())?;
+    let (format, up_axis) = (config.output.format, config.output.up_axis);
+    let (engine, field) = (config.engine.name(), config.field.kind());
+
+    let positions = points.as_slice();
+    let values: Vec<&[Vec3]> = attributes.iter().map(|a| a.values.as_slice()).collect();
+    let out = py
+        .detach(|| run(config, positions, &values))
+        .map_err(to_py)?;
+
+    let report = report(py, &out, engine, field)?;
+    let mesh_attributes = PyDict::new(py);
+    for (a, values) in attributes.iter().zip(out.attributes) {
+        if a.scalar {
+            let values = values.iter().map(|v| v.x).collect();
+            mesh_attributes.set_item(&a.name, arrays::scalars_array(py, values))?;
+        } else {
+            mesh_attributes.set_item(&a.name, arrays::points_array(py, values))?;
+        }
+    }
+    Ok(Mesh::new(
+        py,
+        out.rec.mesh,
+        mesh_attributes,
+        report,
+        format,
+        up_axis,
+    ))
+}
+
+fn run(
+    mut config: Config,
+    positions: &[Vec3],
+    attributes: &[&[Vec3]],
+) -> splash_sph::Result<Output> {
+    let start = Instant::now();
+    // The library would start a pool of its own for every call.
+    let threads = config.threads.take();
+    let reconstructor = Reconstructor::new(config)?;
+    pools::install(threads, || {
+        let rec = reconstructor.reconstruct_observed(positions, &mut Clock::default())?;
+        let interpolation = Instant::now();
+        let attributes = attributes
+            .iter()
+            .map(|values| reconstructor.interpolate(&rec.mesh, positions, values))
+            .collect::<splash_sph::Result<_>>()?;
+        Ok(Output {
+            rec,
+            attributes,
+            interpolation: interpolation.elapsed(),
+            total: start.elapsed(),
+        })
+    })?
+}
+
+/// The report's counts, lengths and times (seconds).
+fn report<'py>(
+    py: Python<'py>,
+    out: &Output,
+    engine: &str,
+    field: &str,
+) -> PyResult<Bound<'py, PyDict>> {
+    let s: &FrameStats = &out.rec.stats;
+    let t = &s.timings;
+    let times = PyDict::new(py);
+    for (name, d) in [
+        ("handler_array", t.handler_array),
+        ("surface_particles", t.surface_particles),
+        ("band", t.band),
+        ("scalar_field", t.scalar_field),
+        ("triangulation", t.triangulation),
+        ("reconstruction", t.reconstruction()),
+        ("attributes", out.interpolation),
+        ("total", out.total),
+    ] {
+        times.set_item(name, d.as_secs_f64())?;
+    }
+    let report = PyDict::new(py);
+    report.set_item("particles", s.particles)?;
+    report.set_item("surface_particles", s.surface_particles)?;
+    report.set_item("vertices", s.vertices)?;
+    report.set_item("triangles", s.triangles)?;
+    report.set_item("surface_vertices", s.surface_vertices)?;
+    report.set_item("closure_vertices", s.closure_vertices)?;
+    report.set_item("surface_cells", s.surface_cells)?;
+    report.set_item("bricks", s.bricks)?;
+    report.set_item("grid", s.grid)?;
+    report.set_item("spacing", as_written(s.spacing))?;
+    report.set_item("cell", as_written(s.cell))?;
+    report.set_item("engine", engine)?;
+    report.set_item("field", field)?;
+    report.set_item("threads", s.threads)?;
+    report.set_item("peak_bytes", s.peak_bytes)?;
+    report.set_item("times", times)?;
+    Ok(report)
+}
+
+/// The float whose shortest decimal form is `x`'s (0.014, not 0.014000000432133675), so that
+/// the report gives back the spacing as it was passed.
+fn as_written(x: f32) -> f64 {
+    x.to_string()
+        .parse()
+        .expect("a float's decimal form parses")
+}
+
+/// The attributes dict as (name, values), checked against the number of particles.
+fn attribute_values<'py>(
+    attributes: Option<&Bound<'py, PyAny>>,
+    particles: usize,
+) -> PyResult<Vec<Attribute<'py>>> {
+    let Some(attributes) = attributes.filter(|a| !a.is_none()) else {
+        return Ok(Vec::new());
+    };
+    let dict = attributes
+        .cast::<PyDict>()
+        .map_err(|_| PyTypeError::new_err("attributes must be a dict: name -> array"))?;
+    let mut out = Vec::new();
+    for (name, array) in dict.iter() {
+        let name: String = name.extract()?;
+        let what = format!("attributes['{name}']");
+        let scalar = arrays::is_scalar(&array)?;
+        let values = if scalar {
+            let x = arrays::scalars(&array, &what)?;
+            Points::Owned(x.into_iter().map(|s| Vec3::new(s, 0.0, 0.0)).collect())
+        } else {
+            arrays::points(&array, &what)?
+        };
+        let len = values.as_slice().len();
+        if len != particles {
+            return Err(PyValueError::new_err(format!(
+                "{what} has {len} values for {particles} particles"
+            )));
+        }
+        out.push(Attribute {
+            name,
+            values,
+            scalar,
+        });
+    }
+    Ok(out)
+}

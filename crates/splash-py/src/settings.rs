@@ -1,0 +1,192 @@
+//! The `Config` of a call: a TOML file or a dict, with the keyword arguments on top, as the
+//! command line puts its flags on top of `--config`.
+
+use std::path::PathBuf;
+
+use pyo3::exceptions::{PyTypeError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
+use splash_sph::field::FieldConfig;
+use splash_sph::{Bytes, Config, Engine, Length, Normals};
+
+use crate::errors::to_py;
+
+/// The keyword arguments that override the configuration; None leaves its value.
+pub struct Overrides<'py> {
+    pub spacing: Option<f32>,
+    pub cell: Option<Bound<'py, PyAny>>,
+    pub field: Option<String>,
+    pub engine: Option<String>,
+    pub normals: Option<String>,
+    pub threads: Option<i64>,
+    pub max_memory: Option<Bound<'py, PyAny>>,
+}
+
+/// `config` (None, a TOML file's path or a dict) with `overrides` applied, validated.
+pub fn resolve(config: Option<&Bound<'_, PyAny>>, overrides: Overrides<'_>) -> PyResult<Config> {
+    let mut config = match config {
+        None => Config::default(),
+        Some(c) if c.is_none() => Config::default(),
+        Some(c) => match c.cast::<PyDict>() {
+            Ok(dict) => from_dict(dict)?,
+            Err(_) => {
+                let path: PathBuf = c.extract().map_err(|_| {
+                    PyTypeError::new_err(format!(
+                        "config must be a TOML file's path or a dict, got {}",
+                        type_name(c)
+                    ))
+                })?;
+                Config::from_file(&path).map_err(to_py)?
+            }
+        },
+    };
+    let Overrides {
+        spacing,
+        cell,
+        field,
+        engine,
+        normals,
+        threads,
+        max_memory,
+    } = overrides;
+    // A field of the same kind keeps the parameters the configuration gives it.
+    if let Some(kind) = field
+        && config.field.kind() != kind
+    {
+        config.field = FieldConfig::named(&kind).map_err(to_py)?;
+    }
+    if spacing.is_some() {
+        config.spacing = spacing;
+    }
+    if let Some(cell) = cell {
+        config.cell = match cell.extract::<String>() {
+            Ok(text) => Length::parse(&text).map_err(to_py)?,
+            Err(_) => Length::World(cell.extract().map_err(|_| {
+                PyTypeError::new_err("cell must be a length such as \"r/2\" or a number")
+            })?),
+        };
+    }
+    if let Some(engine) = engine {
+        config.engine = Engine::parse(&engine).map_err(to_py)?;
+    }
+    if let Some(normals) = normals {
+        config.normals = Normals::parse(&normals).map_err(to_py)?;
+    }
+    if let Some(n) = threads {
+        config.threads = Some(usize::try_from(n).ok().filter(|&n| n > 0).ok_or_else(|| {
+            PyValueError::new_err(format!("threads must be at least 1, got {n}"))
+        })?);
+    }
+    if let Some(m) = max_memory {
+        config.max_memory = Some(match m.extract::<String>() {
+            Ok(text) => Bytes::parse(&text).map_err(to_py)?,
+            Err(_) => Bytes(m.extract().map_err(|_| {
+                PyTypeError::new_err(
+                    "max_memory must be a size such as \"8G\" or a number of bytes",
+                )
+            })?),
+        });
+    }
+    config.validate().map_err(to_py)?;
+    Ok(config)
+}
+
+/// A configuration from a dict shaped like the TOML file (tables as nested dicts; None leaves a
+/// key unset). Unknown keys are errors naming the key, as in a file.
+fn from_dict(dict: &Bound<'_, PyDict>) -> PyResult<Config> {
+    let text = toml::to_string(&table(dict)?)
+        .map_err(|e| PyValueError::new_err(format!("config: {e}")))?;
+    Config::from_toml(&text).map_err(|e| to_py(e.context("config")))
+}
+
+fn table(dict: &Bound<'_, PyDict>) -> PyResult<toml::Table> {
+    let mut table = toml::Table::new();
+    for (key, value) in dict.iter() {
+        let key: String = key.extract().map_err(|_| {
+            PyTypeError::new_err(format!("config keys must be strings, got {key:?}"))
+        })?;
+        if value.is_none() {
+            continue;
+        }
+        let value = toml_value(&value).map_err(|e| {
+            PyTypeError::new_err(format!("config key '{key}': {}", e.value(dict.py())))
+        })?;
+        table.insert(key, value);
+    }
+    Ok(table)
+}
+
+fn toml_value(value: &Bound<'_, PyAny>) -> PyResult<toml::Value> {
+    // bool before int: Python's bools are ints.
+    if value.is_instance_of::<PyBool>() {
+        return Ok(toml::Value::Boolean(value.extract()?));
+    }
+    if value.is_instance_of::<PyInt>() {
+        return Ok(toml::Value::Integer(value.extract()?));
+    }
+    if value.is_instance_of::<PyFloat>() {
+        return Ok(toml::Value::Float(value.extract()?));
+    }
+    if value.is_instance_of::<PyString>() {
+        return Ok(toml::Value::String(value.extract()?));
+    }
+    if let Ok(dict) = value.cast::<PyDict>() {
+        return Ok(toml::Value::Table(table(dict)?));
+    }
+    if value.is_instance_of::<PyList>() || value.is_instance_of::<PyTuple>() {
+        return value
+            .try_iter()?
+            .map(|item| toml_value(&item?))
+            .collect::<PyResult<_>>()
+            .map(toml::Value::Array);
+    }
+    // numpy scalars and other numbers.
+    if let Ok(i) = value.extract::<i64>() {
+        return Ok(toml::Value::Integer(i));
+    }
+    if let Ok(f) = value.extract::<f64>() {
+        return Ok(toml::Value::Float(f));
+    }
+    Err(PyTypeError::new_err(format!(
+        "{} has no TOML equivalent",
+        type_name(value)
+    )))
+}
+
+/// The configuration as the dict that [`from_dict`] reads back.
+pub fn to_dict<'py>(py: Python<'py>, config: &Config) -> PyResult<Bound<'py, PyAny>> {
+    let table: toml::Table = toml::from_str(&config.to_toml())
+        .map_err(|e| PyValueError::new_err(format!("config: {e}")))?;
+    python_value(py, &toml::Value::Table(table))
+}
+
+fn python_value<'py>(py: Python<'py>, value: &toml::Value) -> PyResult<Bound<'py, PyAny>> {
+    Ok(match value {
+        toml::Value::String(s) => s.into_pyobject(py)?.into_any(),
+        toml::Value::Integer(i) => i.into_pyobject(py)?.into_any(),
+        toml::Value::Float(f) => f.into_pyobject(py)?.into_any(),
+        toml::Value::Boolean(b) => b.into_pyobject(py)?.to_owned().into_any(),
+        toml::Value::Datetime(d) => d.to_string().into_pyobject(py)?.into_any(),
+        toml::Value::Array(items) => {
+            let list = PyList::empty(py);
+            for item in items {
+                list.append(python_value(py, item)?)?;
+            }
+            list.into_any()
+        }
+        toml::Value::Table(table) => {
+            let dict = PyDict::new(py);
+            for (key, item) in table {
+                dict.set_item(key, python_value(py, item)?)?;
+            }
+            dict.into_any()
+        }
+    })
+}
+
+fn type_name(value: &Bound<'_, PyAny>) -> String {
+    value
+        .get_type()
+        .name()
+        .map_or_else(|_| "?".to_string(), |n| n.to_string())
+}
