@@ -215,7 +215,7 @@ fn attribute_values<'py>(
     attributes: Option<&Bound<'py, PyAny>>,
     particles: usize,
 ) -> PyResult<Vec<Attribute<'py>>> {
-    let Some(attributes) = attributes.filter(|a| !a.is_none()) else {
+    let Some(attributes) = attributes else {
         return Ok(Vec::new());
     };
     let dict = attributes

@@ -26,7 +26,6 @@ pub struct Overrides<'py> {
 pub fn resolve(config: Option<&Bound<'_, PyAny>>, overrides: Overrides<'_>) -> PyResult<Config> {
     let mut config = match config {
         None => Config::default(),
-        Some(c) if c.is_none() => Config::default(),
         Some(c) => match c.cast::<PyDict>() {
             Ok(dict) => from_dict(dict)?,
             Err(_) => {
