@@ -6,6 +6,7 @@ mod common;
 
 use common::TempDir;
 use std::fs;
+use std::io::ErrorKind;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
@@ -534,6 +535,41 @@ fn bad_text_and_raw_files_are_reported() {
         [Vec3::new(1.0, 2.0, 3.0)]
     );
     assert_fails(&text, Some(InputFormat::Raw), &["6 bytes long"]);
+}
+
+/// A failure to read a file is an `Error::Io` with the OS's error kind; bad content is an
+/// `Error::Format`.
+#[test]
+fn errors_say_whose_they_are() {
+    let dir = TempDir::new("error-kinds");
+    let folder = dir.path("folder.ply");
+    fs::create_dir(&folder).unwrap();
+    for (path, kind) in [
+        (dir.path("missing.ply"), ErrorKind::NotFound),
+        (folder, ErrorKind::IsADirectory),
+    ] {
+        match splash_sph::read_particles(&path, None) {
+            Err(splash_sph::Error::Io {
+                path: at, source, ..
+            }) => assert_eq!((at, source.kind()), (path, kind)),
+            other => panic!("{}: {other:?}", path.display()),
+        }
+    }
+    let bad = dir.file("bad.csv", "x,y,z\n1,2,oops\n");
+    match splash_sph::read_particles(&bad, None) {
+        Err(splash_sph::Error::Format { path, message }) => {
+            assert_eq!(path, bad);
+            assert_eq!(message, "line 2, column 3 ('z'): 'oops' is not a number");
+        }
+        other => panic!("{other:?}"),
+    }
+    let err = write_mesh_file(&dir.path("folder.ply/"), &tetrahedron(), MeshFormat::Obj);
+    match err {
+        Err(splash_sph::Error::Io { message, .. }) => {
+            assert!(message.starts_with("cannot write '"), "{message}");
+        }
+        other => panic!("{other:?}"),
+    }
 }
 
 /// Cutting or corrupting valid files anywhere gives errors (or particles), never a panic.

@@ -4,9 +4,9 @@
 use std::io::BufReader;
 use std::path::Path;
 
-use anyhow::{Result, anyhow, bail};
 use glam::Vec3;
 
+use super::failure::Result;
 use super::lines::Lines;
 
 #[derive(Clone, Copy)]
@@ -106,7 +106,7 @@ fn read_triples(path: &Path, candidates: &[[&str; 3]], headerless: bool) -> Resu
                 let columns = if is_header {
                     header_columns(separator, text, line, candidates)?
                 } else if !headerless {
-                    bail!(
+                    bail_format!(
                         "line {line}: the table has no header, so it names no {} columns",
                         candidates[0].join(", ")
                     );
@@ -117,7 +117,7 @@ fn read_triples(path: &Path, candidates: &[[&str; 3]], headerless: bool) -> Resu
                     }
                 };
                 // Typical lines are 20-40 bytes; the file size bounds the estimate.
-                particles.reserve(usize::try_from(file_len / 32)?);
+                particles.reserve(usize::try_from(file_len / 32).unwrap_or(0));
                 let (separator, columns) = layout.insert((separator, columns));
                 if is_header {
                     continue;
@@ -145,7 +145,7 @@ fn header_columns(
         None if candidates.len() == 1 => candidates[0],
         None => {
             let wanted: Vec<String> = candidates.iter().map(|c| c.join(", ")).collect();
-            bail!(
+            bail_format!(
                 "line {line}: the header has none of the columns {} (its columns: {})",
                 wanted.join(" or "),
                 names.join(", ")
@@ -158,7 +158,7 @@ fn header_columns(
             .iter()
             .position(|name| name.eq_ignore_ascii_case(wanted))
             .ok_or_else(|| {
-                anyhow!(
+                format_failure!(
                     "line {line} is taken as a header (not all its fields are numbers), but it has \
                      no column '{wanted}' (its columns: {})",
                     names.join(", ")
@@ -185,7 +185,7 @@ fn parse_row(separator: Separator, text: &str, columns: &Columns, line: usize) -
         {
             if wanted == i {
                 let value = field.parse::<f32>().map_err(|_| {
-                    anyhow!(
+                    format_failure!(
                         "line {line}, column {} ('{name}'): '{field}' is not a number",
                         i + 1
                     )
@@ -203,7 +203,7 @@ fn parse_row(separator: Separator, text: &str, columns: &Columns, line: usize) -
         let missing: Vec<String> = missing
             .map(|(i, name)| format!("column {} ('{name}')", i + 1))
             .collect();
-        bail!(
+        bail_format!(
             "line {line}: the row has only {found} columns; missing {}",
             missing.join(", ")
         );

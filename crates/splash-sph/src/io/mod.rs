@@ -13,6 +13,9 @@
 //! Meshes are written as OBJ or PLY (binary little-endian or ascii), atomically when written to
 //! a file with [`write_mesh_file`].
 
+#[macro_use]
+mod failure;
+
 mod atomic;
 mod csv;
 mod lines;
@@ -30,12 +33,12 @@ use std::fs::File;
 use std::io::{self, BufWriter, Write};
 use std::path::Path;
 
-use anyhow::{Context, Result, anyhow, bail};
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
 use crate::error::Error;
 use crate::mesh::TriMesh;
+use failure::{Failure, IoFailure, Result};
 
 /// One particle frame: positions, and per-particle attributes by name.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -62,36 +65,19 @@ impl Particles {
     }
 }
 
-/// A reader's error as the library's: an I/O failure underneath is [`Error::Io`], anything
-/// else a [`Error::Format`] of `path`.
-fn typed(path: &Path, e: anyhow::Error) -> Error {
-    let message = format!("{e:#}");
-    match e.chain().find_map(|c| c.downcast_ref::<io::Error>()) {
-        Some(io) => Error::Io {
-            path: path.to_path_buf(),
-            message: format!("cannot read particles from '{}': {message}", path.display()),
-            source: io::Error::new(io.kind(), io.to_string()),
-        },
-        None => Error::Format {
-            path: path.to_path_buf(),
-            message,
-        },
-    }
-}
-
 /// Reads one particle frame; `format` overrides the guess from the file's extension (see
 /// [`read_positions`] for what each format holds).
 pub fn read_particles(path: &Path, format: Option<InputFormat>) -> crate::Result<Particles> {
     let format = match format {
         Some(format) => format,
-        None => InputFormat::from_path(path).map_err(|e| Error::config(format!("{e:#}")))?,
+        None => InputFormat::from_path(path)?,
     };
     let positions = match format {
         InputFormat::Ply => ply::read(path),
         InputFormat::Csv => csv::read(path),
         InputFormat::Raw => raw::read(path),
     }
-    .map_err(|e| typed(path, e))?;
+    .map_err(|e| e.into_error(path))?;
     Ok(Particles {
         positions,
         attributes: BTreeMap::new(),
@@ -148,18 +134,8 @@ impl InputFormat {
 /// first line is a header if any of its fields is not a number; the header must then name
 /// columns `x`, `y` and `z` (case-insensitive, anywhere), otherwise the first three columns are
 /// used. Extra columns are ignored.
-pub fn read_positions(path: &Path, format: Option<InputFormat>) -> Result<Vec<Vec3>> {
-    let format = match format {
-        Some(format) => format,
-        None => InputFormat::from_path(path)?,
-    };
-    let particles = match format {
-        InputFormat::Ply => ply::read(path),
-        InputFormat::Csv => csv::read(path),
-        InputFormat::Raw => raw::read(path),
-    };
-    // One flat message, so that the path and the cause both show however the caller prints it.
-    particles.map_err(|e| anyhow!("cannot read particles from '{}': {e:#}", path.display()))
+pub fn read_positions(path: &Path, format: Option<InputFormat>) -> crate::Result<Vec<Vec3>> {
+    read_particles(path, format).map(|p| p.positions)
 }
 
 /// Reads the particle positions and velocities of one frame. Velocities are the PLY vertex
@@ -169,7 +145,7 @@ pub fn read_positions(path: &Path, format: Option<InputFormat>) -> Result<Vec<Ve
 pub fn read_particles_with_velocities(
     path: &Path,
     format: Option<InputFormat>,
-) -> Result<(Vec<Vec3>, Vec<Vec3>)> {
+) -> crate::Result<(Vec<Vec3>, Vec<Vec3>)> {
     let format = match format {
         Some(format) => format,
         None => InputFormat::from_path(path)?,
@@ -178,30 +154,35 @@ pub fn read_particles_with_velocities(
     let velocities = match format {
         InputFormat::Ply => ply::read_velocities(path),
         InputFormat::Csv => csv::read_velocities(path),
-        InputFormat::Raw => Err(anyhow!(
+        InputFormat::Raw => Err(format_failure!(
             "raw files hold positions only, no velocities (use PLY or CSV with vx, vy, vz)"
         )),
     };
-    let velocities = velocities
-        .map_err(|e| anyhow!("cannot read velocities from '{}': {e:#}", path.display()))?;
+    let velocities = velocities.map_err(|e| e.into_error(path))?;
     if velocities.len() != positions.len() {
         // Only if the file changed between the two reads.
-        bail!(
-            "'{}' changed while it was read: {} positions, {} velocities",
-            path.display(),
-            positions.len(),
-            velocities.len()
-        );
+        return Err(Error::Format {
+            path: path.to_path_buf(),
+            message: format!(
+                "it changed while it was read: {} positions, {} velocities",
+                positions.len(),
+                velocities.len()
+            ),
+        });
     }
     Ok((positions, velocities))
 }
 
 /// Opens a particle file, returning it with its length in bytes.
 fn open_input(path: &Path) -> Result<(File, u64)> {
-    let file = File::open(path).context("cannot open the file")?;
-    let metadata = file.metadata().context("cannot query the file's size")?;
+    let file = File::open(path).map_err(|e| Failure::io("cannot open the file", e))?;
+    let metadata = file
+        .metadata()
+        .map_err(|e| Failure::io("cannot query the file's size", e))?;
     if metadata.is_dir() {
-        bail!("it is a directory");
+        // Reading it would fail with a less telling message, on some systems only later.
+        let failure = IoFailure::of_kind(io::ErrorKind::IsADirectory, "it is a directory");
+        return Err(failure.into());
     }
     Ok((file, metadata.len()))
 }
@@ -395,8 +376,8 @@ fn finite(p: Vec3, at: impl FnOnce() -> String) -> Result<Vec3> {
 }
 
 #[cold]
-fn non_finite(p: Vec3, at: &str) -> anyhow::Error {
-    anyhow!(
+fn non_finite(p: Vec3, at: &str) -> Failure {
+    format_failure!(
         "{at} has a non-finite coordinate: ({}, {}, {})",
         p.x,
         p.y,

@@ -10,11 +10,11 @@ use std::fs::File;
 use std::io::{BufRead, BufReader, Read};
 use std::path::Path;
 
-use anyhow::{Context, Result, anyhow, bail};
 use glam::Vec3;
 use ply_rs_bw::parser::{Parser, Reader};
 use ply_rs_bw::ply::{DefaultElement, ElementDef, Encoding, Header, PropertyType, ScalarType};
 
+use super::failure::{Failure, Result};
 use super::lines::Lines;
 use super::{ply_ascii, ply_binary};
 
@@ -71,7 +71,7 @@ impl Layout {
     fn new(header: &Header, candidates: &[[&str; 3]]) -> Result<Self> {
         let Some((vertex_index, _, vertex)) = header.elements.get_full("vertex") else {
             let names: Vec<&str> = header.elements.keys().map(String::as_str).collect();
-            bail!(
+            bail_format!(
                 "the PLY header has no 'vertex' element (its elements: {})",
                 names.join(", ")
             );
@@ -103,23 +103,23 @@ fn read_header(reader: &mut BufReader<File>) -> Result<(Header, u64, usize)> {
     let mut limited = (&mut *reader).take(MAX_HEADER_BYTES);
     limited
         .read_until(b'\n', &mut bytes)
-        .context("cannot read the header")?;
+        .map_err(|e| Failure::io("cannot read the header", e))?;
     if bytes.trim_ascii_end() != b"ply" {
-        bail!("not a PLY file: the first line is not 'ply'");
+        bail_format!("not a PLY file: the first line is not 'ply'");
     }
     let mut lines = 1;
     loop {
         let start = bytes.len();
         let n = limited
             .read_until(b'\n', &mut bytes)
-            .context("cannot read the header")?;
+            .map_err(|e| Failure::io("cannot read the header", e))?;
         if n == 0 {
             if bytes.len() as u64 >= MAX_HEADER_BYTES {
-                bail!(
+                bail_format!(
                     "malformed PLY header: no 'end_header' line in the first {MAX_HEADER_BYTES} bytes"
                 );
             }
-            bail!("malformed PLY header: the file ends before the 'end_header' line");
+            bail_format!("malformed PLY header: the file ends before the 'end_header' line");
         }
         lines += 1;
         if bytes
@@ -137,7 +137,7 @@ fn read_header(reader: &mut BufReader<File>) -> Result<(Header, u64, usize)> {
             let message = e.to_string();
             let message = message.split("\n\tError:").next().unwrap_or_default();
             let words: Vec<&str> = message.split_whitespace().collect();
-            anyhow!("malformed PLY header: {}", words.join(" "))
+            format_failure!("malformed PLY header: {}", words.join(" "))
         })?;
     // The parser keeps the last of two same-named elements or properties in the first one's
     // place, which would silently shift the binary layout.
@@ -149,7 +149,7 @@ fn read_header(reader: &mut BufReader<File>) -> Result<(Header, u64, usize)> {
     };
     let properties: usize = header.elements.values().map(|e| e.properties.len()).sum();
     if declared("element") != header.elements.len() || declared("property") != properties {
-        bail!(
+        bail_format!(
             "malformed PLY header: two elements, or two properties of an element, have the same name"
         );
     }
@@ -273,7 +273,7 @@ impl Element {
                     PropertyType::List(len, item) => {
                         let len = Scalar::new(len);
                         if !len.is_integer() {
-                            bail!(
+                            bail_format!(
                                 "malformed PLY header: list property '{}' of element '{}' has a \
                                  non-integer length type",
                                 p.name,
@@ -333,7 +333,7 @@ fn coordinate_properties(
         None => {
             let wanted: Vec<String> = candidates.iter().map(|c| c.join(" ")).collect();
             let names: Vec<&str> = vertex.props.iter().map(|p| p.name.as_str()).collect();
-            bail!(
+            bail_format!(
                 "the 'vertex' element has none of the properties {} (its properties: {})",
                 wanted.join(" or "),
                 names.join(", ")
@@ -349,13 +349,13 @@ fn coordinate_properties(
             .find(|(_, p)| p.name == name)
         else {
             let names: Vec<&str> = vertex.props.iter().map(|p| p.name.as_str()).collect();
-            bail!(
+            bail_format!(
                 "the 'vertex' element has no property '{name}' (its properties: {})",
                 names.join(", ")
             );
         };
         let Kind::Scalar(scalar) = prop.kind else {
-            bail!("the 'vertex' property '{name}' is a list, not a number");
+            bail_format!("the 'vertex' property '{name}' is a list, not a number");
         };
         *slot = (index, scalar);
     }

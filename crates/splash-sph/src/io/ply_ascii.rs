@@ -3,9 +3,9 @@
 use std::fs::File;
 use std::io::BufReader;
 
-use anyhow::{Result, anyhow, bail};
 use glam::Vec3;
 
+use super::failure::Result;
 use super::lines::Lines;
 use super::ply::{Element, Kind, Layout};
 
@@ -20,7 +20,7 @@ pub(super) fn read(
     for element in layout.before.iter().filter(|e| !e.props.is_empty()) {
         for index in 0..element.count {
             if lines.next_non_blank()?.is_none() {
-                bail!(
+                bail_format!(
                     "the file ends at line {} inside element '{}', after {index} of {} records",
                     lines.line(),
                     element.name,
@@ -30,19 +30,19 @@ pub(super) fn read(
         }
     }
     // "0 0 0\n" is the shortest vertex line, which bounds the allocation.
-    let fit = usize::try_from(remaining_bytes / 6)?;
+    let fit = usize::try_from(remaining_bytes / 6).unwrap_or(usize::MAX);
     let mut out = Vec::with_capacity(vertex.count.min(fit));
     let last = xyz.iter().copied().max().unwrap_or_default();
     for index in 0..vertex.count {
         let Some((line, text)) = lines.next_non_blank()? else {
-            bail!(
+            bail_format!(
                 "the file ends at line {} after {index} of {} vertices",
                 lines.line(),
                 vertex.count
             );
         };
         let p = parse_vertex(text, vertex, xyz, last)
-            .map_err(|e| anyhow!("line {line} (vertex {index}): {e}"))?;
+            .map_err(|e| format_failure!("line {line} (vertex {index}): {e}"))?;
         out.push(super::finite(p, || {
             format!("line {line} (vertex {index})")
         })?);

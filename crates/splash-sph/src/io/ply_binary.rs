@@ -4,9 +4,9 @@
 use std::fs::File;
 use std::io::{self, BufRead, BufReader, ErrorKind, Read};
 
-use anyhow::{Context, Result, anyhow, bail};
 use glam::Vec3;
 
+use super::failure::{Failure, Result};
 use super::ply::{Element, Kind, Layout, Scalar};
 use super::records::{self, Records};
 
@@ -57,16 +57,18 @@ fn skip(
             .checked_mul(stride as u64)
             .filter(|&bytes| bytes <= remaining)
         else {
-            bail!(
+            bail_format!(
                 "truncated binary data: element '{}' declares {} records of {stride} bytes from \
                  byte offset {offset}, but the file ends at byte offset {file_len}",
                 element.name,
                 element.count
             );
         };
+        // `bytes` is at most the file's length, which fits in an i64.
+        let bytes_i64 = i64::try_from(bytes).unwrap_or(i64::MAX);
         reader
-            .seek_relative(i64::try_from(bytes)?)
-            .with_context(|| format!("read error at byte offset {offset}"))?;
+            .seek_relative(bytes_i64)
+            .map_err(|e| Failure::io(format_args!("read error at byte offset {offset}"), e))?;
         return Ok(offset + bytes);
     }
     (0..element.count).try_fold(offset, |offset, index| {
@@ -94,7 +96,7 @@ fn read_varying(
     // Every record holds at least its scalars and list lengths, which bounds the allocation.
     let min_record: usize = vertex.props.iter().map(|p| p.kind.head_size()).sum();
     let fit = file_len.saturating_sub(offset) / min_record.max(1) as u64;
-    let mut out = Vec::with_capacity(vertex.count.min(usize::try_from(fit)?));
+    let mut out = Vec::with_capacity(vertex.count.min(usize::try_from(fit).unwrap_or(usize::MAX)));
     for index in 0..vertex.count {
         let start = offset;
         let mut coordinates = [None; 3];
@@ -112,7 +114,7 @@ fn read_varying(
             },
         )?;
         let [Some(x), Some(y), Some(z)] = coordinates else {
-            bail!("cannot decode vertex {index} at byte offset {start}");
+            bail_format!("cannot decode vertex {index} at byte offset {start}");
         };
         out.push(super::finite(Vec3::new(x, y, z), || {
             format!("vertex {index} (byte offset {start})")
@@ -133,7 +135,7 @@ fn walk_record(
     mut visit: impl FnMut(usize, Scalar, &[u8]),
 ) -> Result<u64> {
     let truncated = || {
-        anyhow!(
+        format_failure!(
             "truncated binary data: the file ends at byte offset {file_len}, inside {} record \
              {index} of {}",
             element.name,
@@ -157,7 +159,7 @@ fn walk_record(
                     return Err(truncated());
                 }
                 let n = len.to_len(bytes, big_endian).ok_or_else(|| {
-                    anyhow!(
+                    format_failure!(
                         "negative list length for property '{}' of {} record {index} at byte offset {offset}",
                         prop.name,
                         element.name
@@ -165,8 +167,10 @@ fn walk_record(
                 })?;
                 offset += len.size() as u64;
                 let skip = n.checked_mul(item.size() as u64).ok_or_else(truncated)?;
-                let skipped = io::copy(&mut (&mut *reader).take(skip), &mut io::sink())
-                    .with_context(|| format!("read error at byte offset {offset}"))?;
+                let skipped =
+                    io::copy(&mut (&mut *reader).take(skip), &mut io::sink()).map_err(|e| {
+                        Failure::io(format_args!("read error at byte offset {offset}"), e)
+                    })?;
                 if skipped < skip {
                     return Err(truncated());
                 }
@@ -182,6 +186,9 @@ fn read_field(reader: &mut impl Read, buf: &mut [u8], offset: u64) -> Result<boo
     match reader.read_exact(buf) {
         Ok(()) => Ok(true),
         Err(e) if e.kind() == ErrorKind::UnexpectedEof => Ok(false),
-        Err(e) => Err(anyhow!("read error at byte offset {offset}: {e}")),
+        Err(e) => Err(Failure::io(
+            format_args!("read error at byte offset {offset}"),
+            e,
+        )),
     }
 }

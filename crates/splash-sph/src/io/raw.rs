@@ -2,9 +2,9 @@
 
 use std::path::Path;
 
-use anyhow::{Result, bail};
 use glam::Vec3;
 
+use super::failure::Result;
 use super::records::{self, Records};
 
 const RECORD_BYTES: usize = 12;
@@ -13,14 +13,15 @@ pub(super) fn read(path: &Path) -> Result<Vec<Vec3>> {
     let (mut file, file_len) = super::open_input(path)?;
     let remainder = file_len % RECORD_BYTES as u64;
     if remainder != 0 {
-        bail!(
+        bail_format!(
             "raw particle data is a sequence of {RECORD_BYTES}-byte records (x, y, z as \
              little-endian f32), but the file is {file_len} bytes long, not a multiple of \
              {RECORD_BYTES} (remainder {remainder})"
         );
     }
     let records = Records {
-        count: usize::try_from(file_len / RECORD_BYTES as u64)?,
+        // Beyond usize, the count would be refused as more records than the file holds.
+        count: usize::try_from(file_len / RECORD_BYTES as u64).unwrap_or(usize::MAX),
         stride: RECORD_BYTES,
         start: 0,
         file_len,

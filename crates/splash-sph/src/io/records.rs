@@ -2,8 +2,9 @@
 
 use std::io::{ErrorKind, Read};
 
-use anyhow::{Result, anyhow, bail};
 use glam::Vec3;
+
+use super::failure::{Failure, Result};
 
 /// Bytes read per chunk: large enough to amortise the read calls, small enough that the buffer
 /// is negligible next to the output (the whole file is never held in memory).
@@ -37,7 +38,7 @@ pub(super) fn read(
     } = records;
     let complete = file_len.saturating_sub(start) / stride as u64;
     if count as u64 > complete {
-        bail!(
+        bail_format!(
             "truncated binary data: expected {count} {what} records of {stride} bytes from byte \
              offset {start}, but the file ends at byte offset {file_len}, after {complete} \
              complete {what} records"
@@ -52,7 +53,7 @@ pub(super) fn read(
         if got < chunk.len() {
             // Only if the file shrank after its size was checked.
             let end = start + (out.len() * stride + got) as u64;
-            bail!(
+            bail_format!(
                 "truncated binary data: the file ends at byte offset {end}, inside {what} {} of {count}",
                 out.len() + got / stride
             );
@@ -69,7 +70,7 @@ pub(super) fn read(
             let index = first + i;
             let offset = start + (index * stride) as u64;
             if decode(record, p).is_none() {
-                bail!("cannot decode {what} {index} at byte offset {offset}");
+                bail_format!("cannot decode {what} {index} at byte offset {offset}");
             }
             if !p.is_finite() {
                 return Err(super::non_finite(
@@ -90,7 +91,7 @@ fn fill(reader: &mut impl Read, buf: &mut [u8]) -> Result<usize> {
             Ok(0) => break,
             Ok(n) => got += n,
             Err(e) if e.kind() == ErrorKind::Interrupted => {}
-            Err(e) => return Err(anyhow!("read error: {e}")),
+            Err(e) => return Err(Failure::io("read error", e)),
         }
     }
     Ok(got)
