@@ -775,23 +775,16 @@ fn mesh_files_are_replaced_atomically() {
 }
 
 /// Reads a frame of the shared data set, if it is there.
-fn real_frame(path: &str) -> Option<(Vec<Vec3>, Duration)> {
-    if !Path::new(path).exists() {
-        println!("skipped: {path} is not there");
-        return None;
-    }
+fn real_frame(relative: &str) -> Option<(Vec<Vec3>, Duration)> {
+    let path = common::shared_data(relative)?;
     let start = Instant::now();
-    let particles = read_particles(Path::new(path), None).unwrap();
+    let particles = read_particles(&path, None).unwrap();
     Some((particles, start.elapsed()))
 }
 
 #[test]
 fn reads_a_real_frame() {
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../shared/data/cbd-small/frame_0040.ply"
-    );
-    let Some((particles, _)) = real_frame(path) else {
+    let Some((particles, _)) = real_frame("cbd-small/frame_0040.ply") else {
         return;
     };
     assert_eq!(particles.len(), 44_064);
@@ -800,11 +793,7 @@ fn reads_a_real_frame() {
 
 #[test]
 fn reads_a_million_particles() {
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../shared/data/cbd-large/frame_0023.ply"
-    );
-    let Some((particles, elapsed)) = real_frame(path) else {
+    let Some((particles, elapsed)) = real_frame("cbd-large/frame_0023.ply") else {
         return;
     };
     println!("read {} particles in {elapsed:?}", particles.len());
