@@ -1,15 +1,17 @@
 //! Raw particle input: little-endian `f32` `x y z` triples, no header.
 
+use std::collections::BTreeMap;
 use std::path::Path;
 
 use glam::Vec3;
 
+use super::Particles;
 use super::failure::Result;
 use super::records::{self, Records};
 
 const RECORD_BYTES: usize = 12;
 
-pub(super) fn read(path: &Path) -> Result<Vec<Vec3>> {
+pub(super) fn read(path: &Path) -> Result<Particles> {
     let (mut file, file_len) = super::open_input(path)?;
     let remainder = file_len % RECORD_BYTES as u64;
     if remainder != 0 {
@@ -27,11 +29,16 @@ pub(super) fn read(path: &Path) -> Result<Vec<Vec3>> {
         file_len,
         what: "particle",
     };
-    records::read(&mut file, &records, |r, p| {
+    let decode = |r: &[u8], p: &mut Vec3| {
         p.x = f32_le(r, 0)?;
         p.y = f32_le(r, 4)?;
         p.z = f32_le(r, 8)?;
         Some(())
+    };
+    let positions = records::read(&mut file, &records, decode, |_, _| Some(()))?;
+    Ok(Particles {
+        positions,
+        attributes: BTreeMap::new(),
     })
 }
 

@@ -20,30 +20,47 @@ pub(super) struct Records<'a> {
     pub what: &'a str,
 }
 
+impl Records<'_> {
+    /// Fails if the file is too short for `count` records (`count` comes from an untrusted
+    /// header): allocations for them are then bounded by the file's size.
+    pub fn check(&self) -> Result<()> {
+        let &Records {
+            count,
+            stride,
+            start,
+            file_len,
+            what,
+        } = self;
+        let complete = file_len.saturating_sub(start) / stride as u64;
+        if count as u64 > complete {
+            bail_format!(
+                "truncated binary data: expected {count} {what} records of {stride} bytes from \
+                 byte offset {start}, but the file ends at byte offset {file_len}, after \
+                 {complete} complete {what} records"
+            );
+        }
+        Ok(())
+    }
+}
+
 /// Reads the records, decoding each into a point with `decode` (`None` if it cannot, which
-/// well-formed layouts rule out), and rejects non-finite coordinates. Fails before reading or
-/// allocating anything if the file is too short for `count` (which comes from an untrusted
-/// header), so the allocation is bounded by the file's size.
+/// well-formed layouts rule out), and rejects non-finite coordinates; then passes each chunk
+/// of records, with the index of its first, to `rest`, for whatever else they hold. Fails
+/// before reading or allocating anything if the [check](Records::check) fails.
 pub(super) fn read(
     reader: &mut impl Read,
     records: &Records,
     mut decode: impl FnMut(&[u8], &mut Vec3) -> Option<()>,
+    mut rest: impl FnMut(usize, &[u8]) -> Option<()>,
 ) -> Result<Vec<Vec3>> {
+    records.check()?;
     let &Records {
         count,
         stride,
         start,
-        file_len,
         what,
+        ..
     } = records;
-    let complete = file_len.saturating_sub(start) / stride as u64;
-    if count as u64 > complete {
-        bail_format!(
-            "truncated binary data: expected {count} {what} records of {stride} bytes from byte \
-             offset {start}, but the file ends at byte offset {file_len}, after {complete} \
-             complete {what} records"
-        );
-    }
     let mut out = Vec::with_capacity(count);
     let per_chunk = (CHUNK_BYTES / stride).max(1);
     let mut buf = vec![0; per_chunk.min(count) * stride];
@@ -78,6 +95,10 @@ pub(super) fn read(
                     &format!("{what} {index} (byte offset {offset})"),
                 ));
             }
+        }
+        if rest(first, chunk).is_none() {
+            let offset = start + (first * stride) as u64;
+            bail_format!("cannot decode the {what} records from byte offset {offset}");
         }
     }
     Ok(out)
