@@ -39,7 +39,6 @@ use std::path::Path;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
-use crate::error::Error;
 use crate::mesh::TriMesh;
 use failure::{Failure, IoFailure, Result};
 
@@ -139,28 +138,6 @@ impl InputFormat {
             "raw" => Ok(Self::Raw),
             _ => bail_config!("unknown input format '{name}': expected ply, csv or raw"),
         }
-    }
-}
-
-/// Reads the particle positions of one frame (see [`read_particles`]).
-pub fn read_positions(path: &Path, format: Option<InputFormat>) -> crate::Result<Vec<Vec3>> {
-    read_particles(path, format).map(|p| p.positions)
-}
-
-/// Reads the particle positions and velocities of one frame: the `velocity` attribute (see
-/// [`read_particles`]). A file without it is an error.
-pub fn read_particles_with_velocities(
-    path: &Path,
-    format: Option<InputFormat>,
-) -> crate::Result<(Vec<Vec3>, Vec<Vec3>)> {
-    let mut particles = read_particles(path, format)?;
-    match particles.attributes.remove("velocity") {
-        Some(Attribute::Vector(velocities)) => Ok((particles.positions, velocities)),
-        _ => Err(Error::Format {
-            path: path.to_path_buf(),
-            message: "it has none of the properties vx vy vz or velocity_x velocity_y velocity_z"
-                .to_owned(),
-        }),
     }
 }
 
