@@ -8,7 +8,8 @@ use anyhow::{Context, Result, anyhow, bail};
 
 use splash_sph::io::{self, VertexAttributes};
 use splash_sph::{
-    Config, FrameStats, InputFormat, MeshFormat, Reconstructor, TriMesh, estimate_spacing,
+    Attribute, Config, FrameStats, InputFormat, MeshFormat, Particles, Reconstructor, TriMesh,
+    Vec3, estimate_spacing, read_particles,
 };
 
 use crate::memory::reconstruct_measured;
@@ -275,13 +276,13 @@ impl Batch {
     fn reference_spacing(&self, earlier: &[PathBuf], progress: &mut dyn Progress) -> Option<f32> {
         for input in earlier {
             // A bad frame is reported by the job that owns it.
-            let Ok(particles) = io::read_positions(input, self.input_format) else {
+            let Ok(Particles { positions, .. }) = read_particles(input, self.input_format) else {
                 continue;
             };
-            if particles.is_empty() {
+            if positions.is_empty() {
                 continue;
             }
-            let r = estimate_spacing(&particles)?;
+            let r = estimate_spacing(&positions)?;
             progress.spacing_estimated(input, r);
             return Some(r);
         }
@@ -297,12 +298,17 @@ impl Batch {
         progress: &mut dyn Progress,
     ) -> Result<FrameStats> {
         let start = Instant::now();
-        let (particles, velocities) = if self.config.output.velocities() {
-            let (p, v) = io::read_particles_with_velocities(input, self.input_format)?;
-            (p, Some(v))
+        let Particles {
+            positions: particles,
+            mut attributes,
+        } = read_particles(input, self.input_format)?;
+        let velocities = if self.config.output.velocities() {
+            Some(velocities(input, attributes.remove("velocity"))?)
         } else {
-            (io::read_positions(input, self.input_format)?, None)
+            None
         };
+        // The other attributes are not needed during the reconstruction.
+        drop(attributes);
         let read = start.elapsed();
         if particles.is_empty() {
             // Nothing to reconstruct, and nothing to estimate a spacing from.
@@ -363,6 +369,34 @@ impl Batch {
         stats.timings.write = start.elapsed();
         Ok(stats)
     }
+}
+
+/// The particle velocities of frame `input`, from its `velocity` attribute.
+fn velocities(input: &Path, attribute: Option<Attribute>) -> Result<Vec<Vec3>> {
+    let context = || format!("cannot read velocities from '{}'", input.display());
+    let velocities = match attribute {
+        Some(Attribute::Vector(velocities)) => velocities,
+        Some(Attribute::Scalar(_)) => bail!(
+            "{}: its 'velocity' is one number per particle, not the vector of vx vy vz or \
+             velocity_x velocity_y velocity_z",
+            context()
+        ),
+        None => bail!(
+            "{}: it has none of the properties vx vy vz or velocity_x velocity_y velocity_z",
+            context()
+        ),
+    };
+    // The reader leaves attributes as they are; interpolated, one of these would spread.
+    if let Some((i, v)) = velocities.iter().enumerate().find(|(_, v)| !v.is_finite()) {
+        bail!(
+            "{}: particle {i} has a non-finite velocity ({}, {}, {})",
+            context(),
+            v.x,
+            v.y,
+            v.z
+        );
+    }
+    Ok(velocities)
 }
 
 #[cfg(test)]

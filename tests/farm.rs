@@ -17,14 +17,6 @@ use ply_rs_bw::ply::{DefaultElement, Property};
 use splash_sph::io::{MeshFormat, VertexAttributes, write_mesh_with};
 use splash_sph::{Config, Length, Reconstructor};
 
-/// The positions of a particle file.
-fn read_particles(
-    path: &std::path::Path,
-    format: Option<splash_sph::InputFormat>,
-) -> splash_sph::Result<Vec<Vec3>> {
-    splash_sph::read_particles(path, format).map(|p| p.positions)
-}
-
 const R: f32 = 0.01;
 const FAST: [&str; 4] = ["--spacing", "0.01", "--cell", "r"];
 
@@ -783,10 +775,45 @@ fn blue_pixels(ppm: &[u8]) -> usize {
 }
 
 #[test]
-fn read_particles_still_reads_positions_only() {
-    // The velocity reader is a separate entry point; the plain one ignores vx vy vz.
+fn velocities_are_read_beside_the_positions() {
     let dir = TempDir::new("positions");
     let points = small_ball();
-    let with = dir.file("v.ply", ply(&points, Some(&vec![Vec3::ONE; points.len()])));
-    assert_eq!(read_particles(&with, None).unwrap(), points);
+    let velocities = vec![Vec3::ONE; points.len()];
+    let with = dir.file("v.ply", ply(&points, Some(&velocities)));
+    let read = splash_sph::read_particles(&with, None).unwrap();
+    assert_eq!(read.positions, points);
+    let velocity = splash_sph::Attribute::Vector(velocities);
+    assert_eq!(read.attributes["velocity"], velocity);
+}
+
+#[test]
+fn velocities_come_from_text_tables_too_and_must_be_finite() {
+    let dir = TempDir::new("csv-velocity");
+    let mut text = "x,y,z,vx,vy,vz\n".to_owned();
+    for p in small_ball() {
+        text += &format!("{},{},{},0.5,-1,2\n", p.x, p.y, p.z);
+    }
+    let input = dir.file("in/f_1.csv", &text);
+    let velocity = ["--format", "ply", "--attributes", "velocity"];
+    let run = |input: &PathBuf| {
+        let mut all = fast(&[input, &"-o", &dir.path("out/")]);
+        all.extend(velocity.iter().map(OsString::from));
+        splash_env(&all, &[])
+    };
+    run(&input).ok();
+    let (_, _, u, _) = read_ply(
+        &fs::read(dir.path("out/f_0001.ply")).unwrap(),
+        ["vx", "vy", "vz"],
+    );
+    assert!(!u.is_empty());
+    assert!(
+        u.iter()
+            .all(|u| (*u - Vec3::new(0.5, -1.0, 2.0)).length() < 1e-5)
+    );
+
+    let bad = dir.file("in/f_2.csv", text.replacen("0.5,-1,2", "0.5,NaN,2", 1));
+    run(&bad)
+        .failed()
+        .has("cannot read velocities from '")
+        .has("f_2.csv': particle 0 has a non-finite velocity (0.5, NaN, 2)");
 }

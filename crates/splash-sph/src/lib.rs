@@ -47,7 +47,7 @@ pub use config::{
 };
 pub use error::{Error, Result};
 pub use glam::Vec3;
-pub use io::{InputFormat, MeshFormat, Particles, UpAxis, read_particles};
+pub use io::{Attribute, InputFormat, MeshFormat, Particles, UpAxis, read_particles};
 pub use length::Length;
 pub use mesh::TriMesh;
 pub use recon::Reconstruction;

@@ -1,19 +1,26 @@
 //! Particle input and mesh output: every format round-trips, bad input is reported precisely.
 
+use std::collections::BTreeMap;
 use std::fmt::Write as _;
 #[path = "../../../tests/common/mod.rs"]
 mod common;
 
 use common::TempDir;
 use std::fs;
+use std::io::ErrorKind;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use glam::Vec3;
 use ply_rs_bw::parser::Parser;
-use ply_rs_bw::ply::{DefaultElement, Property};
+use ply_rs_bw::ply::{
+    Addable, DefaultElement, ElementDef, Encoding as PlyEncoding, Ply, Property, PropertyDef,
+    PropertyType, ScalarType,
+};
+use ply_rs_bw::writer::Writer;
 use splash_sph::io::{InputFormat, MeshFormat, write_mesh, write_mesh_file};
 use splash_sph::mesh::TriMesh;
+use splash_sph::{Attribute, Particles};
 
 /// The positions of a particle file.
 fn read_particles(path: &Path, format: Option<InputFormat>) -> splash_sph::Result<Vec<Vec3>> {
@@ -536,6 +543,41 @@ fn bad_text_and_raw_files_are_reported() {
     assert_fails(&text, Some(InputFormat::Raw), &["6 bytes long"]);
 }
 
+/// A failure to read a file is an `Error::Io` with the OS's error kind; bad content is an
+/// `Error::Format`.
+#[test]
+fn errors_say_whose_they_are() {
+    let dir = TempDir::new("error-kinds");
+    let folder = dir.path("folder.ply");
+    fs::create_dir(&folder).unwrap();
+    for (path, kind) in [
+        (dir.path("missing.ply"), ErrorKind::NotFound),
+        (folder, ErrorKind::IsADirectory),
+    ] {
+        match splash_sph::read_particles(&path, None) {
+            Err(splash_sph::Error::Io {
+                path: at, source, ..
+            }) => assert_eq!((at, source.kind()), (path, kind)),
+            other => panic!("{}: {other:?}", path.display()),
+        }
+    }
+    let bad = dir.file("bad.csv", "x,y,z\n1,2,oops\n");
+    match splash_sph::read_particles(&bad, None) {
+        Err(splash_sph::Error::Format { path, message }) => {
+            assert_eq!(path, bad);
+            assert_eq!(message, "line 2, column 3 ('z'): 'oops' is not a number");
+        }
+        other => panic!("{other:?}"),
+    }
+    let err = write_mesh_file(&dir.path("folder.ply/"), &tetrahedron(), MeshFormat::Obj);
+    match err {
+        Err(splash_sph::Error::Io { message, .. }) => {
+            assert!(message.starts_with("cannot write '"), "{message}");
+        }
+        other => panic!("{other:?}"),
+    }
+}
+
 /// Cutting or corrupting valid files anywhere gives errors (or particles), never a panic.
 #[test]
 fn damaged_files_never_panic() {
@@ -564,6 +606,407 @@ fn damaged_files_never_panic() {
             let _ = read_particles(&damaged, None);
         }
     }
+}
+
+/// The value a test file holds in property `k` of particle `i`: exact in every type used, and
+/// different for every property and particle.
+fn value(ty: &str, k: usize, i: usize) -> f64 {
+    let whole = (3 * k + i) as f64;
+    if matches!(ty, "float" | "double") {
+        whole + 0.25
+    } else {
+        whole
+    }
+}
+
+/// A PLY file of `n` particles with the vertex properties `props` (type, name) holding
+/// [`value`]s; returns it with the values of each scalar property by name.
+fn valued_ply(
+    encoding: Encoding,
+    props: &[(&str, &str)],
+    n: usize,
+) -> (Vec<u8>, BTreeMap<String, Vec<f32>>) {
+    let format = match encoding {
+        Encoding::Ascii => "ascii",
+        Encoding::Le => "binary_little_endian",
+        Encoding::Be => "binary_big_endian",
+    };
+    let mut header = format!("ply\nformat {format} 1.0\nelement vertex {n}\n");
+    for (ty, name) in props {
+        let ty = if *ty == "list" { "list uchar int" } else { ty };
+        writeln!(header, "property {ty} {name}").unwrap();
+    }
+    header += "end_header\n";
+    let mut out = header.into_bytes();
+    let mut values: BTreeMap<String, Vec<f32>> = BTreeMap::new();
+    for i in 0..n {
+        for (k, (ty, name)) in props.iter().enumerate() {
+            encode(ty, value(ty, k, i), encoding, &mut out);
+            if *ty != "list" {
+                let column = values.entry((*name).to_owned()).or_default();
+                column.push(value(ty, k, i) as f32);
+            }
+        }
+        if let Encoding::Ascii = encoding {
+            out.push(b'\n');
+        }
+    }
+    (out, values)
+}
+
+/// The particles `values` (by column name; none without particles) make with the given scalar
+/// and vector attributes.
+fn expected(
+    values: &BTreeMap<String, Vec<f32>>,
+    scalars: &[&str],
+    vectors: &[(&str, [&str; 3])],
+) -> Particles {
+    let column = |name: &str| match values.get(name) {
+        Some(column) => column.clone(),
+        None if values.is_empty() => Vec::new(),
+        None => panic!("no column '{name}' in {values:?}"),
+    };
+    let triples = |[a, b, c]: [&str; 3]| -> Vec<Vec3> {
+        let [a, b, c] = [a, b, c].map(column);
+        (0..a.len()).map(|i| Vec3::new(a[i], b[i], c[i])).collect()
+    };
+    let mut attributes = BTreeMap::new();
+    for name in scalars {
+        let column = column(name);
+        attributes.insert((*name).to_owned(), Attribute::Scalar(column));
+    }
+    for (name, columns) in vectors {
+        attributes.insert((*name).to_owned(), Attribute::Vector(triples(*columns)));
+    }
+    Particles {
+        positions: triples(["x", "y", "z"]),
+        attributes,
+    }
+}
+
+/// Vector triples in any order and of mixed types, and scalars of every kind.
+const MIXED: &[(&str, &str)] = &[
+    ("uchar", "flag"),
+    ("float", "vz"),
+    ("double", "x"),
+    ("int", "id"),
+    ("float", "vx"),
+    ("float", "y"),
+    ("double", "vy"),
+    ("float", "nz"),
+    ("float", "z"),
+    ("double", "density"),
+    ("uchar", "nx"),
+    ("float", "ny"),
+    ("float", "foo_x"),
+    ("int", "foo_y"),
+    ("double", "foo_z"),
+];
+const MIXED_SCALARS: &[&str] = &["density", "flag", "id"];
+const MIXED_VECTORS: &[(&str, [&str; 3])] = &[
+    ("velocity", ["vx", "vy", "vz"]),
+    ("normal", ["nx", "ny", "nz"]),
+    ("foo", ["foo_x", "foo_y", "foo_z"]),
+];
+
+#[test]
+fn ply_files_yield_every_attribute() {
+    let dir = TempDir::new("ply-attributes");
+    // A list property makes the binary records vary in size: another reader path.
+    let mut with_list = MIXED.to_vec();
+    with_list.insert(4, ("list", "neighbours"));
+    for encoding in [Encoding::Ascii, Encoding::Le, Encoding::Be] {
+        for (layout, props) in [("fixed", MIXED), ("list", &with_list[..])] {
+            let (bytes, values) = valued_ply(encoding, props, 5);
+            let path = dir.file(&format!("{layout}-{encoding:?}.ply"), bytes);
+            let read = splash_sph::read_particles(&path, None).unwrap();
+            let want = expected(&values, MIXED_SCALARS, MIXED_VECTORS);
+            assert_eq!(read, want, "{}", path.display());
+        }
+    }
+    // Without vertices, the attributes are there, empty.
+    let (bytes, values) = valued_ply(Encoding::Le, MIXED, 0);
+    let read = splash_sph::read_particles(&dir.file("empty.ply", bytes), None).unwrap();
+    assert_eq!(read, expected(&values, MIXED_SCALARS, MIXED_VECTORS));
+    assert_eq!(read.attributes.len(), 6);
+}
+
+#[test]
+fn triples_are_vectors_unless_their_name_is_taken() {
+    let names = [
+        "velocity_z",
+        "x",
+        "velocity_x",
+        "y",
+        "velocity_y",
+        "z",
+        // `velocity` is taken by the triple before.
+        "vx",
+        "vy",
+        "vz",
+        // `normal` is a property.
+        "normal",
+        "nx",
+        "ny",
+        "nz",
+        // `x` is a property.
+        "x_x",
+        "x_y",
+        "x_z",
+        // Incomplete, nameless, or not lower case (PLY names are case-sensitive).
+        "bar_x",
+        "bar_y",
+        "_x",
+        "_y",
+        "_z",
+        "VX",
+        "VY",
+        "VZ",
+    ];
+    let props: Vec<(&str, &str)> = names.iter().map(|&name| ("float", name)).collect();
+    let (bytes, values) = valued_ply(Encoding::Ascii, &props, 3);
+    let dir = TempDir::new("triples");
+    let read = splash_sph::read_particles(&dir.file("triples.ply", bytes), None).unwrap();
+    let vector = ["velocity_x", "velocity_y", "velocity_z"];
+    let scalars: Vec<&str> = names
+        .into_iter()
+        .filter(|name| !["x", "y", "z"].contains(name) && !vector.contains(name))
+        .collect();
+    assert_eq!(read, expected(&values, &scalars, &[("velocity", vector)]));
+}
+
+#[test]
+fn text_tables_with_a_header_yield_every_numeric_column() {
+    let dir = TempDir::new("csv-attributes");
+    let rows = 4;
+    let columns = |names: &[&str]| -> BTreeMap<String, Vec<f32>> {
+        let column = |k: usize| (0..rows).map(|i| value("float", k, i) as f32).collect();
+        (names.iter().enumerate())
+            .map(|(k, name)| (name.to_ascii_lowercase(), column(k)))
+            .collect()
+    };
+    // `extra` columns follow, each row's with `{i}` replaced by the row's number.
+    let table = |names: &[&str], separator: &str, extra: [&str; 2]| {
+        let mut text = names.join(separator) + extra[0] + "\n";
+        for i in 0..rows {
+            let row: Vec<String> = (0..names.len())
+                .map(|k| (value("float", k, i) as f32).to_string())
+                .collect();
+            text += &(row.join(separator) + &extra[1].replace("{i}", &i.to_string()) + "\n");
+        }
+        text
+    };
+
+    // Comma separated, any case and order; a text column and a repeated name are skipped.
+    let names = ["id", "Z", "vx", "y", "X", "VY", "vz", "rho"];
+    let text = table(&names, ",", [",name,RHO", ",p{i},9"]);
+    let read = splash_sph::read_particles(&dir.file("comma.csv", &text), None).unwrap();
+    let velocity = ("velocity", ["vx", "vy", "vz"]);
+    let want = expected(&columns(&names), &["id", "rho"], &[velocity]);
+    assert_eq!(read, want, "{text}");
+
+    // Whitespace separated; a vector keeps the name its x column spells.
+    let names = [
+        "x",
+        "y",
+        "z",
+        "velocity_x",
+        "velocity_y",
+        "velocity_z",
+        "density",
+        "Foo_X",
+        "foo_y",
+        "FOO_Z",
+    ];
+    let text = table(&names, " \t", ["", ""]);
+    let read = splash_sph::read_particles(&dir.file("spaces.txt", &text), None).unwrap();
+    let values = columns(&names);
+    let velocity = ("velocity", ["velocity_x", "velocity_y", "velocity_z"]);
+    let mut want = expected(&values, &["density"], &[velocity]);
+    let foo = expected(&values, &[], &[("Foo", ["foo_x", "foo_y", "foo_z"])]);
+    want.attributes.extend(foo.attributes);
+    assert_eq!(read, want, "{text}");
+
+    // No header: positions only.
+    let read = splash_sph::read_particles(&dir.file("plain.csv", "1,2,3,4,5\n"), None).unwrap();
+    assert_eq!(read.positions, [Vec3::new(1.0, 2.0, 3.0)]);
+    assert!(read.attributes.is_empty());
+
+    // A header without rows: its columns are attributes without values.
+    let path = dir.file("header.csv", "x,y,z,vx,vy,vz,rho\n");
+    let read = splash_sph::read_particles(&path, None).unwrap();
+    assert_eq!(read.attributes["velocity"], Attribute::Vector(Vec::new()));
+    assert_eq!(read.attributes["rho"], Attribute::Scalar(Vec::new()));
+
+    // A column that holds numbers must hold them in every row.
+    assert_fails(
+        &dir.file("word.csv", "x,y,z,rho\n1,2,3,4\n1,2,3,high\n"),
+        None,
+        &["line 3, column 4 ('rho'): 'high' is not a number"],
+    );
+    assert_fails(
+        &dir.file("short.csv", "x,y,z,rho\n1,2,3,4\n1,2,3\n"),
+        None,
+        &["line 3: the row has only 3 columns; missing column 4 ('rho')"],
+    );
+}
+
+/// A PLY file written by ply_rs_bw, in `encoding`, with a face element after the vertices.
+fn independent_ply(encoding: PlyEncoding, n: usize) -> Vec<u8> {
+    let mut ply = Ply::<DefaultElement>::new();
+    ply.header.encoding = encoding;
+    let mut vertex = ElementDef::new("vertex".to_owned());
+    let types = [
+        ("x", ScalarType::Float),
+        ("y", ScalarType::Float),
+        ("z", ScalarType::Float),
+        ("velocity_x", ScalarType::Double),
+        ("velocity_y", ScalarType::Double),
+        ("velocity_z", ScalarType::Double),
+        ("density", ScalarType::Float),
+        ("flag", ScalarType::UChar),
+        ("id", ScalarType::Int),
+    ];
+    for (name, ty) in &types {
+        let def = PropertyDef::new((*name).to_owned(), PropertyType::Scalar(ty.clone()));
+        vertex.properties.add(def);
+    }
+    ply.header.elements.add(vertex);
+    let mut face = ElementDef::new("face".to_owned());
+    let list = PropertyType::List(ScalarType::UChar, ScalarType::Int);
+    face.properties
+        .add(PropertyDef::new("vertex_indices".to_owned(), list));
+    ply.header.elements.add(face);
+    let vertices = (0..n)
+        .map(|i| {
+            let mut e = DefaultElement::new();
+            for (k, (name, ty)) in types.iter().enumerate() {
+                // Exact as f32, and different for every property and particle.
+                let v = ((i * types.len() + k) as f32 * 0.37).sin() * 10.0;
+                let property = match ty {
+                    ScalarType::Float => Property::Float(v),
+                    ScalarType::Double => Property::Double(f64::from(v)),
+                    ScalarType::UChar => Property::UChar((i + k) as u8),
+                    _ => Property::Int(-((i * k) as i32)),
+                };
+                e.insert((*name).to_owned(), property);
+            }
+            e
+        })
+        .collect();
+    ply.payload.insert("vertex".to_owned(), vertices);
+    let mut face = DefaultElement::new();
+    face.insert(
+        "vertex_indices".to_owned(),
+        Property::ListInt(vec![0, 1, 2]),
+    );
+    ply.payload.insert("face".to_owned(), vec![face]);
+    let mut out = Vec::new();
+    Writer::new().write_ply(&mut out, &mut ply).unwrap();
+    out
+}
+
+/// The vertices of a PLY file as ply_rs_bw reads them: every scalar property as `f32`.
+fn ply_rs_columns(bytes: &[u8]) -> BTreeMap<String, Vec<f32>> {
+    let ply = Parser::<DefaultElement>::new()
+        .read_ply(&mut &bytes[..])
+        .unwrap();
+    let mut columns: BTreeMap<String, Vec<f32>> = BTreeMap::new();
+    for vertex in &ply.payload["vertex"] {
+        for (name, property) in vertex {
+            let value = match property {
+                Property::Float(v) => *v,
+                Property::Double(v) => *v as f32,
+                Property::UChar(v) => f32::from(*v),
+                Property::Int(v) => *v as f32,
+                other => panic!("{name}: {other:?}"),
+            };
+            columns.entry(name.clone()).or_default().push(value);
+        }
+    }
+    columns
+}
+
+#[test]
+fn ply_files_of_an_independent_writer_read_back_equal() {
+    let dir = TempDir::new("ply-rs");
+    for encoding in [
+        PlyEncoding::Ascii,
+        PlyEncoding::BinaryLittleEndian,
+        PlyEncoding::BinaryBigEndian,
+    ] {
+        let bytes = independent_ply(encoding, 6);
+        let values = ply_rs_columns(&bytes);
+        let path = dir.file(&format!("{encoding:?}.ply"), &bytes);
+        let read = splash_sph::read_particles(&path, None).unwrap();
+        let vector = ("velocity", ["velocity_x", "velocity_y", "velocity_z"]);
+        let want = expected(&values, &["density", "flag", "id"], &[vector]);
+        assert_eq!(read, want, "{encoding:?}");
+        assert_eq!(read.len(), 6);
+    }
+}
+
+#[test]
+fn the_real_fixture_has_velocity_and_density() {
+    let path = common::fixture("frame_0040.ply");
+    let read = splash_sph::read_particles(&path, None).unwrap();
+    let values = ply_rs_columns(&fs::read(&path).unwrap());
+    let want = expected(&values, &["density"], &[("velocity", ["vx", "vy", "vz"])]);
+    assert_eq!(read.attributes.len(), 2);
+    let Attribute::Vector(velocity) = &read.attributes["velocity"] else {
+        panic!("velocity is not a vector");
+    };
+    assert_eq!(velocity.len(), 44_064);
+    // A fluid in motion, at about water's rest density.
+    assert!(velocity.iter().any(|v| v.length() > 0.5));
+    let Attribute::Scalar(density) = &read.attributes["density"] else {
+        panic!("density is not a scalar");
+    };
+    let mean = density.iter().sum::<f32>() / density.len() as f32;
+    assert!((900.0..1100.0).contains(&mean), "mean density {mean}");
+    assert_eq!(read, want);
+}
+
+#[test]
+fn truncated_files_with_attributes_are_reported() {
+    let dir = TempDir::new("cut-attributes");
+    let mut with_list = MIXED.to_vec();
+    with_list.insert(4, ("list", "neighbours"));
+    for (name, props) in [("fixed", MIXED), ("list", &with_list[..])] {
+        let (bytes, _) = valued_ply(Encoding::Le, props, 5);
+        // Inside the fourth of five records, which are all of one size.
+        let payload_start = header_bytes(&bytes);
+        let record = (bytes.len() - payload_start) / 5;
+        let cut = payload_start + 3 * record + record / 2;
+        let path = dir.file(&format!("{name}.ply"), &bytes[..cut]);
+        let expected = if name == "fixed" {
+            "after 3 complete vertex records"
+        } else {
+            "inside vertex record 3 of 5"
+        };
+        assert_fails(
+            &path,
+            None,
+            &["truncated", &format!("byte offset {cut}"), expected],
+        );
+    }
+    let (bytes, _) = valued_ply(Encoding::Ascii, MIXED, 5);
+    let text = String::from_utf8(bytes).unwrap();
+    let cut: String = text
+        .split_inclusive('\n')
+        .take(text.lines().count() - 2)
+        .collect();
+    let path = dir.file("ascii.ply", cut);
+    assert_fails(&path, None, &["after 3 of 5 vertices"]);
+}
+
+/// The length of a PLY file's header.
+fn header_bytes(bytes: &[u8]) -> usize {
+    bytes
+        .windows(11)
+        .position(|w| w == b"end_header\n")
+        .unwrap()
+        + 11
 }
 
 /// A tetrahedron with per-vertex normals.
@@ -739,23 +1182,16 @@ fn mesh_files_are_replaced_atomically() {
 }
 
 /// Reads a frame of the shared data set, if it is there.
-fn real_frame(path: &str) -> Option<(Vec<Vec3>, Duration)> {
-    if !Path::new(path).exists() {
-        println!("skipped: {path} is not there");
-        return None;
-    }
+fn real_frame(relative: &str) -> Option<(Vec<Vec3>, Duration)> {
+    let path = common::shared_data(relative)?;
     let start = Instant::now();
-    let particles = read_particles(Path::new(path), None).unwrap();
+    let particles = read_particles(&path, None).unwrap();
     Some((particles, start.elapsed()))
 }
 
 #[test]
 fn reads_a_real_frame() {
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../shared/data/cbd-small/frame_0040.ply"
-    );
-    let Some((particles, _)) = real_frame(path) else {
+    let Some((particles, _)) = real_frame("cbd-small/frame_0040.ply") else {
         return;
     };
     assert_eq!(particles.len(), 44_064);
@@ -764,11 +1200,7 @@ fn reads_a_real_frame() {
 
 #[test]
 fn reads_a_million_particles() {
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../shared/data/cbd-large/frame_0023.ply"
-    );
-    let Some((particles, elapsed)) = real_frame(path) else {
+    let Some((particles, elapsed)) = real_frame("cbd-large/frame_0023.ply") else {
         return;
     };
     println!("read {} particles in {elapsed:?}", particles.len());

@@ -8,7 +8,7 @@ use std::path::Path;
 use std::process;
 use std::sync::atomic::{AtomicU64, Ordering};
 
-use anyhow::{Context, Result};
+use super::failure::IoFailure;
 
 /// Distinguishes temporaries of concurrent writes from one process.
 static NEXT_TEMPORARY: AtomicU64 = AtomicU64::new(0);
@@ -19,28 +19,25 @@ pub(super) fn write_file(
     path: &Path,
     write: impl FnOnce(&mut File) -> io::Result<()>,
 ) -> crate::Result<()> {
-    replace(path, write).map_err(|e| {
-        let message = format!("cannot write '{}': {e:#}", path.display());
-        let source = match e.chain().find_map(|c| c.downcast_ref::<io::Error>()) {
-            Some(io) => io::Error::new(io.kind(), io.to_string()),
-            None => io::Error::other(format!("{e:#}")),
-        };
-        crate::Error::Io {
-            path: path.to_path_buf(),
-            message,
-            source,
-        }
-    })
+    replace(path, write)
+        .map_err(|e| e.into_error(path, format_args!("cannot write '{}'", path.display())))
 }
 
-fn replace(path: &Path, write: impl FnOnce(&mut File) -> io::Result<()>) -> Result<()> {
-    let name = path.file_name().context("the path has no file name")?;
+fn replace(path: &Path, write: impl FnOnce(&mut File) -> io::Result<()>) -> Result<(), IoFailure> {
+    let Some(name) = path.file_name() else {
+        let message = "the path has no file name";
+        return Err(IoFailure::of_kind(io::ErrorKind::InvalidInput, message));
+    };
     let dir = match path.parent() {
         Some(dir) if !dir.as_os_str().is_empty() => dir,
         _ => Path::new("."),
     };
-    fs::create_dir_all(dir)
-        .with_context(|| format!("cannot create the directory '{}'", dir.display()))?;
+    fs::create_dir_all(dir).map_err(|e| {
+        IoFailure::new(
+            format_args!("cannot create the directory '{}'", dir.display()),
+            e,
+        )
+    })?;
     let mut temporary = OsString::from(".");
     temporary.push(name);
     temporary.push(format!(
@@ -86,14 +83,23 @@ fn write_temporary(
     temporary: &Path,
     path: &Path,
     write: impl FnOnce(&mut File) -> io::Result<()>,
-) -> Result<()> {
-    let shown = temporary.display();
-    let mut file = File::create(temporary)
-        .with_context(|| format!("cannot create the temporary file '{shown}'"))?;
-    write(&mut file).with_context(|| format!("cannot write the temporary file '{shown}'"))?;
-    file.sync_all()
-        .with_context(|| format!("cannot sync the temporary file '{shown}'"))?;
+) -> Result<(), IoFailure> {
+    let failed = |doing: &str, e| {
+        let doing = format!(
+            "cannot {doing} the temporary file '{}'",
+            temporary.display()
+        );
+        IoFailure::new(doing, e)
+    };
+    let mut file = File::create(temporary).map_err(|e| failed("create", e))?;
+    write(&mut file).map_err(|e| failed("write", e))?;
+    file.sync_all().map_err(|e| failed("sync", e))?;
     drop(file);
-    fs::rename(temporary, path)
-        .with_context(|| format!("cannot rename the temporary file '{shown}' onto the target"))
+    fs::rename(temporary, path).map_err(|e| {
+        let doing = format!(
+            "cannot rename the temporary file '{}' onto the target",
+            temporary.display()
+        );
+        IoFailure::new(doing, e)
+    })
 }

@@ -4,9 +4,11 @@
 use std::io::BufReader;
 use std::path::Path;
 
-use anyhow::{Result, anyhow, bail};
 use glam::Vec3;
 
+use super::Particles;
+use super::attribute_columns::AttributeColumns;
+use super::failure::Result;
 use super::lines::Lines;
 
 #[derive(Clone, Copy)]
@@ -64,149 +66,154 @@ fn unquote(field: &str) -> &str {
         .map_or(field, str::trim)
 }
 
-/// Which columns hold the coordinates, and what to call them in messages.
-struct Columns {
-    index: [usize; 3],
-    names: [String; 3],
+/// The table's layout, as its first line declares it.
+struct Table {
+    separator: Separator,
+    /// The columns of `x`, `y`, `z`.
+    xyz: [usize; 3],
+    /// The header's column names; `x y z` without a header.
+    names: Vec<String>,
+    has_header: bool,
 }
 
-const COORDINATES: [[&str; 3]; 1] = [["x", "y", "z"]];
-/// The velocity columns splash reads, in order of preference.
-const VELOCITIES: [[&str; 3]; 2] = [
-    ["vx", "vy", "vz"],
-    ["velocity_x", "velocity_y", "velocity_z"],
-];
+impl Table {
+    /// Reads the layout from the first line, `text`: a header if any of its fields is not a
+    /// number.
+    fn new(text: &str, line: usize) -> Result<Self> {
+        let separator = Separator::detect(text);
+        let has_header = separator.fields(text).any(|f| f.parse::<f32>().is_err());
+        if !has_header {
+            return Ok(Self {
+                separator,
+                xyz: [0, 1, 2],
+                names: ["x", "y", "z"].map(String::from).to_vec(),
+                has_header,
+            });
+        }
+        let names: Vec<&str> = separator.fields(text).collect();
+        let mut xyz = [0; 3];
+        for (slot, wanted) in xyz.iter_mut().zip(["x", "y", "z"]) {
+            *slot = names
+                .iter()
+                .position(|name| name.eq_ignore_ascii_case(wanted))
+                .ok_or_else(|| {
+                    format_failure!(
+                        "line {line} is taken as a header (not all its fields are numbers), but it \
+                         has no column '{wanted}' (its columns: {})",
+                        names.join(", ")
+                    )
+                })?;
+        }
+        Ok(Self {
+            separator,
+            xyz,
+            names: names.into_iter().map(String::from).collect(),
+            has_header,
+        })
+    }
 
-pub(super) fn read(path: &Path) -> Result<Vec<Vec3>> {
-    read_triples(path, &COORDINATES, true)
+    /// The attribute columns: those the header names, other than the coordinates, that are
+    /// `numeric`.
+    fn attributes(&self, numeric: impl Fn(usize) -> bool) -> AttributeColumns {
+        if !self.has_header {
+            return AttributeColumns::none();
+        }
+        let names: Vec<&str> = self.names.iter().map(String::as_str).collect();
+        AttributeColumns::new(&names, self.xyz, numeric, true)
+    }
 }
 
-/// Reads the velocities: the first of [`VELOCITIES`] the header names; a header is required.
-pub(super) fn read_velocities(path: &Path) -> Result<Vec<Vec3>> {
-    read_triples(path, &VELOCITIES, false)
-}
-
-/// Reads three columns per row as a point: the first of `candidates` whose first column the
-/// header names, or the first three columns when there is no header and `headerless` allows.
-fn read_triples(path: &Path, candidates: &[[&str; 3]], headerless: bool) -> Result<Vec<Vec3>> {
+/// Reads the coordinates of every row and, if the table has a header, every column that holds a
+/// number in the first row as an attribute (every later row must then hold a number there).
+pub(super) fn read(path: &Path) -> Result<Particles> {
     let (file, file_len) = super::open_input(path)?;
     let mut lines = Lines::new(BufReader::with_capacity(1 << 16, file), 0);
     let mut particles = Vec::new();
-    let mut layout: Option<(Separator, Columns)> = None;
+    let mut table: Option<Table> = None;
+    let mut attributes: Option<AttributeColumns> = None;
     while let Some((line, text)) = lines.next_non_blank()? {
         let text = text.trim_start_matches('\u{feff}');
         if text.is_empty() || text.starts_with('#') {
             continue;
         }
-        let (separator, columns) = match &layout {
-            Some((separator, columns)) => (*separator, columns),
+        let table = match &table {
+            Some(table) => table,
             None => {
-                let separator = Separator::detect(text);
-                let is_header = separator.fields(text).any(|f| f.parse::<f32>().is_err());
-                let columns = if is_header {
-                    header_columns(separator, text, line, candidates)?
-                } else if !headerless {
-                    bail!(
-                        "line {line}: the table has no header, so it names no {} columns",
-                        candidates[0].join(", ")
-                    );
-                } else {
-                    Columns {
-                        index: [0, 1, 2],
-                        names: ["x", "y", "z"].map(String::from),
-                    }
-                };
-                // Typical lines are 20-40 bytes; the file size bounds the estimate.
-                particles.reserve(usize::try_from(file_len / 32)?);
-                let (separator, columns) = layout.insert((separator, columns));
-                if is_header {
+                let new = table.insert(Table::new(text, line)?);
+                if new.has_header {
                     continue;
                 }
-                (*separator, &*columns)
+                new
             }
         };
-        let p = parse_row(separator, text, columns, line)?;
+        let attributes = match &mut attributes {
+            Some(attributes) => attributes,
+            None => {
+                let fields: Vec<&str> = table.separator.fields(text).collect();
+                let numeric = |i: usize| fields.get(i).is_some_and(|f| f.parse::<f32>().is_ok());
+                let attributes = attributes.insert(table.attributes(numeric));
+                // Rows like the first fill the file: an estimate, bounded by the file's size.
+                let rows = usize::try_from(file_len / (text.len() as u64 + 1)).unwrap_or(0);
+                particles.reserve(rows);
+                attributes.reserve(rows);
+                attributes
+            }
+        };
+        let p = parse_row(table, attributes, text, line)?;
         particles.push(super::finite(p, || format!("line {line}"))?);
     }
-    Ok(particles)
-}
-
-/// Finds the columns of the first of `candidates` whose first column the header line names.
-fn header_columns(
-    separator: Separator,
-    text: &str,
-    line: usize,
-    candidates: &[[&str; 3]],
-) -> Result<Columns> {
-    let names: Vec<&str> = separator.fields(text).collect();
-    let has = |wanted: &str| names.iter().any(|n| n.eq_ignore_ascii_case(wanted));
-    let chosen = match candidates.iter().find(|c| has(c[0])) {
-        Some(chosen) => *chosen,
-        None if candidates.len() == 1 => candidates[0],
-        None => {
-            let wanted: Vec<String> = candidates.iter().map(|c| c.join(", ")).collect();
-            bail!(
-                "line {line}: the header has none of the columns {} (its columns: {})",
-                wanted.join(" or "),
-                names.join(", ")
-            );
-        }
+    let attributes = match (attributes, table) {
+        (Some(attributes), _) => attributes,
+        // A header without rows: its columns are attributes without values.
+        (None, Some(table)) => table.attributes(|_| true),
+        (None, None) => AttributeColumns::none(),
     };
-    let mut index = [0; 3];
-    for (slot, wanted) in index.iter_mut().zip(chosen) {
-        *slot = names
-            .iter()
-            .position(|name| name.eq_ignore_ascii_case(wanted))
-            .ok_or_else(|| {
-                anyhow!(
-                    "line {line} is taken as a header (not all its fields are numbers), but it has \
-                     no column '{wanted}' (its columns: {})",
-                    names.join(", ")
-                )
-            })?;
-    }
-    Ok(Columns {
-        index,
-        names: index.map(|i| names.get(i).copied().unwrap_or_default().to_owned()),
+    Ok(Particles {
+        positions: particles,
+        attributes: attributes.into_map(),
     })
 }
 
-/// Parses the coordinates from data row `line`.
-fn parse_row(separator: Separator, text: &str, columns: &Columns, line: usize) -> Result<Vec3> {
-    let mut coordinates = [None; 3];
-    let last = columns.index.iter().copied().max().unwrap_or_default();
+/// Parses data row `line`: the coordinates, returned, and the attributes, appended.
+fn parse_row(
+    table: &Table,
+    attributes: &mut AttributeColumns,
+    text: &str,
+    line: usize,
+) -> Result<Vec3> {
+    let mut coordinates = [0.0; 3];
+    let last = table.xyz.iter().copied().max().unwrap_or_default();
+    let last = last.max(attributes.last());
+    let name = |i: usize| table.names.get(i).map_or("", String::as_str);
+    attributes.push();
     let mut found = 0;
-    for (i, field) in separator.fields(text).enumerate().take(last + 1) {
+    for (i, field) in table.separator.fields(text).enumerate().take(last + 1) {
         found = i + 1;
-        for ((slot, &wanted), name) in coordinates
-            .iter_mut()
-            .zip(&columns.index)
-            .zip(&columns.names)
-        {
-            if wanted == i {
-                let value = field.parse::<f32>().map_err(|_| {
-                    anyhow!(
-                        "line {line}, column {} ('{name}'): '{field}' is not a number",
-                        i + 1
-                    )
-                })?;
-                *slot = Some(value);
-            }
+        let coordinate = table.xyz.iter().position(|&c| c == i);
+        if coordinate.is_none() && !attributes.reads(i) {
+            continue;
+        }
+        let value = field.parse::<f32>().map_err(|_| {
+            format_failure!(
+                "line {line}, column {} ('{}'): '{field}' is not a number",
+                i + 1,
+                name(i)
+            )
+        })?;
+        match coordinate {
+            Some(c) => coordinates[c] = value,
+            None => attributes.set_last(i, value),
         }
     }
-    let [Some(x), Some(y), Some(z)] = coordinates else {
-        let missing = columns
-            .index
-            .iter()
-            .zip(&columns.names)
-            .filter(|&(&i, _)| i >= found);
+    if found <= last {
+        let missing = (found..=last).filter(|&i| table.xyz.contains(&i) || attributes.reads(i));
         let missing: Vec<String> = missing
-            .map(|(i, name)| format!("column {} ('{name}')", i + 1))
+            .map(|i| format!("column {} ('{}')", i + 1, name(i)))
             .collect();
-        bail!(
+        bail_format!(
             "line {line}: the row has only {found} columns; missing {}",
             missing.join(", ")
         );
-    };
-    Ok(Vec3::new(x, y, z))
+    }
+    Ok(Vec3::from_array(coordinates))
 }

@@ -2,7 +2,7 @@
 
 use std::io::BufRead;
 
-use anyhow::{Context, Result, bail};
+use super::failure::{Failure, Result};
 
 pub(super) struct Lines<R> {
     reader: R,
@@ -33,7 +33,7 @@ impl<R: BufRead> Lines<R> {
             let n = self
                 .reader
                 .read_until(b'\n', &mut self.buf)
-                .with_context(|| format!("read error after line {}", self.line))?;
+                .map_err(|e| Failure::io(format_args!("read error after line {}", self.line), e))?;
             if n == 0 {
                 return Ok(None);
             }
@@ -44,7 +44,7 @@ impl<R: BufRead> Lines<R> {
         }
         match std::str::from_utf8(self.buf.trim_ascii()) {
             Ok(text) => Ok(Some((self.line, text))),
-            Err(_) => bail!("line {} is not valid UTF-8 text", self.line),
+            Err(_) => bail_format!("line {} is not valid UTF-8 text", self.line),
         }
     }
 }

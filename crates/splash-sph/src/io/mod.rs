@@ -1,19 +1,25 @@
 //! Reading particle frames and writing meshes.
 //!
-//! Particle inputs (see [`InputFormat`]):
+//! Particle inputs (see [`InputFormat`]), read in one pass with every per-particle attribute
+//! the file has (see [`read_particles`]):
 //! - PLY, ascii or binary (either byte order): the `vertex` element's `x`, `y`, `z` properties,
-//!   of any scalar type and in any position; other properties and elements are skipped.
+//!   of any scalar type and in any position; its other scalar properties are attributes, its
+//!   list properties and the other elements are skipped.
 //! - Text tables (`.csv`, `.txt`): see [`read_particles`] for the accepted dialect.
 //! - Raw: little-endian `f32` `x y z` triples and nothing else.
 //!
 //! Every reader error names the file and what is wrong with it, with the line (text) or byte
 //! offset (binary) where that helps. Coordinates must be finite. A frame without particles is
-//! valid and reads as an empty `Vec`.
+//! valid and reads as empty `Vec`s.
 //!
 //! Meshes are written as OBJ or PLY (binary little-endian or ascii), atomically when written to
 //! a file with [`write_mesh_file`].
 
+#[macro_use]
+mod failure;
+
 mod atomic;
+mod attribute_columns;
 mod csv;
 mod lines;
 mod obj;
@@ -30,12 +36,11 @@ use std::fs::File;
 use std::io::{self, BufWriter, Write};
 use std::path::Path;
 
-use anyhow::{Context, Result, anyhow, bail};
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
-use crate::error::Error;
 use crate::mesh::TriMesh;
+use failure::{Failure, IoFailure, Result};
 
 /// One particle frame: positions, and per-particle attributes by name.
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -62,40 +67,37 @@ impl Particles {
     }
 }
 
-/// A reader's error as the library's: an I/O failure underneath is [`Error::Io`], anything
-/// else a [`Error::Format`] of `path`.
-fn typed(path: &Path, e: anyhow::Error) -> Error {
-    let message = format!("{e:#}");
-    match e.chain().find_map(|c| c.downcast_ref::<io::Error>()) {
-        Some(io) => Error::Io {
-            path: path.to_path_buf(),
-            message: format!("cannot read particles from '{}': {message}", path.display()),
-            source: io::Error::new(io.kind(), io.to_string()),
-        },
-        None => Error::Format {
-            path: path.to_path_buf(),
-            message,
-        },
-    }
-}
-
-/// Reads one particle frame; `format` overrides the guess from the file's extension (see
-/// [`read_positions`] for what each format holds).
+/// Reads one particle frame, its positions and attributes; `format` overrides the guess from
+/// the file's extension.
+///
+/// Attributes are the PLY `vertex` element's scalar properties other than `x`, `y`, `z` (list
+/// properties are skipped), or the numeric columns of a text table with a header; raw files
+/// have none. Values of any type are converted to `f32`, and are not checked for finiteness.
+/// `{name}_x {name}_y {name}_z` make the vector attribute `{name}`, `vx vy vz` make
+/// `velocity` and `nx ny nz` `normal`; any other property or column is a scalar attribute of
+/// its own name (`density`). A triple whose name is also a property's or another triple's
+/// stays three scalars.
+///
+/// Text tables: fields are separated by commas if the first data or header line has one, else
+/// by semicolons if it has one, else by runs of spaces/tabs. Fields are trimmed and may be
+/// wrapped in double quotes (a quoted field cannot contain the separator). Blank lines and lines
+/// starting with `#` are skipped; CRLF line ends and a UTF-8 byte order mark are accepted. The
+/// first line is a header if any of its fields is not a number; the header must then name
+/// columns `x`, `y` and `z` (case-insensitive, anywhere), otherwise the first three columns are
+/// used and the others ignored. A header's other columns are attributes if they hold a number
+/// in the first row, and every later row must then hold one there; names compare ignoring
+/// case, and of two columns of one name the first is read.
 pub fn read_particles(path: &Path, format: Option<InputFormat>) -> crate::Result<Particles> {
     let format = match format {
         Some(format) => format,
-        None => InputFormat::from_path(path).map_err(|e| Error::config(format!("{e:#}")))?,
+        None => InputFormat::from_path(path)?,
     };
-    let positions = match format {
+    match format {
         InputFormat::Ply => ply::read(path),
         InputFormat::Csv => csv::read(path),
         InputFormat::Raw => raw::read(path),
     }
-    .map_err(|e| typed(path, e))?;
-    Ok(Particles {
-        positions,
-        attributes: BTreeMap::new(),
-    })
+    .map_err(|e| e.into_error(path))
 }
 
 /// File format of a particle frame.
@@ -139,69 +141,16 @@ impl InputFormat {
     }
 }
 
-/// Reads the particle positions of one frame; `format` overrides the guess from the extension.
-///
-/// Text tables: fields are separated by commas if the first data or header line has one, else
-/// by semicolons if it has one, else by runs of spaces/tabs. Fields are trimmed and may be
-/// wrapped in double quotes (a quoted field cannot contain the separator). Blank lines and lines
-/// starting with `#` are skipped; CRLF line ends and a UTF-8 byte order mark are accepted. The
-/// first line is a header if any of its fields is not a number; the header must then name
-/// columns `x`, `y` and `z` (case-insensitive, anywhere), otherwise the first three columns are
-/// used. Extra columns are ignored.
-pub fn read_positions(path: &Path, format: Option<InputFormat>) -> Result<Vec<Vec3>> {
-    let format = match format {
-        Some(format) => format,
-        None => InputFormat::from_path(path)?,
-    };
-    let particles = match format {
-        InputFormat::Ply => ply::read(path),
-        InputFormat::Csv => csv::read(path),
-        InputFormat::Raw => raw::read(path),
-    };
-    // One flat message, so that the path and the cause both show however the caller prints it.
-    particles.map_err(|e| anyhow!("cannot read particles from '{}': {e:#}", path.display()))
-}
-
-/// Reads the particle positions and velocities of one frame. Velocities are the PLY vertex
-/// properties `vx vy vz` (else `velocity_x velocity_y velocity_z`), or the CSV columns of those
-/// names (a header is then required); raw files have none. A file without them is an error.
-/// The file is read twice, once per triple, which keeps the position readers untouched.
-pub fn read_particles_with_velocities(
-    path: &Path,
-    format: Option<InputFormat>,
-) -> Result<(Vec<Vec3>, Vec<Vec3>)> {
-    let format = match format {
-        Some(format) => format,
-        None => InputFormat::from_path(path)?,
-    };
-    let positions = read_positions(path, Some(format))?;
-    let velocities = match format {
-        InputFormat::Ply => ply::read_velocities(path),
-        InputFormat::Csv => csv::read_velocities(path),
-        InputFormat::Raw => Err(anyhow!(
-            "raw files hold positions only, no velocities (use PLY or CSV with vx, vy, vz)"
-        )),
-    };
-    let velocities = velocities
-        .map_err(|e| anyhow!("cannot read velocities from '{}': {e:#}", path.display()))?;
-    if velocities.len() != positions.len() {
-        // Only if the file changed between the two reads.
-        bail!(
-            "'{}' changed while it was read: {} positions, {} velocities",
-            path.display(),
-            positions.len(),
-            velocities.len()
-        );
-    }
-    Ok((positions, velocities))
-}
-
 /// Opens a particle file, returning it with its length in bytes.
 fn open_input(path: &Path) -> Result<(File, u64)> {
-    let file = File::open(path).context("cannot open the file")?;
-    let metadata = file.metadata().context("cannot query the file's size")?;
+    let file = File::open(path).map_err(|e| Failure::io("cannot open the file", e))?;
+    let metadata = file
+        .metadata()
+        .map_err(|e| Failure::io("cannot query the file's size", e))?;
     if metadata.is_dir() {
-        bail!("it is a directory");
+        // Reading it would fail with a less telling message, on some systems only later.
+        let failure = IoFailure::of_kind(io::ErrorKind::IsADirectory, "it is a directory");
+        return Err(failure.into());
     }
     Ok((file, metadata.len()))
 }
@@ -395,8 +344,8 @@ fn finite(p: Vec3, at: impl FnOnce() -> String) -> Result<Vec3> {
 }
 
 #[cold]
-fn non_finite(p: Vec3, at: &str) -> anyhow::Error {
-    anyhow!(
+fn non_finite(p: Vec3, at: &str) -> Failure {
+    format_failure!(
         "{at} has a non-finite coordinate: ({}, {}, {})",
         p.x,
         p.y,

@@ -10,51 +10,46 @@ use std::fs::File;
 use std::io::{BufRead, BufReader, Read};
 use std::path::Path;
 
-use anyhow::{Context, Result, anyhow, bail};
-use glam::Vec3;
 use ply_rs_bw::parser::{Parser, Reader};
 use ply_rs_bw::ply::{DefaultElement, ElementDef, Encoding, Header, PropertyType, ScalarType};
 
+use super::Particles;
+use super::attribute_columns::AttributeColumns;
+use super::failure::{Failure, Result};
 use super::lines::Lines;
 use super::{ply_ascii, ply_binary};
 
 /// Headers are a few hundred bytes; the cap keeps a non-PLY file from being read whole.
 const MAX_HEADER_BYTES: u64 = 1 << 20;
-const COORDINATES: [[&str; 3]; 1] = [["x", "y", "z"]];
-/// The velocity properties splash reads, in order of preference.
-pub(super) const VELOCITIES: [[&str; 3]; 2] = [
-    ["vx", "vy", "vz"],
-    ["velocity_x", "velocity_y", "velocity_z"],
-];
 
-pub(super) fn read(path: &Path) -> Result<Vec<Vec3>> {
-    read_triples(path, &COORDINATES)
-}
-
-/// Reads the vertex velocities: the first of [`VELOCITIES`] the header has.
-pub(super) fn read_velocities(path: &Path) -> Result<Vec<Vec3>> {
-    read_triples(path, &VELOCITIES)
-}
-
-/// Reads three vertex properties per record as a point: the first of `candidates` whose first
-/// property the header declares.
-fn read_triples(path: &Path, candidates: &[[&str; 3]]) -> Result<Vec<Vec3>> {
+/// Reads the `vertex` element's coordinates and every other scalar property of it as an
+/// attribute (list properties are skipped).
+pub(super) fn read(path: &Path) -> Result<Particles> {
     let (file, file_len) = super::open_input(path)?;
     let mut reader = BufReader::with_capacity(1 << 16, file);
     let (header, header_len, header_lines) = read_header(&mut reader)?;
-    let layout = Layout::new(&header, candidates)?;
-    match header.encoding {
+    let layout = Layout::new(&header)?;
+    let vertex = &layout.vertex;
+    let names: Vec<&str> = vertex.props.iter().map(|p| p.name.as_str()).collect();
+    let scalar = |i: usize| matches!(vertex.props[i].kind, Kind::Scalar(_));
+    let mut attributes = AttributeColumns::new(&names, layout.xyz_indices(), scalar, false);
+    let columns = &mut attributes;
+    let positions = match header.encoding {
         Encoding::Ascii => {
             let lines = Lines::new(reader, header_lines);
-            ply_ascii::read(lines, &layout, file_len.saturating_sub(header_len))
+            ply_ascii::read(lines, &layout, columns, file_len.saturating_sub(header_len))
         }
         Encoding::BinaryLittleEndian => {
-            ply_binary::read(&mut reader, &layout, false, header_len, file_len)
+            ply_binary::read(&mut reader, &layout, columns, false, header_len, file_len)
         }
         Encoding::BinaryBigEndian => {
-            ply_binary::read(&mut reader, &layout, true, header_len, file_len)
+            ply_binary::read(&mut reader, &layout, columns, true, header_len, file_len)
         }
-    }
+    }?;
+    Ok(Particles {
+        positions,
+        attributes: attributes.into_map(),
+    })
 }
 
 /// What the payload readers need from the header.
@@ -63,15 +58,15 @@ pub(super) struct Layout {
     /// their layout checked.
     pub before: Vec<Element>,
     pub vertex: Element,
-    /// Index and type of each of the vertex properties read (`x`, `y`, `z`, or the velocity's).
+    /// Index and type of each of the vertex properties `x`, `y`, `z`.
     pub xyz: [(usize, Scalar); 3],
 }
 
 impl Layout {
-    fn new(header: &Header, candidates: &[[&str; 3]]) -> Result<Self> {
+    fn new(header: &Header) -> Result<Self> {
         let Some((vertex_index, _, vertex)) = header.elements.get_full("vertex") else {
             let names: Vec<&str> = header.elements.keys().map(String::as_str).collect();
-            bail!(
+            bail_format!(
                 "the PLY header has no 'vertex' element (its elements: {})",
                 names.join(", ")
             );
@@ -83,7 +78,7 @@ impl Layout {
             .take(vertex_index)
             .map(Element::new)
             .collect::<Result<_>>()?;
-        let xyz = coordinate_properties(&vertex, candidates)?;
+        let xyz = coordinate_properties(&vertex)?;
         Ok(Self {
             before,
             vertex,
@@ -103,23 +98,23 @@ fn read_header(reader: &mut BufReader<File>) -> Result<(Header, u64, usize)> {
     let mut limited = (&mut *reader).take(MAX_HEADER_BYTES);
     limited
         .read_until(b'\n', &mut bytes)
-        .context("cannot read the header")?;
+        .map_err(|e| Failure::io("cannot read the header", e))?;
     if bytes.trim_ascii_end() != b"ply" {
-        bail!("not a PLY file: the first line is not 'ply'");
+        bail_format!("not a PLY file: the first line is not 'ply'");
     }
     let mut lines = 1;
     loop {
         let start = bytes.len();
         let n = limited
             .read_until(b'\n', &mut bytes)
-            .context("cannot read the header")?;
+            .map_err(|e| Failure::io("cannot read the header", e))?;
         if n == 0 {
             if bytes.len() as u64 >= MAX_HEADER_BYTES {
-                bail!(
+                bail_format!(
                     "malformed PLY header: no 'end_header' line in the first {MAX_HEADER_BYTES} bytes"
                 );
             }
-            bail!("malformed PLY header: the file ends before the 'end_header' line");
+            bail_format!("malformed PLY header: the file ends before the 'end_header' line");
         }
         lines += 1;
         if bytes
@@ -137,7 +132,7 @@ fn read_header(reader: &mut BufReader<File>) -> Result<(Header, u64, usize)> {
             let message = e.to_string();
             let message = message.split("\n\tError:").next().unwrap_or_default();
             let words: Vec<&str> = message.split_whitespace().collect();
-            anyhow!("malformed PLY header: {}", words.join(" "))
+            format_failure!("malformed PLY header: {}", words.join(" "))
         })?;
     // The parser keeps the last of two same-named elements or properties in the first one's
     // place, which would silently shift the binary layout.
@@ -149,7 +144,7 @@ fn read_header(reader: &mut BufReader<File>) -> Result<(Header, u64, usize)> {
     };
     let properties: usize = header.elements.values().map(|e| e.properties.len()).sum();
     if declared("element") != header.elements.len() || declared("property") != properties {
-        bail!(
+        bail_format!(
             "malformed PLY header: two elements, or two properties of an element, have the same name"
         );
     }
@@ -273,7 +268,7 @@ impl Element {
                     PropertyType::List(len, item) => {
                         let len = Scalar::new(len);
                         if !len.is_integer() {
-                            bail!(
+                            bail_format!(
                                 "malformed PLY header: list property '{}' of element '{}' has a \
                                  non-integer length type",
                                 p.name,
@@ -320,28 +315,10 @@ impl Element {
     }
 }
 
-/// Index and type of each of three vertex properties: the first of `candidates` whose first
-/// property exists (all three must then exist).
-fn coordinate_properties(
-    vertex: &Element,
-    candidates: &[[&str; 3]],
-) -> Result<[(usize, Scalar); 3]> {
-    let has = |name: &str| vertex.props.iter().any(|p| p.name == name);
-    let names = match candidates.iter().find(|c| has(c[0])) {
-        Some(names) => *names,
-        None if candidates.len() == 1 => candidates[0],
-        None => {
-            let wanted: Vec<String> = candidates.iter().map(|c| c.join(" ")).collect();
-            let names: Vec<&str> = vertex.props.iter().map(|p| p.name.as_str()).collect();
-            bail!(
-                "the 'vertex' element has none of the properties {} (its properties: {})",
-                wanted.join(" or "),
-                names.join(", ")
-            );
-        }
-    };
+/// Index and type of each of the vertex properties `x`, `y`, `z`.
+fn coordinate_properties(vertex: &Element) -> Result<[(usize, Scalar); 3]> {
     let mut xyz = [(0, Scalar::F32); 3];
-    for (slot, name) in xyz.iter_mut().zip(names) {
+    for (slot, name) in xyz.iter_mut().zip(["x", "y", "z"]) {
         let Some((index, prop)) = vertex
             .props
             .iter()
@@ -349,13 +326,13 @@ fn coordinate_properties(
             .find(|(_, p)| p.name == name)
         else {
             let names: Vec<&str> = vertex.props.iter().map(|p| p.name.as_str()).collect();
-            bail!(
+            bail_format!(
                 "the 'vertex' element has no property '{name}' (its properties: {})",
                 names.join(", ")
             );
         };
         let Kind::Scalar(scalar) = prop.kind else {
-            bail!("the 'vertex' property '{name}' is a list, not a number");
+            bail_format!("the 'vertex' property '{name}' is a list, not a number");
         };
         *slot = (index, scalar);
     }

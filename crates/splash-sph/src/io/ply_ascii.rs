@@ -3,9 +3,10 @@
 use std::fs::File;
 use std::io::BufReader;
 
-use anyhow::{Result, anyhow, bail};
 use glam::Vec3;
 
+use super::attribute_columns::AttributeColumns;
+use super::failure::Result;
 use super::lines::Lines;
 use super::ply::{Element, Kind, Layout};
 
@@ -13,6 +14,7 @@ use super::ply::{Element, Kind, Layout};
 pub(super) fn read(
     mut lines: Lines<BufReader<File>>,
     layout: &Layout,
+    attributes: &mut AttributeColumns,
     remaining_bytes: u64,
 ) -> Result<Vec<Vec3>> {
     let (vertex, xyz) = (&layout.vertex, layout.xyz_indices());
@@ -20,7 +22,7 @@ pub(super) fn read(
     for element in layout.before.iter().filter(|e| !e.props.is_empty()) {
         for index in 0..element.count {
             if lines.next_non_blank()?.is_none() {
-                bail!(
+                bail_format!(
                     "the file ends at line {} inside element '{}', after {index} of {} records",
                     lines.line(),
                     element.name,
@@ -29,20 +31,23 @@ pub(super) fn read(
             }
         }
     }
-    // "0 0 0\n" is the shortest vertex line, which bounds the allocation.
-    let fit = usize::try_from(remaining_bytes / 6)?;
+    // Each property takes at least two bytes ("0 "), which bounds the allocation.
+    let shortest = 2 * vertex.props.len() as u64;
+    let fit = usize::try_from(remaining_bytes / shortest).unwrap_or(usize::MAX);
     let mut out = Vec::with_capacity(vertex.count.min(fit));
+    attributes.reserve(vertex.count.min(fit));
     let last = xyz.iter().copied().max().unwrap_or_default();
+    let last = last.max(attributes.last());
     for index in 0..vertex.count {
         let Some((line, text)) = lines.next_non_blank()? else {
-            bail!(
+            bail_format!(
                 "the file ends at line {} after {index} of {} vertices",
                 lines.line(),
                 vertex.count
             );
         };
-        let p = parse_vertex(text, vertex, xyz, last)
-            .map_err(|e| anyhow!("line {line} (vertex {index}): {e}"))?;
+        let p = parse_vertex(text, vertex, xyz, last, attributes)
+            .map_err(|e| format_failure!("line {line} (vertex {index}): {e}"))?;
         out.push(super::finite(p, || {
             format!("line {line} (vertex {index})")
         })?);
@@ -50,12 +55,14 @@ pub(super) fn read(
     Ok(out)
 }
 
-/// Parses the coordinates from one vertex line, reading its values up to property `last`.
+/// Parses one vertex line up to property `last`: the coordinates, returned, and the
+/// attributes, appended.
 fn parse_vertex(
     text: &str,
     vertex: &Element,
     xyz: [usize; 3],
     last: usize,
+    attributes: &mut AttributeColumns,
 ) -> Result<Vec3, String> {
     let mut tokens = text.split_ascii_whitespace();
     let too_few = || {
@@ -65,14 +72,21 @@ fn parse_vertex(
         )
     };
     let mut coordinates = [0.0; 3];
+    attributes.push();
     for (i, prop) in vertex.props.iter().enumerate().take(last + 1) {
         let token = tokens.next().ok_or_else(too_few)?;
         match prop.kind {
             Kind::Scalar(_) => {
-                if let Some(c) = xyz.iter().position(|&j| j == i) {
-                    coordinates[c] = token.parse().map_err(|_| {
-                        format!("cannot parse '{token}' as property '{}'", prop.name)
-                    })?;
+                let coordinate = xyz.iter().position(|&j| j == i);
+                if coordinate.is_none() && !attributes.reads(i) {
+                    continue;
+                }
+                let value = token
+                    .parse()
+                    .map_err(|_| format!("cannot parse '{token}' as property '{}'", prop.name))?;
+                match coordinate {
+                    Some(c) => coordinates[c] = value,
+                    None => attributes.set_last(i, value),
                 }
             }
             Kind::List { .. } => {

@@ -4,16 +4,19 @@
 use std::fs::File;
 use std::io::{self, BufRead, BufReader, ErrorKind, Read};
 
-use anyhow::{Context, Result, anyhow, bail};
 use glam::Vec3;
 
+use super::attribute_columns::AttributeColumns;
+use super::failure::{Failure, Result};
 use super::ply::{Element, Kind, Layout, Scalar};
 use super::records::{self, Records};
 
-/// Reads the payload that starts at byte `offset`.
+/// Reads the payload that starts at byte `offset`: the positions, returned, and the
+/// attributes.
 pub(super) fn read(
     reader: &mut BufReader<File>,
     layout: &Layout,
+    attributes: &mut AttributeColumns,
     big_endian: bool,
     mut offset: u64,
     file_len: u64,
@@ -23,7 +26,7 @@ pub(super) fn read(
     }
     let vertex = &layout.vertex;
     let Some(stride) = vertex.fixed_stride() else {
-        return read_varying(reader, layout, big_endian, offset, file_len);
+        return read_varying(reader, layout, attributes, big_endian, offset, file_len);
     };
     let records = Records {
         count: vertex.count,
@@ -35,10 +38,36 @@ pub(super) fn read(
     let [(ax, sx), (ay, sy), (az, sz)] = layout
         .xyz
         .map(|(i, scalar)| (vertex.scalar_offset(i), scalar));
-    records::read(reader, &records, |record, p| {
+    // Index, offset in the record and type of each attribute's property.
+    let columns: Vec<(usize, usize, Scalar)> = vertex
+        .props
+        .iter()
+        .enumerate()
+        .filter_map(|(i, p)| match p.kind {
+            Kind::Scalar(scalar) if attributes.reads(i) => {
+                Some((i, vertex.scalar_offset(i), scalar))
+            }
+            _ => None,
+        })
+        .collect();
+    // The count is checked against the file's size before anything is allocated for it.
+    records.check()?;
+    attributes.reserve(records.count);
+    let decode = |record: &[u8], p: &mut Vec3| {
         p.x = sx.to_f32(record.get(ax..)?, big_endian)?;
         p.y = sy.to_f32(record.get(ay..)?, big_endian)?;
         p.z = sz.to_f32(record.get(az..)?, big_endian)?;
+        Some(())
+    };
+    // The attributes are decoded a column at a time, after the positions of each chunk, which
+    // leaves the positions' loop as tight as without them.
+    records::read(reader, &records, decode, |first, chunk| {
+        attributes.resize(first + chunk.len() / stride);
+        for &(i, at, scalar) in &columns {
+            let values = chunk.chunks_exact(stride);
+            let values = values.map(|record| scalar.to_f32(record.get(at..)?, big_endian));
+            attributes.fill(i, first, values)?;
+        }
         Some(())
     })
 }
@@ -57,16 +86,18 @@ fn skip(
             .checked_mul(stride as u64)
             .filter(|&bytes| bytes <= remaining)
         else {
-            bail!(
+            bail_format!(
                 "truncated binary data: element '{}' declares {} records of {stride} bytes from \
                  byte offset {offset}, but the file ends at byte offset {file_len}",
                 element.name,
                 element.count
             );
         };
+        // `bytes` is at most the file's length, which fits in an i64.
+        let bytes_i64 = i64::try_from(bytes).unwrap_or(i64::MAX);
         reader
-            .seek_relative(i64::try_from(bytes)?)
-            .with_context(|| format!("read error at byte offset {offset}"))?;
+            .seek_relative(bytes_i64)
+            .map_err(|e| Failure::io(format_args!("read error at byte offset {offset}"), e))?;
         return Ok(offset + bytes);
     }
     (0..element.count).try_fold(offset, |offset, index| {
@@ -86,6 +117,7 @@ fn skip(
 fn read_varying(
     reader: &mut BufReader<File>,
     layout: &Layout,
+    attributes: &mut AttributeColumns,
     big_endian: bool,
     mut offset: u64,
     file_len: u64,
@@ -94,10 +126,14 @@ fn read_varying(
     // Every record holds at least its scalars and list lengths, which bounds the allocation.
     let min_record: usize = vertex.props.iter().map(|p| p.kind.head_size()).sum();
     let fit = file_len.saturating_sub(offset) / min_record.max(1) as u64;
-    let mut out = Vec::with_capacity(vertex.count.min(usize::try_from(fit)?));
+    let capacity = vertex.count.min(usize::try_from(fit).unwrap_or(usize::MAX));
+    let mut out = Vec::with_capacity(capacity);
+    attributes.reserve(capacity);
     for index in 0..vertex.count {
         let start = offset;
         let mut coordinates = [None; 3];
+        let mut decoded = true;
+        attributes.push();
         offset = walk_record(
             reader,
             vertex,
@@ -108,11 +144,16 @@ fn read_varying(
             |i, s, bytes| {
                 if let Some(c) = xyz.iter().position(|&j| j == i) {
                     coordinates[c] = s.to_f32(bytes, big_endian);
+                } else if attributes.reads(i) {
+                    match s.to_f32(bytes, big_endian) {
+                        Some(value) => attributes.set_last(i, value),
+                        None => decoded = false,
+                    }
                 }
             },
         )?;
-        let [Some(x), Some(y), Some(z)] = coordinates else {
-            bail!("cannot decode vertex {index} at byte offset {start}");
+        let ([Some(x), Some(y), Some(z)], true) = (coordinates, decoded) else {
+            bail_format!("cannot decode vertex {index} at byte offset {start}");
         };
         out.push(super::finite(Vec3::new(x, y, z), || {
             format!("vertex {index} (byte offset {start})")
@@ -133,7 +174,7 @@ fn walk_record(
     mut visit: impl FnMut(usize, Scalar, &[u8]),
 ) -> Result<u64> {
     let truncated = || {
-        anyhow!(
+        format_failure!(
             "truncated binary data: the file ends at byte offset {file_len}, inside {} record \
              {index} of {}",
             element.name,
@@ -157,7 +198,7 @@ fn walk_record(
                     return Err(truncated());
                 }
                 let n = len.to_len(bytes, big_endian).ok_or_else(|| {
-                    anyhow!(
+                    format_failure!(
                         "negative list length for property '{}' of {} record {index} at byte offset {offset}",
                         prop.name,
                         element.name
@@ -165,8 +206,10 @@ fn walk_record(
                 })?;
                 offset += len.size() as u64;
                 let skip = n.checked_mul(item.size() as u64).ok_or_else(truncated)?;
-                let skipped = io::copy(&mut (&mut *reader).take(skip), &mut io::sink())
-                    .with_context(|| format!("read error at byte offset {offset}"))?;
+                let skipped =
+                    io::copy(&mut (&mut *reader).take(skip), &mut io::sink()).map_err(|e| {
+                        Failure::io(format_args!("read error at byte offset {offset}"), e)
+                    })?;
                 if skipped < skip {
                     return Err(truncated());
                 }
@@ -182,6 +225,9 @@ fn read_field(reader: &mut impl Read, buf: &mut [u8], offset: u64) -> Result<boo
     match reader.read_exact(buf) {
         Ok(()) => Ok(true),
         Err(e) if e.kind() == ErrorKind::UnexpectedEof => Ok(false),
-        Err(e) => Err(anyhow!("read error at byte offset {offset}: {e}")),
+        Err(e) => Err(Failure::io(
+            format_args!("read error at byte offset {offset}"),
+            e,
+        )),
     }
 }

@@ -2,8 +2,9 @@
 
 use std::io::{ErrorKind, Read};
 
-use anyhow::{Result, anyhow, bail};
 use glam::Vec3;
+
+use super::failure::{Failure, Result};
 
 /// Bytes read per chunk: large enough to amortise the read calls, small enough that the buffer
 /// is negligible next to the output (the whole file is never held in memory).
@@ -19,30 +20,47 @@ pub(super) struct Records<'a> {
     pub what: &'a str,
 }
 
+impl Records<'_> {
+    /// Fails if the file is too short for `count` records (`count` comes from an untrusted
+    /// header): allocations for them are then bounded by the file's size.
+    pub fn check(&self) -> Result<()> {
+        let &Records {
+            count,
+            stride,
+            start,
+            file_len,
+            what,
+        } = self;
+        let complete = file_len.saturating_sub(start) / stride as u64;
+        if count as u64 > complete {
+            bail_format!(
+                "truncated binary data: expected {count} {what} records of {stride} bytes from \
+                 byte offset {start}, but the file ends at byte offset {file_len}, after \
+                 {complete} complete {what} records"
+            );
+        }
+        Ok(())
+    }
+}
+
 /// Reads the records, decoding each into a point with `decode` (`None` if it cannot, which
-/// well-formed layouts rule out), and rejects non-finite coordinates. Fails before reading or
-/// allocating anything if the file is too short for `count` (which comes from an untrusted
-/// header), so the allocation is bounded by the file's size.
+/// well-formed layouts rule out), and rejects non-finite coordinates; then passes each chunk
+/// of records, with the index of its first, to `rest`, for whatever else they hold. Fails
+/// before reading or allocating anything if the [check](Records::check) fails.
 pub(super) fn read(
     reader: &mut impl Read,
     records: &Records,
     mut decode: impl FnMut(&[u8], &mut Vec3) -> Option<()>,
+    mut rest: impl FnMut(usize, &[u8]) -> Option<()>,
 ) -> Result<Vec<Vec3>> {
+    records.check()?;
     let &Records {
         count,
         stride,
         start,
-        file_len,
         what,
+        ..
     } = records;
-    let complete = file_len.saturating_sub(start) / stride as u64;
-    if count as u64 > complete {
-        bail!(
-            "truncated binary data: expected {count} {what} records of {stride} bytes from byte \
-             offset {start}, but the file ends at byte offset {file_len}, after {complete} \
-             complete {what} records"
-        );
-    }
     let mut out = Vec::with_capacity(count);
     let per_chunk = (CHUNK_BYTES / stride).max(1);
     let mut buf = vec![0; per_chunk.min(count) * stride];
@@ -52,7 +70,7 @@ pub(super) fn read(
         if got < chunk.len() {
             // Only if the file shrank after its size was checked.
             let end = start + (out.len() * stride + got) as u64;
-            bail!(
+            bail_format!(
                 "truncated binary data: the file ends at byte offset {end}, inside {what} {} of {count}",
                 out.len() + got / stride
             );
@@ -69,7 +87,7 @@ pub(super) fn read(
             let index = first + i;
             let offset = start + (index * stride) as u64;
             if decode(record, p).is_none() {
-                bail!("cannot decode {what} {index} at byte offset {offset}");
+                bail_format!("cannot decode {what} {index} at byte offset {offset}");
             }
             if !p.is_finite() {
                 return Err(super::non_finite(
@@ -77,6 +95,10 @@ pub(super) fn read(
                     &format!("{what} {index} (byte offset {offset})"),
                 ));
             }
+        }
+        if rest(first, chunk).is_none() {
+            let offset = start + (first * stride) as u64;
+            bail_format!("cannot decode the {what} records from byte offset {offset}");
         }
     }
     Ok(out)
@@ -90,7 +112,7 @@ fn fill(reader: &mut impl Read, buf: &mut [u8]) -> Result<usize> {
             Ok(0) => break,
             Ok(n) => got += n,
             Err(e) if e.kind() == ErrorKind::Interrupted => {}
-            Err(e) => return Err(anyhow!("read error: {e}")),
+            Err(e) => return Err(Failure::io("read error", e)),
         }
     }
     Ok(got)
