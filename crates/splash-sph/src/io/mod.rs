@@ -26,6 +26,7 @@ mod obj;
 mod ply;
 mod ply_ascii;
 mod ply_binary;
+mod ply_layout;
 mod ply_write;
 mod pov;
 mod raw;
@@ -45,6 +46,7 @@ use failure::{Failure, IoFailure, Result};
 /// One particle frame: positions, and per-particle attributes by name.
 #[derive(Debug, Clone, Default, PartialEq)]
 pub struct Particles {
+    /// One position per particle.
     pub positions: Vec<Vec3>,
     /// One value per particle each, by name (`velocity`, `density`, …).
     pub attributes: BTreeMap<String, Attribute>,
@@ -53,15 +55,19 @@ pub struct Particles {
 /// The values of one per-particle attribute.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Attribute {
+    /// One number per particle (`density`, `pressure`, …).
     Scalar(Vec<f32>),
+    /// One vector per particle (`velocity`, `normal`, …).
     Vector(Vec<Vec3>),
 }
 
 impl Particles {
+    /// Particles in the frame.
     pub fn len(&self) -> usize {
         self.positions.len()
     }
 
+    /// Whether the frame has no particles.
     pub fn is_empty(&self) -> bool {
         self.positions.is_empty()
     }
@@ -103,8 +109,11 @@ pub fn read_particles(path: &Path, format: Option<InputFormat>) -> crate::Result
 /// File format of a particle frame.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum InputFormat {
+    /// PLY, ascii or binary.
     Ply,
+    /// Text tables (`.csv`, `.txt`).
     Csv,
+    /// Raw little-endian `f32` `x y z` triples (`.bin`, `.raw`).
     Raw,
 }
 
@@ -159,9 +168,12 @@ fn open_input(path: &Path) -> Result<(File, u64)> {
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
 pub enum MeshFormat {
+    /// Wavefront OBJ: `v`, `vn`, `f v//vn`.
     Obj,
     #[serde(rename = "ply")]
+    /// Binary little-endian PLY.
     PlyBinary,
+    /// Ascii PLY.
     PlyAscii,
     /// A POV-Ray include file declaring a `mesh2` object (see [`POV_OBJECT`]).
     Pov,
@@ -291,6 +303,7 @@ pub enum UpAxis {
 }
 
 impl UpAxis {
+    /// `y` or `z`.
     pub fn parse(name: &str) -> crate::Result<Self> {
         match name.trim().to_ascii_lowercase().as_str() {
             "z" => Ok(Self::Z),

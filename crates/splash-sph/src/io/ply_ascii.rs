@@ -8,7 +8,7 @@ use glam::Vec3;
 use super::attribute_columns::AttributeColumns;
 use super::failure::Result;
 use super::lines::Lines;
-use super::ply::{Element, Kind, Layout};
+use super::ply_layout::{Element, Kind, Layout};
 
 /// Reads the payload, `remaining_bytes` long, skipping blank lines.
 pub(super) fn read(

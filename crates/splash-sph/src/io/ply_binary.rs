@@ -8,7 +8,7 @@ use glam::Vec3;
 
 use super::attribute_columns::AttributeColumns;
 use super::failure::{Failure, Result};
-use super::ply::{Element, Kind, Layout, Scalar};
+use super::ply_layout::{Element, Kind, Layout, Scalar};
 use super::records::{self, Records};
 
 /// Reads the payload that starts at byte `offset`: the positions, returned, and the
