@@ -76,7 +76,8 @@ struct ConfigArgs {
     #[arg(long)]
     particle_radius: Option<f32>,
 
-    /// Marching Cubes cell size: 2r, r, r/2 (default), or a length.
+    /// Marching Cubes cell size: 2r, r, r/2 (default), or a length; at most 4r (larger cells
+    /// lose the fluid's thin parts, then all of it).
     #[arg(long)]
     cell: Option<String>,
 
