@@ -210,3 +210,16 @@ fn shown_configuration_records_the_whole_run() {
     );
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+#[test]
+fn cell_r_over_n_is_a_length_like_its_decimal() {
+    let show = |cell: &str| {
+        let out = splash(&["config", "show", "--spacing", "0.014", "--cell", cell]);
+        assert!(out.status.success(), "--cell {cell}: {out:?}");
+        String::from_utf8(out.stdout).unwrap()
+    };
+    let quarter = show("r/4");
+    assert!(quarter.contains("cell = \"0.25r\""), "{quarter}");
+    assert_eq!(quarter, show("0.25r"));
+    assert_eq!(show("3r/2"), show("1.5r"));
+}
