@@ -85,15 +85,19 @@ fn flags_override_the_file_and_typos_are_errors() {
     let out = splash(&["config", "show", "--config", bad.to_str().unwrap()]);
     let err = String::from_utf8(out.stderr).unwrap();
     assert!(!out.status.success());
+    // At the key's line, not at [field]'s (line 1).
     assert!(
-        err.contains("typo.toml") && err.contains("unknown field `ios`"),
+        err.contains("typo.toml: TOML parse error at line 3, column 1")
+            && err.contains("3 | ios = 0.5")
+            && err.contains("unknown field `ios`"),
         "{err}"
     );
     std::fs::write(&bad, "[field]\nkind = \"ssp07\"\nt_low = 4.0\n").unwrap();
     let out = splash(&["config", "show", "--config", bad.to_str().unwrap()]);
     let err = String::from_utf8(out.stderr).unwrap();
     assert!(
-        err.contains("typo.toml")
+        err.contains("typo.toml: invalid configuration at line 3, column 9")
+            && err.contains("3 | t_low = 4.0")
             && err.contains("field.t_low (4) must be below field.t_high (3.5)"),
         "{err}"
     );

@@ -10,6 +10,7 @@ use std::sync::Arc;
 use serde::{Deserialize, Serialize};
 
 use crate::bytes::{Bytes, default_limit};
+use crate::config_errors;
 use crate::error::{Error, Result};
 use crate::field::{FieldConfig, ScalarField, Scattering};
 use crate::io::{MeshFormat, UpAxis};
@@ -248,12 +249,14 @@ impl Config {
         Config::from_toml(&text).map_err(|e| e.context(path.display()))
     }
 
-    /// Parses and validates TOML text.
+    /// Parses and validates TOML text; errors point at the offending key's line.
     pub fn from_toml(text: &str) -> Result<Config> {
-        let config: Config = toml::from_str(text).map_err(|e| Error::config(e.to_string()))?;
-        config
-            .validate()
-            .map_err(|e| e.context("invalid configuration"))?;
+        let config: Config = toml::from_str(text)
+            .map_err(|e| Error::config(config_errors::parse_error(text, e).to_string()))?;
+        config.validate().map_err(|e| match e {
+            Error::Config(m) => Error::config(config_errors::validation_error(text, &m)),
+            e => e.context("invalid configuration"),
+        })?;
         Ok(config)
     }
 
