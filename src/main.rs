@@ -209,8 +209,9 @@ struct Recon {
     #[arg(long, value_name = "LIST")]
     frames: Option<String>,
 
-    /// Job K of N (1 ≤ K ≤ N) takes every N-th selected frame, from the K-th; auto/N takes K
-    /// from SLURM_ARRAY_TASK_ID - SLURM_ARRAY_TASK_MIN + 1.
+    /// Job K of N (1 ≤ K ≤ N) takes every N-th selected frame, from the K-th; auto/N takes
+    /// K = SLURM_ARRAY_TASK_ID mod N + 1 (arrays 0-(N-1) or 1-N; a task resubmitted alone
+    /// keeps its frames).
     #[arg(long, value_name = "K/N")]
     shard: Option<String>,
 

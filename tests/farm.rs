@@ -160,7 +160,10 @@ fn splash_env(args: &[OsString], env: &[(&str, &str)]) -> Run {
     command
         .arg("recon")
         .args(args)
-        .env_remove("SLURM_ARRAY_TASK_ID");
+        .env_remove("SLURM_ARRAY_TASK_ID")
+        .env_remove("SLURM_ARRAY_TASK_MIN")
+        .env_remove("SLURM_ARRAY_TASK_MAX")
+        .env_remove("SLURM_ARRAY_TASK_STEP");
     for (k, v) in env {
         command.env(k, v);
     }
@@ -281,22 +284,33 @@ fn ranges_and_shards_cover_every_frame_exactly_once() {
         assert_eq!(seen, expected, "{n} shards");
         assert_eq!(entries(&dir.path(&format!("n{n}"))).len(), 12);
     }
-    // auto/N: SLURM array tasks 1..=4 (SLURM_ARRAY_TASK_MIN=1); task 3 is shard 3/4.
-    let run = splash_env(
-        &fast(&[
-            &input,
-            &"--shard",
-            &"auto/4",
-            &"-o",
-            &dir.path("auto/"),
-            &"--log-format",
-            &"json",
-        ]),
-        &[("SLURM_ARRAY_TASK_ID", "3"), ("SLURM_ARRAY_TASK_MIN", "1")],
-    )
-    .ok();
-    assert_eq!(run.frames(), [3, 7, 11]);
-    assert_eq!(run.events("start")[0].get("shard"), "\"3/4\"");
+    // auto/N: K = SLURM_ARRAY_TASK_ID mod N + 1. Task 3 of the array 1-4 is shard 4/4, and
+    // resubmitted alone (sbatch --array=3: the array's bounds become 3) it does the same frames.
+    let auto = |bounds: (&str, &str), step: &str| {
+        splash_env(
+            &fast(&[
+                &input,
+                &"--shard",
+                &"auto/4",
+                &"-o",
+                &dir.path("auto/"),
+                &"--log-format",
+                &"json",
+            ]),
+            &[
+                ("SLURM_ARRAY_TASK_ID", "3"),
+                ("SLURM_ARRAY_TASK_MIN", bounds.0),
+                ("SLURM_ARRAY_TASK_MAX", bounds.1),
+                ("SLURM_ARRAY_TASK_STEP", step),
+            ],
+        )
+    };
+    for bounds in [("1", "4"), ("3", "3")] {
+        let run = auto(bounds, "1").ok();
+        assert_eq!(run.frames(), [4, 8, 12], "array {bounds:?}");
+        assert_eq!(run.events("start")[0].get("shard"), "\"4/4\"");
+    }
+    auto(("1", "7"), "2").failed().has("a step of 2");
     splash_env(&fast(&[&input, &"--shard", &"auto/4"]), &[])
         .failed()
         .has("SLURM_ARRAY_TASK_ID is not set");
