@@ -24,7 +24,8 @@ use crate::length::{Length, positive};
 pub struct Config {
     /// Particle spacing r in world units; the CLI estimates it from the first frame when absent.
     pub spacing: Option<f32>,
-    /// Marching Cubes cell edge length.
+    /// Marching Cubes cell edge length; at most 4r ([`validate`](Self::validate) refuses
+    /// larger cells once the spacing is known).
     pub cell: Length,
     /// Which engine reconstructs (all give the same mesh).
     pub engine: Engine,
