@@ -76,7 +76,8 @@ struct ConfigArgs {
     #[arg(long)]
     particle_radius: Option<f32>,
 
-    /// Marching Cubes cell size: 2r, r, r/2 (default), or a length.
+    /// Marching Cubes cell size: 2r, r, r/2 (default), r/N, Kr, or a length; at most 4r (larger
+    /// cells lose the fluid's thin parts, then all of it).
     #[arg(long)]
     cell: Option<String>,
 
@@ -180,7 +181,7 @@ or the first three columns without a header) and raw binary (.bin/.raw: little-e
 triples, nothing else). The format comes from the extension unless --input-format is given.
 
 Lengths (--cell, band and support in the config) are multiples of the particle spacing r
-(2r, r, r/2, 0.5r) or plain numbers in world units. The band of surface vertices spans 2r
+(2r, r, r/2, r/4, 0.5r) or plain numbers in world units. The band of surface vertices spans 2r
 around each surface particle, widened to r + cell when that is larger (3r at cell 2r), and it
 grows by itself wherever the surface leaves it, so meshes are closed at every cell size.
 
@@ -208,8 +209,9 @@ struct Recon {
     #[arg(long, value_name = "LIST")]
     frames: Option<String>,
 
-    /// Job K of N (1 ≤ K ≤ N) takes every N-th selected frame, from the K-th; auto/N takes K
-    /// from SLURM_ARRAY_TASK_ID - SLURM_ARRAY_TASK_MIN + 1.
+    /// Job K of N (1 ≤ K ≤ N) takes every N-th selected frame, from the K-th; auto/N takes
+    /// K = SLURM_ARRAY_TASK_ID mod N + 1 (arrays 0-(N-1) or 1-N; a task resubmitted alone
+    /// keeps its frames).
     #[arg(long, value_name = "K/N")]
     shard: Option<String>,
 

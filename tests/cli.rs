@@ -459,6 +459,23 @@ fn bad_options_are_refused_before_any_work() {
         (&["--input-format", "vtk"], &["unknown input format 'vtk'"]),
         (&["--threads", "0"], &["--threads must be at least 1"]),
         (&["--spacing", "0"], &["spacing must be a positive length"]),
+        // Cells far larger than the spacing: 1e30 spun for ever, 0.5 wrote an empty mesh.
+        (
+            &["--cell", "1e30"],
+            &["cell 1.00e30 (1.00e32r", "at most 4r"],
+        ),
+        (
+            &["--cell", "0.5"],
+            &["cell 0.5 (50r for r = 0.01)", "at most 4r"],
+        ),
+        (
+            &["--cell", "5r"],
+            &["cell 5r is far larger than the particle spacing"],
+        ),
+        (
+            &["--spacing", "1", "--cell", "1000"],
+            &["cell 1000 (1000r for r = 1)"],
+        ),
         // Given with --spacing 0.01.
         (
             &["--particle-radius", "0.005"],
@@ -746,4 +763,11 @@ fn spacing_is_estimated_when_not_given() {
         .assert_stderr_has("estimated particle spacing");
     let (_, triangles) = obj_mesh(&output);
     assert!(triangles > 0, "{}: empty mesh", output.display());
+    // The cell's limit applies once the spacing is known: here, per frame.
+    fs::remove_file(&output).unwrap();
+    splash!["recon", input, "--cell", "0.06", "-o", output]
+        .assert_failure()
+        .assert_stderr_has("cell 0.06 (5.9")
+        .assert_stderr_has("at most 4r");
+    assert!(!output.exists());
 }

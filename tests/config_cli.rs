@@ -85,15 +85,19 @@ fn flags_override_the_file_and_typos_are_errors() {
     let out = splash(&["config", "show", "--config", bad.to_str().unwrap()]);
     let err = String::from_utf8(out.stderr).unwrap();
     assert!(!out.status.success());
+    // At the key's line, not at [field]'s (line 1).
     assert!(
-        err.contains("typo.toml") && err.contains("unknown field `ios`"),
+        err.contains("typo.toml: TOML parse error at line 3, column 1")
+            && err.contains("3 | ios = 0.5")
+            && err.contains("unknown field `ios`"),
         "{err}"
     );
     std::fs::write(&bad, "[field]\nkind = \"ssp07\"\nt_low = 4.0\n").unwrap();
     let out = splash(&["config", "show", "--config", bad.to_str().unwrap()]);
     let err = String::from_utf8(out.stderr).unwrap();
     assert!(
-        err.contains("typo.toml")
+        err.contains("typo.toml: invalid configuration at line 3, column 9")
+            && err.contains("3 | t_low = 4.0")
             && err.contains("field.t_low (4) must be below field.t_high (3.5)"),
         "{err}"
     );
@@ -209,4 +213,17 @@ fn shown_configuration_records_the_whole_run() {
         "{err}"
     );
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn cell_r_over_n_is_a_length_like_its_decimal() {
+    let show = |cell: &str| {
+        let out = splash(&["config", "show", "--spacing", "0.014", "--cell", cell]);
+        assert!(out.status.success(), "--cell {cell}: {out:?}");
+        String::from_utf8(out.stdout).unwrap()
+    };
+    let quarter = show("r/4");
+    assert!(quarter.contains("cell = \"0.25r\""), "{quarter}");
+    assert_eq!(quarter, show("0.25r"));
+    assert_eq!(show("3r/2"), show("1.5r"));
 }

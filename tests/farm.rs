@@ -152,7 +152,10 @@ fn splash_env(args: &[OsString], env: &[(&str, &str)]) -> Run {
     command
         .arg("recon")
         .args(args)
-        .env_remove("SLURM_ARRAY_TASK_ID");
+        .env_remove("SLURM_ARRAY_TASK_ID")
+        .env_remove("SLURM_ARRAY_TASK_MIN")
+        .env_remove("SLURM_ARRAY_TASK_MAX")
+        .env_remove("SLURM_ARRAY_TASK_STEP");
     for (k, v) in env {
         command.env(k, v);
     }
@@ -273,22 +276,33 @@ fn ranges_and_shards_cover_every_frame_exactly_once() {
         assert_eq!(seen, expected, "{n} shards");
         assert_eq!(entries(&dir.path(&format!("n{n}"))).len(), 12);
     }
-    // auto/N: SLURM array tasks 1..=4 (SLURM_ARRAY_TASK_MIN=1); task 3 is shard 3/4.
-    let run = splash_env(
-        &fast(&[
-            &input,
-            &"--shard",
-            &"auto/4",
-            &"-o",
-            &dir.path("auto/"),
-            &"--log-format",
-            &"json",
-        ]),
-        &[("SLURM_ARRAY_TASK_ID", "3"), ("SLURM_ARRAY_TASK_MIN", "1")],
-    )
-    .ok();
-    assert_eq!(run.frames(), [3, 7, 11]);
-    assert_eq!(run.events("start")[0].get("shard"), "\"3/4\"");
+    // auto/N: K = SLURM_ARRAY_TASK_ID mod N + 1. Task 3 of the array 1-4 is shard 4/4, and
+    // resubmitted alone (sbatch --array=3: the array's bounds become 3) it does the same frames.
+    let auto = |bounds: (&str, &str), step: &str| {
+        splash_env(
+            &fast(&[
+                &input,
+                &"--shard",
+                &"auto/4",
+                &"-o",
+                &dir.path("auto/"),
+                &"--log-format",
+                &"json",
+            ]),
+            &[
+                ("SLURM_ARRAY_TASK_ID", "3"),
+                ("SLURM_ARRAY_TASK_MIN", bounds.0),
+                ("SLURM_ARRAY_TASK_MAX", bounds.1),
+                ("SLURM_ARRAY_TASK_STEP", step),
+            ],
+        )
+    };
+    for bounds in [("1", "4"), ("3", "3")] {
+        let run = auto(bounds, "1").ok();
+        assert_eq!(run.frames(), [4, 8, 12], "array {bounds:?}");
+        assert_eq!(run.events("start")[0].get("shard"), "\"4/4\"");
+    }
+    auto(("1", "7"), "2").failed().has("a step of 2");
     splash_env(&fast(&[&input, &"--shard", &"auto/4"]), &[])
         .failed()
         .has("SLURM_ARRAY_TASK_ID is not set");
@@ -707,13 +721,16 @@ fn pov_ray_includes_parse_and_render() {
     );
 
     if Command::new("povray").arg("--version").output().is_err() {
-        eprintln!("notice: povray is not installed; checked the include's structure only");
+        eprintln!(
+            "notice: povray is not installed; skipped the renders, checked the includes only"
+        );
         return;
     }
-    // The README's scene, rendered small for frames 40 (the fixture) and 41 (empty).
+    // The README's scene, rendered small, with its command lines' frame options. The fluid is
+    // blue; the ground is grey and the sky pale.
     let scene = include_str!("../examples/scene.pov");
     fs::write(dir.path("scene.pov"), scene).unwrap();
-    for (frame, water) in [(40, true), (41, false)] {
+    let povray = |options: &[&str]| {
         let output = Command::new("povray")
             .current_dir(&dir.0)
             .args([
@@ -724,26 +741,60 @@ fn pov_ray_includes_parse_and_render() {
                 "+H54",
                 "-D",
                 "-V",
-                "-GA",
             ])
-            .arg(format!("+KFI{frame}"))
-            .arg(format!("+KFF{frame}"))
+            .args(options)
             .output()
             .unwrap();
-        let image = dir.path(&format!("frame{frame}.ppm"));
-        assert!(
-            output.status.success() && image.exists(),
-            "povray failed on frame {frame}:\n{}",
-            String::from_utf8_lossy(&output.stderr)
+        // POV-Ray wraps its messages at 80 columns.
+        let stderr = String::from_utf8_lossy(&output.stderr);
+        let stderr = stderr.split_whitespace().collect::<Vec<_>>().join(" ");
+        (output.status.success(), stderr)
+    };
+    let blue = |image: &str| {
+        let path = dir.path(image);
+        let pixels = blue_pixels(&fs::read(&path).unwrap());
+        fs::remove_file(path).unwrap();
+        pixels
+    };
+    // One frame: declared, or as an animation of one frame.
+    let copy = |from: u32, to: u32| {
+        let inc = |n| dir.path(&format!("pov/frame_{n:04}.inc"));
+        fs::copy(inc(from), inc(to)).unwrap();
+    };
+    copy(40, 1);
+    for (options, image, water) in [
+        (&["Declare=Frame=40"][..], "frame.ppm", true),
+        (&["Declare=Frame=41"], "frame.ppm", false),
+        (&["+KFI40", "+KFF40"], "frame40.ppm", true),
+        // POV-Ray turns animation off here, and frame_number is 0.
+        (&["+KFI1", "+KFF1"], "frame.ppm", true),
+    ] {
+        let (ok, stderr) = povray(options);
+        assert!(ok, "povray {options:?} failed:\n{stderr}");
+        let pixels = blue(image);
+        assert_eq!(
+            pixels > 200,
+            water,
+            "{pixels} fluid pixels with {options:?}"
         );
-        let blue = blue_pixels(&fs::read(&image).unwrap());
-        // The fluid is blue; the ground is grey and the sky pale.
-        if water {
-            assert!(blue > 200, "{blue} fluid pixels in frame {frame}");
-        } else {
-            assert_eq!(blue, 0, "frame {frame} is empty");
-        }
     }
+    // Every 3rd frame, from 40: files 40, 43 (empty) and 46, and none between them.
+    copy(41, 43);
+    copy(40, 46);
+    fs::remove_file(dir.path("pov/frame_0041.inc")).unwrap();
+    let (ok, stderr) = povray(&["+KFI40", "+KFF46", "+STP3"]);
+    assert!(ok, "povray +KFI40 +KFF46 +STP3 failed:\n{stderr}");
+    let pixels = ["frame40.ppm", "frame43.ppm", "frame46.ppm"].map(blue);
+    assert!(
+        pixels[0] > 200 && pixels[1] == 0 && pixels[2] == pixels[0],
+        "fluid pixels {pixels:?}"
+    );
+    // A frame number without a file is named.
+    let (ok, stderr) = povray(&["+KFI40", "+KFF46", "+STP2"]);
+    assert!(
+        !ok && stderr.contains("no pov/frame_0042.inc for frame 42"),
+        "{stderr}"
+    );
 }
 
 /// Pixels of a binary PPM (P6, 8 bit) that are clearly blue.

@@ -10,6 +10,7 @@ use std::sync::Arc;
 use serde::{Deserialize, Serialize};
 
 use crate::bytes::{Bytes, default_limit};
+use crate::config_errors;
 use crate::error::{Error, Result};
 use crate::field::{FieldConfig, ScalarField, Scattering};
 use crate::io::{MeshFormat, UpAxis};
@@ -23,7 +24,8 @@ use crate::length::{Length, positive};
 pub struct Config {
     /// Particle spacing r in world units; the CLI estimates it from the first frame when absent.
     pub spacing: Option<f32>,
-    /// Marching Cubes cell edge length.
+    /// Marching Cubes cell edge length; at most 4r ([`validate`](Self::validate) refuses
+    /// larger cells once the spacing is known).
     pub cell: Length,
     /// Which engine reconstructs (all give the same mesh).
     pub engine: Engine,
@@ -248,12 +250,14 @@ impl Config {
         Config::from_toml(&text).map_err(|e| e.context(path.display()))
     }
 
-    /// Parses and validates TOML text.
+    /// Parses and validates TOML text; errors point at the offending key's line.
     pub fn from_toml(text: &str) -> Result<Config> {
-        let config: Config = toml::from_str(text).map_err(|e| Error::config(e.to_string()))?;
-        config
-            .validate()
-            .map_err(|e| e.context("invalid configuration"))?;
+        let config: Config = toml::from_str(text)
+            .map_err(|e| Error::config(config_errors::parse_error(text, e).to_string()))?;
+        config.validate().map_err(|e| match e {
+            Error::Config(m) => Error::config(config_errors::validation_error(text, &m)),
+            e => e.context("invalid configuration"),
+        })?;
         Ok(config)
     }
 
@@ -268,6 +272,7 @@ impl Config {
             positive("spacing", r)?;
         }
         positive("cell", self.cell.value())?;
+        self.check_cell_against_spacing()?;
         positive(
             "surface_particles.support",
             self.surface_particles.support.value(),
@@ -302,6 +307,46 @@ impl Config {
         }
         self.field.validate()?;
         Ok(())
+    }
+
+    /// Refuses cells above [`MAX_CELL`] spacings, once the spacing is known (a cell in units of
+    /// r, at once). The mesh thins out as the cell grows: sheets and droplets thinner than a
+    /// cell fall between grid vertices, then the whole fluid does (`fixtures/frame_0040.ply`,
+    /// r = 0.014: 2336 triangles at 4r, 88 at 12r, none at 36r), and the run would end without
+    /// a word. An error rather than a warning: the library has no channel for warnings, and a
+    /// farm's logs are read after the frames are rendered.
+    fn check_cell_against_spacing(&self) -> Result<()> {
+        let (cell, spacings) = match (self.cell, self.spacing) {
+            (Length::Spacings(k), _) => (self.cell.to_string(), k),
+            (Length::World(l), Some(r)) => {
+                let k = l / r;
+                (format!("{} ({}r for r = {r})", short(l), short(k)), k)
+            }
+            (Length::World(_), None) => return Ok(()),
+        };
+        // The tolerance lets a world cell of exactly 4r through its f32 rounding.
+        if spacings > MAX_CELL * (1.0 + 1e-5) {
+            bail_config!(
+                "cell {cell} is far larger than the particle spacing: above {MAX_CELL}r the mesh \
+                 loses every feature thinner than a cell and then the fluid itself; use at most \
+                 {MAX_CELL}r (the usual cells are 2r, r and r/2), or check the spacing"
+            );
+        }
+        Ok(())
+    }
+}
+
+/// The largest cell, in particle spacings, that [`Config::validate`] accepts: twice the
+/// paper's coarsest cell (2r), and the reach of SSP07's kernel (4r).
+const MAX_CELL: f32 = 4.0;
+
+/// `x` to three decimals, or in exponent notation when very large or small (f32's
+/// `Display` writes 1e30 with all its 31 digits).
+fn short(x: f32) -> String {
+    if (1e-3..1e5).contains(&x.abs()) {
+        format!("{}", (x * 1000.0).round() / 1000.0)
+    } else {
+        format!("{x:.2e}")
     }
 }
 
@@ -392,6 +437,34 @@ mod tests {
             let p = Params::resolve(&c, 1.0);
             assert_eq!(p.band_half_width, band, "cell {cell}r");
         }
+    }
+
+    #[test]
+    fn cells_far_larger_than_the_spacing_are_refused() {
+        let config = |cell: &str, spacing: Option<f32>| Config {
+            cell: Length::parse(cell).unwrap(),
+            spacing,
+            ..Config::default()
+        };
+        for (cell, spacing) in [("4r", None), ("0.056", Some(0.014)), ("0.5", None)] {
+            assert!(config(cell, spacing).validate().is_ok(), "{cell}");
+        }
+        for (cell, spacing) in [("4.1r", None), ("0.5", Some(0.014)), ("1000", Some(1.0))] {
+            let e = config(cell, spacing).validate().unwrap_err().to_string();
+            assert!(e.starts_with("cell ") && e.contains("at most 4r"), "{e}");
+        }
+        let e = config("1e30", Some(0.014)).validate().unwrap_err();
+        assert!(
+            e.to_string()
+                .starts_with("cell 1.00e30 (7.14e31r for r = 0.014)"),
+            "{e}"
+        );
+        let e = config("0.5", Some(0.014)).validate().unwrap_err();
+        assert!(
+            e.to_string()
+                .starts_with("cell 0.5 (35.714r for r = 0.014)"),
+            "{e}"
+        );
     }
 
     #[test]

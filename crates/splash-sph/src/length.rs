@@ -38,31 +38,27 @@ impl Length {
         }
     }
 
-    /// `2r`, `r`, `r/2`, `0.5r` or a plain number (world units).
+    /// `2r`, `r`, `0.5r`, `r/2`, `r/4`, `3r/2` (any `Kr/N`) or a plain number (world units).
     pub fn parse(text: &str) -> Result<Length> {
         let t = text.trim();
         let bad = || {
             Error::config(format!(
-                "'{text}' is not a length: use e.g. 2r, r, r/2, 0.5r or 0.007"
+                "'{text}' is not a length: use e.g. 2r, r, r/2, r/4, 0.5r or 0.007"
             ))
         };
-        if let Some(head) = t.strip_suffix("r/2") {
-            let k = if head.is_empty() {
-                1.0
-            } else {
-                head.parse::<f32>().map_err(|_| bad())?
-            };
-            return Ok(Length::Spacings(k / 2.0));
+        let number = |s: &str| s.trim().parse::<f32>().map_err(|_| bad());
+        let (head, divisor) = match t.split_once("r/") {
+            Some((head, n)) => (head, number(n)?),
+            None => match t.strip_suffix('r') {
+                Some(head) => (head, 1.0),
+                None => return number(t).map(Length::World),
+            },
+        };
+        if !(divisor.is_finite() && divisor > 0.0) {
+            return Err(bad());
         }
-        if let Some(head) = t.strip_suffix('r') {
-            let k = if head.is_empty() {
-                1.0
-            } else {
-                head.parse::<f32>().map_err(|_| bad())?
-            };
-            return Ok(Length::Spacings(k));
-        }
-        t.parse::<f32>().map(Length::World).map_err(|_| bad())
+        let k = if head.is_empty() { 1.0 } else { number(head)? };
+        Ok(Length::Spacings(k / divisor))
     }
 }
 
@@ -121,7 +117,17 @@ mod tests {
         assert_eq!(Length::parse("r").unwrap(), Length::Spacings(1.0));
         assert_eq!(Length::parse("r/2").unwrap(), Length::Spacings(0.5));
         assert_eq!(Length::parse("0.25r").unwrap(), Length::Spacings(0.25));
+        assert_eq!(Length::parse("r/4").unwrap(), Length::Spacings(0.25));
+        assert_eq!(Length::parse(" 3r/2 ").unwrap(), Length::Spacings(1.5));
+        assert_eq!(Length::parse("r/3").unwrap(), Length::Spacings(1.0 / 3.0));
+        assert_eq!(Length::parse("r/2.5").unwrap(), Length::Spacings(0.4));
         assert_eq!(Length::parse("0.007").unwrap(), Length::World(0.007));
-        assert!(Length::parse("half").is_err());
+        for bad in [
+            "half", "r/", "r/0", "r/-2", "r/x", "xr/2", "r/2r", "2", "r r",
+        ] {
+            let parsed = Length::parse(bad);
+            assert!(parsed.is_err() || bad == "2", "{bad} parsed as {parsed:?}");
+        }
+        assert_eq!(Length::parse("2").unwrap(), Length::World(2.0));
     }
 }

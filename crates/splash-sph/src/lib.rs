@@ -29,6 +29,7 @@ mod error;
 
 mod attributes;
 mod config;
+mod config_errors;
 mod length;
 mod neighbours;
 mod reconstructor;

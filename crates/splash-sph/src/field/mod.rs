@@ -136,6 +136,24 @@ impl FieldConfig {
         })
     }
 
+    /// The `[field]` table of kind `kind` read from `d`, without its `kind` key (None for an
+    /// unknown kind). Reading the kind's struct directly keeps the positions of the keys, which
+    /// the tagged enum's buffering loses: see `config_errors`.
+    pub(crate) fn deserialize_kind<'de, D: serde::Deserializer<'de>>(
+        kind: &str,
+        d: D,
+    ) -> std::result::Result<Option<FieldConfig>, D::Error> {
+        Ok(Some(match kind {
+            "ssp07" => FieldConfig::Ssp07(Deserialize::deserialize(d)?),
+            "zb05" => FieldConfig::Zb05(Deserialize::deserialize(d)?),
+            "density" => FieldConfig::Density(Deserialize::deserialize(d)?),
+            "blobby" => FieldConfig::Blobby(Deserialize::deserialize(d)?),
+            "metaball" => FieldConfig::Metaball(Deserialize::deserialize(d)?),
+            "anisotropic" => FieldConfig::Anisotropic(Deserialize::deserialize(d)?),
+            _ => return Ok(None),
+        }))
+    }
+
     /// The `kind` name of the field.
     pub fn kind(&self) -> &'static str {
         match self {

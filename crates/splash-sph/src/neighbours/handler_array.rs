@@ -17,6 +17,8 @@ pub struct HandlerArray {
     cell_size: f32,
     /// Lowest occupied cell; Morton codes are taken relative to it.
     origin: IVec3,
+    /// Highest occupied cell on each axis: with `origin`, the box that cell loops stay in.
+    last: IVec3,
     /// Particle positions in handler order (sorted by cell id).
     pub positions: Vec<Vec3>,
     /// Per-particle attribute channels, each in handler order, for fields whose kernels carry
@@ -66,10 +68,10 @@ impl HandlerArray {
                 || (IVec3::MAX, IVec3::MIN),
                 |a, b| (a.0.min(b.0), a.1.max(b.1)),
             );
-        let origin = if particles.is_empty() {
-            IVec3::ZERO
+        let (origin, last) = if particles.is_empty() {
+            (IVec3::ZERO, IVec3::splat(-1))
         } else {
-            lo
+            (lo, hi)
         };
         let span = (hi - origin).max_element() as i64;
         if !particles.is_empty() && span >= 1 << AXIS_BITS {
@@ -104,6 +106,7 @@ impl HandlerArray {
         let handlers_array = HandlerArray {
             cell_size,
             origin,
+            last,
             positions,
             channels: Vec::new(),
             cells,
@@ -144,6 +147,7 @@ impl HandlerArray {
 
     /// Calls `f` with the handler-order range of every non-empty cell from `a` to `b`.
     pub fn for_each_in_cells(&self, a: IVec3, b: IVec3, mut f: impl FnMut(std::ops::Range<usize>)) {
+        let (a, b) = self.occupied_part(a, b);
         for z in a.z..=b.z {
             for y in a.y..=b.y {
                 for x in a.x..=b.x {
@@ -154,6 +158,13 @@ impl HandlerArray {
                 }
             }
         }
+    }
+
+    /// The part of the box of cells `[a, b]` that holds particles (empty when `a > b` on an
+    /// axis). A query box can reach far beyond the particles, up to i32's saturated limits for
+    /// cells far larger than the lookup cells, and looping over all of it would never end.
+    fn occupied_part(&self, a: IVec3, b: IVec3) -> (IVec3, IVec3) {
+        (a.max(self.origin), b.min(self.last))
     }
 
     pub fn heap_bytes(&self) -> usize {
@@ -215,5 +226,23 @@ mod tests {
         for &p in &ps {
             assert!(h.cell(h.cell_of(p)).contains(&p));
         }
+    }
+
+    #[test]
+    fn cell_loops_stay_within_the_particles() {
+        let ps = [Vec3::new(0.1, 0.1, 0.1), Vec3::new(0.6, -0.3, 0.35)];
+        let h = HandlerArray::new(&ps, 0.25).unwrap();
+        // A box of i32's whole range (a brick of a cell 1e30 in lookup cells of 0.25) visits
+        // the 3×3×2 occupied cells, not 2⁹⁶.
+        let (a, b) = h.occupied_part(IVec3::MIN, IVec3::MAX);
+        assert_eq!((a, b), (IVec3::new(0, -2, 0), IVec3::new(2, 0, 1)));
+        let mut total = 0;
+        h.for_each_in_box(Vec3::splat(-1e30), Vec3::splat(1e30), |c| total += c.len());
+        assert_eq!(total, ps.len());
+        let (a, b) = h.occupied_part(IVec3::splat(5), IVec3::splat(9));
+        assert!(a.cmpgt(b).any(), "a box beside the particles is empty");
+        let empty = HandlerArray::new(&[], 0.25).unwrap();
+        let (a, b) = empty.occupied_part(IVec3::MIN, IVec3::MAX);
+        assert!(a.cmpgt(b).all());
     }
 }

@@ -78,3 +78,20 @@ fn full_grid_engines_refuse_above_the_memory_limit() {
     // The narrow band's memory follows the surface: no grid-sized plan to refuse.
     assert!(reconstruct(&ball, &p, Engine::NarrowBand).is_ok());
 }
+
+#[test]
+fn every_engine_ends_on_a_cell_far_beyond_the_limit() {
+    // Config::validate refuses such cells; the engines must still end on them (the gathers
+    // once looped over i32's whole range of lookup cells at cell 1e30, for ever).
+    let ball = lattice_ball(Vec3::ZERO, 4.0 * R, R);
+    for cell in ["1e30", "1000r"] {
+        for engine in Engine::ALL {
+            let result = reconstruct(&ball, &params(R, cell), engine);
+            assert!(
+                result.is_ok(),
+                "{engine:?} at cell {cell}: {:?}",
+                result.err()
+            );
+        }
+    }
+}
