@@ -1207,3 +1207,56 @@ fn reads_a_million_particles() {
     assert_eq!(particles.len(), 1_054_872);
     assert!(particles.iter().all(|p| p.is_finite()));
 }
+
+/// What a careful reader refuses rather than reading part of a file (issue 14, item 7): a
+/// vertex count smaller than the data, extra values on a vertex line, a PLY version that does
+/// not exist, and a coordinate column named twice.
+#[test]
+fn counts_lines_versions_and_columns_that_do_not_add_up_are_refused() {
+    let dir = TempDir::new("careful");
+    let le = |v: [f32; 3]| v.iter().flat_map(|c| c.to_le_bytes()).collect::<Vec<u8>>();
+    let records: Vec<u8> = [[0.0, 1.0, 2.0], [3.0, 4.0, 5.0], [6.0, 7.0, 8.0]]
+        .into_iter()
+        .flat_map(le)
+        .collect();
+    let binary = |count: usize, tail: &[u8]| {
+        let mut bytes = header("binary_little_endian", &count.to_string(), XYZ_PROPS).into_bytes();
+        bytes.extend_from_slice(&records);
+        bytes.extend_from_slice(tail);
+        bytes
+    };
+    // The three records read whole; a final newline is tolerated, a fourth record is not.
+    assert_eq!(
+        read_particles(&dir.file("three.ply", binary(3, b"\n")), None)
+            .unwrap()
+            .len(),
+        3
+    );
+    let short = dir.file("short.ply", binary(2, b""));
+    assert_fails(
+        &short,
+        None,
+        &["declares 2 vertices", "vertex count is too small"],
+    );
+    let ascii = |count: usize, body: &str| header("ascii", &count.to_string(), XYZ_PROPS) + body;
+    let body = "0 1 2\n3 4 5\n6 7 8\n";
+    assert_eq!(
+        read_particles(&dir.file("three.txt.ply", ascii(3, body)), None)
+            .unwrap()
+            .len(),
+        3
+    );
+    let short = dir.file("short_ascii.ply", ascii(2, body));
+    assert_fails(&short, None, &["line 10", "more data after the 2 vertices"]);
+    let long_line = dir.file("long_line.ply", ascii(3, "0 1 2\n3 4 5 9\n6 7 8\n"));
+    assert_fails(
+        &long_line,
+        None,
+        &["line 9", "more values than the 3 properties", "'9'"],
+    );
+    let version = header("ascii", "1", XYZ_PROPS).replace(" 1.0\n", " 2.0\n") + "0 1 2\n";
+    let version = dir.file("version.ply", version);
+    assert_fails(&version, None, &["version 2.0 is not supported"]);
+    let twice = dir.file("twice.csv", "x,x,y,z\n1,2,3,4\n");
+    assert_fails(&twice, None, &["line 1", "column 'x' 2 times"]);
+}

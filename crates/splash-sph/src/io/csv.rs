@@ -103,6 +103,16 @@ impl Table {
                         names.join(", ")
                     )
                 })?;
+            let columns = names
+                .iter()
+                .filter(|n| n.eq_ignore_ascii_case(wanted))
+                .count();
+            if columns > 1 {
+                bail_format!(
+                    "line {line}: the header names column '{wanted}' {columns} times; which one \
+                     holds the coordinate?"
+                );
+            }
         }
         Ok(Self {
             separator,

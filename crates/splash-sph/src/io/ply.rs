@@ -95,6 +95,13 @@ fn read_header(reader: &mut BufReader<File>) -> Result<(Header, u64, usize)> {
             let words: Vec<&str> = message.split_whitespace().collect();
             format_failure!("malformed PLY header: {}", words.join(" "))
         })?;
+    if (header.version.major, header.version.minor) != (1, 0) {
+        bail_format!(
+            "PLY format version {}.{} is not supported: the only PLY version is 1.0",
+            header.version.major,
+            header.version.minor
+        );
+    }
     // The parser keeps the last of two same-named elements or properties in the first one's
     // place, which would silently shift the binary layout.
     let text = String::from_utf8_lossy(&bytes);

@@ -8,7 +8,7 @@ use glam::Vec3;
 use super::attribute_columns::AttributeColumns;
 use super::failure::Result;
 use super::lines::Lines;
-use super::ply_layout::{Element, Kind, Layout};
+use super::ply_layout::{Element, Kind, Layout, Property};
 
 /// Reads the payload, `remaining_bytes` long, skipping blank lines.
 pub(super) fn read(
@@ -52,6 +52,15 @@ pub(super) fn read(
             format!("line {line} (vertex {index})")
         })?);
     }
+    if layout.vertex_is_last
+        && let Some((line, _)) = lines.next_non_blank()?
+    {
+        bail_format!(
+            "line {line}: more data after the {} vertices the header declares (the vertex \
+             count is too small)",
+            vertex.count
+        );
+    }
     Ok(out)
 }
 
@@ -73,8 +82,13 @@ fn parse_vertex(
     };
     let mut coordinates = [0.0; 3];
     attributes.push();
-    for (i, prop) in vertex.props.iter().enumerate().take(last + 1) {
+    for (i, prop) in vertex.props.iter().enumerate() {
         let token = tokens.next().ok_or_else(too_few)?;
+        if i > last {
+            // Past the properties read: only counted, so that a short or long line is caught.
+            skip_list(prop, token, &mut tokens, too_few)?;
+            continue;
+        }
         match prop.kind {
             Kind::Scalar(_) => {
                 let coordinate = xyz.iter().position(|&j| j == i);
@@ -89,15 +103,33 @@ fn parse_vertex(
                     None => attributes.set_last(i, value),
                 }
             }
-            Kind::List { .. } => {
-                let n: usize = token.parse().map_err(|_| {
-                    format!("invalid list length '{token}' for property '{}'", prop.name)
-                })?;
-                if n > 0 {
-                    tokens.nth(n - 1).ok_or_else(too_few)?;
-                }
-            }
+            Kind::List { .. } => skip_list(prop, token, &mut tokens, too_few)?,
         }
     }
+    if let Some(extra) = tokens.next() {
+        return Err(format!(
+            "more values than the {} properties of the 'vertex' element (from '{extra}' on)",
+            vertex.props.len()
+        ));
+    }
     Ok(Vec3::from_array(coordinates))
+}
+
+/// Skips the rest of property `prop`, whose first token is `token`: nothing for a scalar, the
+/// entries of a list.
+fn skip_list<'a>(
+    prop: &Property,
+    token: &str,
+    tokens: &mut impl Iterator<Item = &'a str>,
+    too_few: impl Fn() -> String,
+) -> Result<(), String> {
+    if let Kind::List { .. } = prop.kind {
+        let n: usize = token
+            .parse()
+            .map_err(|_| format!("invalid list length '{token}' for property '{}'", prop.name))?;
+        if n > 0 {
+            tokens.nth(n - 1).ok_or_else(too_few)?;
+        }
+    }
+    Ok(())
 }

@@ -52,6 +52,15 @@ pub(super) fn read(
         .collect();
     // The count is checked against the file's size before anything is allocated for it.
     records.check()?;
+    let end = offset + records.count as u64 * stride as u64;
+    if layout.vertex_is_last && file_len - end >= stride as u64 {
+        // A whole record or more after the last element: the count is wrong. (A few stray
+        // bytes, such as a final newline, are tolerated.)
+        bail_format!(
+            "the header declares {} vertices of {stride} bytes, ending at byte offset {end},              but the file goes on to byte offset {file_len}: the vertex count is too small",
+            records.count
+        );
+    }
     attributes.reserve(records.count);
     let decode = |record: &[u8], p: &mut Vec3| {
         p.x = sx.to_f32(record.get(ax..)?, big_endian)?;

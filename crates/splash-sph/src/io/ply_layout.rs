@@ -11,6 +11,8 @@ pub(super) struct Layout {
     /// their layout checked.
     pub before: Vec<Element>,
     pub vertex: Element,
+    /// Whether `vertex` is the file's last element, so that nothing may follow its records.
+    pub vertex_is_last: bool,
     /// Index and type of each of the vertex properties `x`, `y`, `z`.
     pub xyz: [(usize, Scalar); 3],
 }
@@ -34,6 +36,7 @@ impl Layout {
         let xyz = coordinate_properties(&vertex)?;
         Ok(Self {
             before,
+            vertex_is_last: vertex_index + 1 == header.elements.len(),
             vertex,
             xyz,
         })
