@@ -1260,3 +1260,30 @@ fn counts_lines_versions_and_columns_that_do_not_add_up_are_refused() {
     let twice = dir.file("twice.csv", "x,x,y,z\n1,2,3,4\n");
     assert_fails(&twice, None, &["line 1", "column 'x' 2 times"]);
 }
+
+/// A text file without line breaks is refused at the line limit, not read whole, and error
+/// messages quote short excerpts of the file (issue 14, items 4 and 10).
+#[test]
+fn text_without_line_breaks_gives_a_short_error() {
+    let dir = TempDir::new("no-breaks");
+    let zeros = dir.file("zeros.csv", vec![0u8; 3 << 20]);
+    assert_fails(&zeros, None, &["line 1 is longer than 1 MiB"]);
+    let carriage_returns = "x;y;z\r1;2;3\r".repeat(1000);
+    let cr = dir.file("cr.csv", &carriage_returns);
+    let message = read_particles(&cr, None).unwrap_err().to_string();
+    assert!(message.len() < 600, "{} bytes: {message}", message.len());
+    let mut wide = (0..500)
+        .map(|i| format!("c{i}"))
+        .collect::<Vec<_>>()
+        .join(",");
+    wide.push('\n');
+    let wide = dir.file("wide.csv", wide + &"1,".repeat(499) + "1\n");
+    assert_fails(&wide, None, &["no column 'x'", "c0, c1", "… 488 more"]);
+    let long = dir.file(
+        "long.ply",
+        header("ascii", "1", XYZ_PROPS) + &"8a".repeat(500) + " 1 2\n",
+    );
+    assert_fails(&long, None, &["cannot parse '", "…' as property 'x'"]);
+    let message = read_particles(&long, None).unwrap_err().to_string();
+    assert!(message.len() < 300, "{message}");
+}

@@ -100,7 +100,7 @@ impl Table {
                     format_failure!(
                         "line {line} is taken as a header (not all its fields are numbers), but it \
                          has no column '{wanted}' (its columns: {})",
-                        names.join(", ")
+                        super::listed(names.iter().copied())
                     )
                 })?;
             let columns = names
@@ -205,9 +205,10 @@ fn parse_row(
         }
         let value = field.parse::<f32>().map_err(|_| {
             format_failure!(
-                "line {line}, column {} ('{}'): '{field}' is not a number",
+                "line {line}, column {} ('{}'): '{}' is not a number",
                 i + 1,
-                name(i)
+                super::short(&name(i)),
+                super::short(field)
             )
         })?;
         match coordinate {

@@ -1,8 +1,12 @@
 //! Line-by-line reading of text payloads, with line numbers for error messages.
 
-use std::io::BufRead;
+use std::io::{BufRead, Read};
 
 use super::failure::{Failure, Result};
+
+/// Longest line read: particle tables have lines of a few hundred bytes; a file without line
+/// breaks (all zeros, CR-only) must not be read whole into memory as one line.
+const MAX_LINE_BYTES: u64 = 1 << 20;
 
 pub(super) struct Lines<R> {
     reader: R,
@@ -30,14 +34,21 @@ impl<R: BufRead> Lines<R> {
     pub fn next_non_blank(&mut self) -> Result<Option<(usize, &str)>> {
         loop {
             self.buf.clear();
-            let n = self
-                .reader
+            let n = (&mut self.reader)
+                .take(MAX_LINE_BYTES)
                 .read_until(b'\n', &mut self.buf)
                 .map_err(|e| Failure::io(format_args!("read error after line {}", self.line), e))?;
             if n == 0 {
                 return Ok(None);
             }
             self.line += 1;
+            if n as u64 == MAX_LINE_BYTES && self.buf.last() != Some(&b'\n') {
+                bail_format!(
+                    "line {} is longer than {} MiB: not a text table (no line breaks?)",
+                    self.line,
+                    MAX_LINE_BYTES >> 20
+                );
+            }
             if !self.buf.trim_ascii().is_empty() {
                 break;
             }

@@ -365,3 +365,26 @@ fn non_finite(p: Vec3, at: &str) -> Failure {
         p.z
     )
 }
+
+/// At most this many characters of a file's text are quoted in an error message, and at
+/// most this many names listed: a file with no line breaks must not become a megabyte of text.
+const QUOTED_CHARS: usize = 40;
+const LISTED_NAMES: usize = 12;
+
+/// `text` as an error message quotes it: cut to [`QUOTED_CHARS`] characters, with "…".
+fn short(text: &str) -> String {
+    match text.char_indices().nth(QUOTED_CHARS) {
+        Some((end, _)) => format!("{}…", &text[..end]),
+        None => text.to_string(),
+    }
+}
+
+/// Names joined by commas for an error message: at most [`LISTED_NAMES`], each [`short`].
+fn listed<'a>(names: impl IntoIterator<Item = &'a str>) -> String {
+    let names: Vec<&str> = names.into_iter().collect();
+    let mut out: Vec<String> = names.iter().take(LISTED_NAMES).map(|n| short(n)).collect();
+    if names.len() > LISTED_NAMES {
+        out.push(format!("… {} more", names.len() - LISTED_NAMES));
+    }
+    out.join(", ")
+}

@@ -95,9 +95,10 @@ fn parse_vertex(
                 if coordinate.is_none() && !attributes.reads(i) {
                     continue;
                 }
-                let value = token
-                    .parse()
-                    .map_err(|_| format!("cannot parse '{token}' as property '{}'", prop.name))?;
+                let value = token.parse().map_err(|_| {
+                    let token = super::short(token);
+                    format!("cannot parse '{token}' as property '{}'", prop.name)
+                })?;
                 match coordinate {
                     Some(c) => coordinates[c] = value,
                     None => attributes.set_last(i, value),
@@ -124,9 +125,10 @@ fn skip_list<'a>(
     too_few: impl Fn() -> String,
 ) -> Result<(), String> {
     if let Kind::List { .. } = prop.kind {
-        let n: usize = token
-            .parse()
-            .map_err(|_| format!("invalid list length '{token}' for property '{}'", prop.name))?;
+        let n: usize = token.parse().map_err(|_| {
+            let token = super::short(token);
+            format!("invalid list length '{token}' for property '{}'", prop.name)
+        })?;
         if n > 0 {
             tokens.nth(n - 1).ok_or_else(too_few)?;
         }

@@ -23,7 +23,7 @@ impl Layout {
             let names: Vec<&str> = header.elements.keys().map(String::as_str).collect();
             bail_format!(
                 "the PLY header has no 'vertex' element (its elements: {})",
-                names.join(", ")
+                super::listed(names.iter().copied())
             );
         };
         let vertex = Element::new(vertex)?;
@@ -225,7 +225,7 @@ fn coordinate_properties(vertex: &Element) -> Result<[(usize, Scalar); 3]> {
             let names: Vec<&str> = vertex.props.iter().map(|p| p.name.as_str()).collect();
             bail_format!(
                 "the 'vertex' element has no property '{name}' (its properties: {})",
-                names.join(", ")
+                super::listed(names.iter().copied())
             );
         };
         let Kind::Scalar(scalar) = prop.kind else {
