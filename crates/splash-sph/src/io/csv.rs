@@ -207,7 +207,7 @@ fn parse_row(
             format_failure!(
                 "line {line}, column {} ('{}'): '{}' is not a number",
                 i + 1,
-                super::short(&name(i)),
+                super::short(name(i)),
                 super::short(field)
             )
         })?;
