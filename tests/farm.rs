@@ -232,6 +232,44 @@ fn frames_run_in_number_order_from_directories_and_patterns() {
     assert!(!dir.path("clash").exists());
 }
 
+/// A farm re-queue: the same frames written to the same `-o` by two jobs at once. Neither may
+/// remove the other's temporary before its rename.
+#[test]
+fn two_jobs_writing_the_same_frames_both_succeed() {
+    let dir = TempDir::new("concurrent");
+    sequence(&dir, 1..=8);
+    let input = dir.path("in");
+    let plain = format!("{}/", dir.path("plain").display());
+    splash_env(&fast(&[&input, &"-o", &plain]), &[]).ok();
+    for round in 0..5 {
+        let out = format!("{}/", dir.path(&format!("out{round}")).display());
+        let start = || {
+            Command::new(env!("CARGO_BIN_EXE_splash"))
+                .arg("recon")
+                .args(fast(&[&input, &"-o", &out]))
+                .output()
+        };
+        let (a, b) = std::thread::scope(|s| {
+            let a = s.spawn(start);
+            let b = s.spawn(start);
+            (a.join().unwrap(), b.join().unwrap())
+        });
+        for output in [a, b] {
+            let output = output.expect("cannot start splash");
+            finish(format!("round {round}"), output).ok();
+        }
+        let out = dir.path(&format!("out{round}"));
+        assert_eq!(entries(&out), entries(&dir.path("plain")), "round {round}");
+        for name in entries(&out) {
+            assert_eq!(
+                fs::read(out.join(&name)).unwrap(),
+                fs::read(dir.path("plain").join(&name)).unwrap(),
+                "round {round}: {name}"
+            );
+        }
+    }
+}
+
 #[test]
 fn ranges_and_shards_cover_every_frame_exactly_once() {
     let dir = TempDir::new("shards");
