@@ -270,6 +270,39 @@ fn two_jobs_writing_the_same_frames_both_succeed() {
     }
 }
 
+/// A scanned directory's frames are its numbered files of the commonest extension; stray
+/// notes were read as CSV frames (and failed the job) or written out as meshes.
+#[test]
+fn files_beside_the_frame_sequence_are_skipped_with_a_warning() {
+    let dir = TempDir::new("strays");
+    sequence(&dir, 1..=3);
+    dir.file("in/notes.txt", "remember to check the viscosity");
+    dir.file("in/readme.txt", "");
+    dir.file("in/f_2.csv", "x,y,z\n0,0,0\n");
+    let input = dir.path("in");
+    let out = format!("{}/", dir.path("out").display());
+    let run = splash_env(&fast(&[&input, &"-o", &out]), &[]).ok();
+    assert_eq!(
+        entries(&dir.path("out")),
+        ["f_0001.obj", "f_0002.obj", "f_0003.obj"]
+    );
+    let warning = run
+        .stderr
+        .lines()
+        .find(|l| l.starts_with("warning: 3 files"))
+        .unwrap_or_else(|| panic!("{}", run.stderr));
+    for name in ["f_2.csv", "notes.txt", "readme.txt"] {
+        assert!(warning.contains(name), "{warning}");
+    }
+    // Without any frame number, the commonest extension still decides.
+    let flat = TempDir::new("strays-flat");
+    flat.file("in/ball.ply", ply(&small_ball(), None));
+    flat.file("in/notes.txt", "not a frame");
+    let run = splash_env(&fast(&[&flat.path("in"), &"-o", &flat.path("out/")]), &[]).ok();
+    assert_eq!(entries(&flat.path("out")), ["ball.obj"]);
+    assert!(run.stderr.contains("notes.txt"), "{}", run.stderr);
+}
+
 #[test]
 fn ranges_and_shards_cover_every_frame_exactly_once() {
     let dir = TempDir::new("shards");
