@@ -54,6 +54,14 @@ impl Output {
         }
     }
 
+    /// The extension of an output file name, if it has one.
+    pub fn extension(&self) -> Option<String> {
+        match self {
+            Output::Pattern(p) => Some(Path::new(p).extension()?.to_string_lossy().into_owned()),
+            _ => None,
+        }
+    }
+
     fn path_for(&self, input: &Path, format: MeshFormat) -> Result<PathBuf> {
         let stem = input
             .file_stem()

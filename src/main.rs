@@ -288,7 +288,15 @@ fn recon(args: Recon) -> Result<ExitCode> {
             }
             format
         }
-        (None, hint) => hint.unwrap_or(MeshFormat::Obj),
+        (None, Some(hint)) => hint,
+        // OBJ text in a `.stl` would pass for a mesh of that kind until something reads it.
+        (None, None) => match output.extension() {
+            Some(ext) => bail!(
+                "the output name's .{ext} extension is not a mesh format splash writes (.obj, \
+                 .ply, .inc); rename the output or give --format"
+            ),
+            None => MeshFormat::Obj,
+        },
     };
     let input_format = args
         .input_format
@@ -308,7 +316,28 @@ fn recon(args: Recon) -> Result<ExitCode> {
         _ => Verbosity::Normal,
     };
 
-    let mut inputs = sequence::discover(&args.inputs)?;
+    let discovered = sequence::discover(&args.inputs)?;
+    let mut inputs = discovered.files;
+    if !discovered.skipped.is_empty() && verbosity != Verbosity::Quiet {
+        let shown: Vec<String> = discovered
+            .skipped
+            .iter()
+            .take(5)
+            .map(|p| format!("'{}'", p.display()))
+            .collect();
+        let more = discovered.skipped.len() - shown.len();
+        eprintln!(
+            "warning: {} files of the input directories are not part of the frame sequence and \
+             are skipped: {}{}",
+            discovered.skipped.len(),
+            shown.join(", "),
+            if more > 0 {
+                format!(" and {more} more")
+            } else {
+                String::new()
+            }
+        );
+    }
     if let Some(frames) = &frames {
         inputs = frames.select(inputs)?;
         let present: BTreeSet<u64> = inputs

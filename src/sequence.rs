@@ -1,7 +1,7 @@
 //! Frame sequences: which particle files a run covers and in what order.
 //!
-//! - Inputs are files, directories (their particle files, not recursively, hidden files
-//!   skipped) or quoted glob patterns (`'sim/frame_*.ply'`, expanded here so that the shell's
+//! - Inputs are files, directories (the frame sequence among their particle files, not
+//!   recursively, hidden files skipped: see [`frame_files`]) or quoted glob patterns (`'sim/frame_*.ply'`, expanded here so that the shell's
 //!   argument limit never bites).
 //! - A frame's number is the last run of digits in its file stem; frames are ordered by it,
 //!   numerically (`f_9` before `f_10`), frames without a number after the numbered ones.
@@ -9,7 +9,7 @@
 //! - `--shard K/N` keeps every N-th frame of the selection ([`Shard`]), so that N independent
 //!   jobs cover each frame exactly once.
 
-use std::collections::{BTreeSet, HashSet};
+use std::collections::{BTreeMap, BTreeSet, HashSet};
 use std::fmt;
 use std::path::{Path, PathBuf};
 
@@ -58,12 +58,13 @@ fn is_glob(text: &str) -> bool {
 /// A path that does not exist and is not a pattern is passed through, so that the frame is
 /// reported as unreadable like any other bad frame. A directory without particle files or a
 /// pattern matching nothing is an error.
-pub fn discover(inputs: &[PathBuf]) -> Result<Vec<PathBuf>> {
+pub fn discover(inputs: &[PathBuf]) -> Result<Discovered> {
     let mut files = Vec::new();
+    let mut skipped = Vec::new();
     for input in inputs {
         let text = input.to_string_lossy();
         if input.is_dir() {
-            let before = files.len();
+            let mut candidates = Vec::new();
             let entries = std::fs::read_dir(input)
                 .with_context(|| format!("cannot list the directory '{}'", input.display()))?;
             for entry in entries {
@@ -72,16 +73,19 @@ pub fn discover(inputs: &[PathBuf]) -> Result<Vec<PathBuf>> {
                 let path = entry.path();
                 let hidden = entry.file_name().to_string_lossy().starts_with('.');
                 if !hidden && path.is_file() && InputFormat::from_path(&path).is_ok() {
-                    files.push(path);
+                    candidates.push(path);
                 }
             }
-            if files.len() == before {
+            if candidates.is_empty() {
                 bail!(
                     "the directory '{}' holds no particle files (.ply, .csv, .txt, .bin, .raw)",
                     input.display()
                 );
             }
-            files[before..].sort();
+            candidates.sort();
+            let (mut frames, mut left) = frame_files(candidates);
+            files.append(&mut frames);
+            skipped.append(&mut left);
         } else if !input.exists() && is_glob(&text) {
             let options = glob::MatchOptions {
                 require_literal_leading_dot: true,
@@ -107,7 +111,35 @@ pub fn discover(inputs: &[PathBuf]) -> Result<Vec<PathBuf>> {
     let mut seen = HashSet::new();
     files.retain(|f| seen.insert(f.canonicalize().unwrap_or_else(|_| f.clone())));
     sort_frames(&mut files);
-    Ok(files)
+    Ok(Discovered { files, skipped })
+}
+
+/// The inputs of a run, and the files of scanned directories left out of it.
+pub struct Discovered {
+    pub files: Vec<PathBuf>,
+    pub skipped: Vec<PathBuf>,
+}
+
+/// Splits a directory's particle files (sorted) into its frame sequence and the rest. A stray
+/// `notes.txt` or `readme.txt` beside `frame_0001.ply`… is no frame: when some files carry a
+/// frame number, those without one are left out, and of the rest the largest group sharing
+/// one extension is the sequence (a tie goes to the extension that sorts first).
+fn frame_files(candidates: Vec<PathBuf>) -> (Vec<PathBuf>, Vec<PathBuf>) {
+    let extension = |p: &PathBuf| {
+        p.extension()
+            .map(|e| e.to_string_lossy().to_ascii_lowercase())
+    };
+    let numbered = candidates.iter().any(|p| path_frame_number(p).is_some());
+    let in_sequence = |p: &PathBuf| !numbered || path_frame_number(p).is_some();
+    let mut counts: BTreeMap<Option<String>, usize> = BTreeMap::new();
+    for path in candidates.iter().filter(|p| in_sequence(p)) {
+        *counts.entry(extension(path)).or_default() += 1;
+    }
+    let most = counts.values().copied().max().unwrap_or(0);
+    let chosen = counts.into_iter().find(|&(_, n)| n == most).map(|(e, _)| e);
+    candidates
+        .into_iter()
+        .partition(|p| in_sequence(p) && Some(extension(p)) == chosen)
 }
 
 /// Orders paths by frame number, numerically; paths without one go last; ties keep their order.

@@ -506,6 +506,59 @@ fn bad_options_are_refused_before_any_work() {
 }
 
 #[test]
+fn an_output_name_must_name_the_mesh_format() {
+    let dir = TempDir::new("output-extension");
+    let input = dir.file("frame.ply", ply_binary(&ball()));
+    // OBJ text in a .stl exited 0.
+    splash![
+        "recon",
+        &input,
+        "-o",
+        dir.path("mesh.stl"),
+        "--spacing",
+        "0.01"
+    ]
+    .assert_failure()
+    .assert_stderr_has(".stl extension is not a mesh format");
+    splash![
+        "recon",
+        &input,
+        "-o",
+        dir.path("mesh.ply"),
+        "--format",
+        "obj",
+        "--spacing",
+        "0.01"
+    ]
+    .assert_failure()
+    .assert_stderr_has("--format obj does not match the output name's .ply extension");
+    assert_eq!(entries(&dir.path("")), ["frame.ply"]);
+    // Asked for explicitly, or without an extension to contradict, the format stands.
+    splash![
+        "recon",
+        &input,
+        "-o",
+        dir.path("mesh.dat"),
+        "--format",
+        "ply",
+        "--spacing",
+        "0.01"
+    ]
+    .assert_success();
+    splash!["recon", &input, "-o", dir.path("mesh"), "--spacing", "0.01"].assert_success();
+    assert!(
+        fs::read_to_string(dir.path("mesh"))
+            .unwrap()
+            .starts_with("# ")
+    );
+    assert!(
+        fs::read(dir.path("mesh.dat"))
+            .unwrap()
+            .starts_with(b"ply\n")
+    );
+}
+
+#[test]
 fn one_bad_frame_does_not_stop_the_others() {
     let dir = TempDir::new("one-bad");
     let points = ball();

@@ -232,6 +232,77 @@ fn frames_run_in_number_order_from_directories_and_patterns() {
     assert!(!dir.path("clash").exists());
 }
 
+/// A farm re-queue: the same frames written to the same `-o` by two jobs at once. Neither may
+/// remove the other's temporary before its rename.
+#[test]
+fn two_jobs_writing_the_same_frames_both_succeed() {
+    let dir = TempDir::new("concurrent");
+    sequence(&dir, 1..=8);
+    let input = dir.path("in");
+    let plain = format!("{}/", dir.path("plain").display());
+    splash_env(&fast(&[&input, &"-o", &plain]), &[]).ok();
+    for round in 0..5 {
+        let out = format!("{}/", dir.path(&format!("out{round}")).display());
+        let start = || {
+            Command::new(env!("CARGO_BIN_EXE_splash"))
+                .arg("recon")
+                .args(fast(&[&input, &"-o", &out]))
+                .output()
+        };
+        let (a, b) = std::thread::scope(|s| {
+            let a = s.spawn(start);
+            let b = s.spawn(start);
+            (a.join().unwrap(), b.join().unwrap())
+        });
+        for output in [a, b] {
+            let output = output.expect("cannot start splash");
+            finish(format!("round {round}"), output).ok();
+        }
+        let out = dir.path(&format!("out{round}"));
+        assert_eq!(entries(&out), entries(&dir.path("plain")), "round {round}");
+        for name in entries(&out) {
+            assert_eq!(
+                fs::read(out.join(&name)).unwrap(),
+                fs::read(dir.path("plain").join(&name)).unwrap(),
+                "round {round}: {name}"
+            );
+        }
+    }
+}
+
+/// A scanned directory's frames are its numbered files of the commonest extension; stray
+/// notes were read as CSV frames (and failed the job) or written out as meshes.
+#[test]
+fn files_beside_the_frame_sequence_are_skipped_with_a_warning() {
+    let dir = TempDir::new("strays");
+    sequence(&dir, 1..=3);
+    dir.file("in/notes.txt", "remember to check the viscosity");
+    dir.file("in/readme.txt", "");
+    dir.file("in/f_2.csv", "x,y,z\n0,0,0\n");
+    let input = dir.path("in");
+    let out = format!("{}/", dir.path("out").display());
+    let run = splash_env(&fast(&[&input, &"-o", &out]), &[]).ok();
+    assert_eq!(
+        entries(&dir.path("out")),
+        ["f_0001.obj", "f_0002.obj", "f_0003.obj"]
+    );
+    let warning = run
+        .stderr
+        .lines()
+        .find(|l| l.starts_with("warning: 3 files"))
+        .unwrap_or_else(|| panic!("{}", run.stderr));
+    for name in ["f_2.csv", "notes.txt", "readme.txt"] {
+        assert!(warning.contains(name), "{warning}");
+    }
+    // Without any frame number, the commonest extension still decides.
+    let flat = TempDir::new("strays-flat");
+    flat.file("in/ball.ply", ply(&small_ball(), None));
+    flat.file("in/notes.txt", "not a frame");
+    let run = splash_env(&fast(&[&flat.path("in"), &"-o", &flat.path("out/")]), &[]).ok();
+    assert_eq!(entries(&flat.path("out")), ["ball.obj"]);
+    assert!(run.stderr.contains("notes.txt"), "{}", run.stderr);
+}
+
 #[test]
 fn ranges_and_shards_cover_every_frame_exactly_once() {
     let dir = TempDir::new("shards");

@@ -61,8 +61,9 @@ fn replace(path: &Path, write: impl FnOnce(&mut File) -> io::Result<()>) -> Resu
 }
 
 /// Removes the temporaries of earlier writes of `name` that were killed before their rename
-/// (`.{name}.tmp-*` other than `ours`, already renamed): now that the file is complete, they are
-/// garbage. Best effort.
+/// (`.{name}.tmp-{pid}-{n}` whose process is gone): now that the file is complete, they are
+/// garbage. Temporaries of live processes, this one included, are another write in progress
+/// (a re-queued farm job writing the same frames) and must stay for its rename. Best effort.
 fn remove_leftovers(dir: &Path, name: &std::ffi::OsStr, ours: &Path) {
     let mut prefix = OsString::from(".");
     prefix.push(name);
@@ -73,10 +74,31 @@ fn remove_leftovers(dir: &Path, name: &std::ffi::OsStr, ours: &Path) {
     };
     for entry in entries.flatten() {
         let path = entry.path();
-        if entry.file_name().to_string_lossy().starts_with(&prefix) && path != ours {
+        let file_name = entry.file_name();
+        let Some(suffix) = file_name
+            .to_string_lossy()
+            .strip_prefix(&prefix)
+            .map(str::to_owned)
+        else {
+            continue;
+        };
+        if path != ours && writer_is_dead(&suffix) {
             let _ = fs::remove_file(path);
         }
     }
+}
+
+/// Whether the writer of a temporary whose name ends in `{pid}-{n}` is known to be dead. A name
+/// that does not parse, or a system without `/proc`, gives no proof: the temporary is kept.
+fn writer_is_dead(suffix: &str) -> bool {
+    let Some(pid) = suffix
+        .split_once('-')
+        .and_then(|(pid, _)| pid.parse::<u32>().ok())
+    else {
+        return false;
+    };
+    let proc = Path::new("/proc");
+    pid != process::id() && proc.join("self").exists() && !proc.join(pid.to_string()).exists()
 }
 
 fn write_temporary(
@@ -102,4 +124,45 @@ fn write_temporary(
         );
         IoFailure::new(doing, e)
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    // Liveness is read from /proc.
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn only_temporaries_of_dead_writers_are_removed() {
+        let dir = std::env::temp_dir().join(format!("splash-atomic-{}", process::id()));
+        let _ = fs::remove_dir_all(&dir);
+        fs::create_dir_all(&dir).unwrap();
+        // A child that has been waited for is dead, and its pid is not reused this soon.
+        let mut child = process::Command::new("true").spawn().unwrap();
+        let dead = child.id();
+        child.wait().unwrap();
+        let mut live = process::Command::new("sleep").arg("60").spawn().unwrap();
+        let names = [
+            format!(".f.obj.tmp-{dead}-0"),
+            format!(".f.obj.tmp-{}-0", live.id()),
+            format!(".f.obj.tmp-{}-999", process::id()),
+            ".f.obj.tmp-unknown".to_owned(),
+        ];
+        for name in &names {
+            fs::write(dir.join(name), "partial").unwrap();
+        }
+        write_file(&dir.join("f.obj"), |f| io::Write::write_all(f, b"mesh")).unwrap();
+        live.kill().unwrap();
+        live.wait().unwrap();
+        let mut left: Vec<String> = fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        left.sort();
+        let mut expected = vec!["f.obj".to_owned()];
+        expected.extend(names[1..].iter().cloned());
+        expected.sort();
+        assert_eq!(left, expected);
+        fs::remove_dir_all(&dir).unwrap();
+    }
 }
