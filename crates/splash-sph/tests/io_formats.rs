@@ -1287,3 +1287,21 @@ fn text_without_line_breaks_gives_a_short_error() {
     let message = read_particles(&long, None).unwrap_err().to_string();
     assert!(message.len() < 300, "{message}");
 }
+
+/// A malformed PLY header line is quoted by its start only: the parser's message quoted the
+/// whole line, up to the header's megabyte (found by the fuzz harness, tests/fuzz.rs).
+#[test]
+fn a_long_malformed_header_line_gives_a_short_error() {
+    let dir = TempDir::new("long-header-line");
+    for line in [
+        "element vert".to_string() + &",".repeat(70_000),
+        "9".repeat(3000),
+    ] {
+        let text = format!("ply\nformat ascii 1.0\n{line}\n{XYZ_PROPS}end_header\n1 2 3\n");
+        let path = dir.file("long.ply", text);
+        assert_fails(&path, None, &["malformed PLY header", "Line 3", "…"]);
+        let message = read_particles(&path, None).unwrap_err().to_string();
+        let own = message.len() - path.to_string_lossy().len();
+        assert!(own < 300, "{} bytes: {message}", message.len());
+    }
+}

@@ -379,6 +379,15 @@ fn short(text: &str) -> String {
     }
 }
 
+/// A message from elsewhere (a parser's) as an error message quotes it: cut to a few lines'
+/// worth, with "…", since it may quote the file.
+fn short_message(text: &str) -> String {
+    match text.char_indices().nth(4 * QUOTED_CHARS) {
+        Some((end, _)) => format!("{}…", &text[..end]),
+        None => text.to_string(),
+    }
+}
+
 /// Names joined by commas for an error message: at most [`LISTED_NAMES`], each [`short`].
 fn listed<'a>(names: impl IntoIterator<Item = &'a str>) -> String {
     let names: Vec<&str> = names.into_iter().collect();

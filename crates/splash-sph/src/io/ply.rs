@@ -93,7 +93,16 @@ fn read_header(reader: &mut BufReader<File>) -> Result<(Header, u64, usize)> {
             let message = e.to_string();
             let message = message.split("\n\tError:").next().unwrap_or_default();
             let words: Vec<&str> = message.split_whitespace().collect();
-            format_failure!("malformed PLY header: {}", words.join(" "))
+            let message = words.join(" ");
+            // The parser quotes the whole line, which may be a megabyte long: quote its start.
+            let message = match message.split_once("String: '") {
+                Some((head, line)) => {
+                    let line = line.strip_suffix('\'').unwrap_or(line);
+                    format!("{head}String: '{}'", super::short(line))
+                }
+                None => super::short_message(&message),
+            };
+            format_failure!("malformed PLY header: {message}")
         })?;
     if (header.version.major, header.version.minor) != (1, 0) {
         bail_format!(
