@@ -4,7 +4,7 @@ use std::fmt;
 
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, short_words};
 
 /// A number of bytes; written in configs as `"8G"`, `"512M"` or a plain integer.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
@@ -18,6 +18,7 @@ impl Bytes {
         let split = t.find(|c: char| c.is_ascii_alphabetic()).unwrap_or(t.len());
         let (number, unit) = t.split_at(split);
         let bad = || {
+            let text = short_words(text);
             Error::config(format!(
                 "'{text}' is not a size: use e.g. 12G, 512M or 1000000"
             ))
@@ -30,9 +31,9 @@ impl Bytes {
             "g" | "gb" | "gib" => 1 << 30,
             "t" | "tb" | "tib" => 1 << 40,
             _ => {
-                return Err(Error::config(format!(
+                return Err(Error::config(short_words(&format!(
                     "'{text}': unknown unit '{unit}' (use K, M, G or T)"
-                )));
+                ))));
             }
         };
         if !(number.is_finite() && number >= 0.0) {
@@ -108,6 +109,20 @@ pub fn default_limit() -> u64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// An error quotes the start of a long text only (found by tests/fuzz.rs).
+    #[test]
+    fn errors_quote_long_texts_short() {
+        for text in [
+            "9".repeat(5000) + "x",
+            "x".repeat(5000),
+            "1".to_string() + &"Q".repeat(5000),
+        ] {
+            let e = Bytes::parse(&text).unwrap_err().to_string();
+            assert!(e.len() < 200, "{e}");
+            assert!(e.contains("…"), "{e}");
+        }
+    }
 
     #[test]
     fn sizes_parse_and_print() {

@@ -252,8 +252,10 @@ impl Config {
 
     /// Parses and validates TOML text; errors point at the offending key's line.
     pub fn from_toml(text: &str) -> Result<Config> {
-        let config: Config = toml::from_str(text)
-            .map_err(|e| Error::config(config_errors::parse_error(text, e).to_string()))?;
+        let config: Config = toml::from_str(text).map_err(|e| {
+            let e = config_errors::parse_error(text, e);
+            Error::config(config_errors::render_parse_error(text, &e))
+        })?;
         config.validate().map_err(|e| match e {
             Error::Config(m) => Error::config(config_errors::validation_error(text, &m)),
             e => e.context("invalid configuration"),

@@ -14,6 +14,7 @@ use serde::Deserialize;
 use serde::de::value::MapAccessDeserializer;
 use serde::de::{self, DeserializeSeed, Deserializer, IgnoredAny, IntoDeserializer, MapAccess};
 
+use crate::error::short_words;
 use crate::field::FieldConfig;
 
 /// `error`, or when it lies inside `[field]`, the same error pointing at its key or value.
@@ -154,6 +155,7 @@ impl<'de, S: DeserializeSeed<'de>> de::Visitor<'de> for KeyUnlessKind<S> {
 /// The message of a [`Config::validate`](crate::Config::validate) error on `text`, pointing at
 /// the first key it names that the text sets, in the layout of toml's errors.
 pub(crate) fn validation_error(text: &str, message: &str) -> String {
+    let message = &short_words(message);
     let span = message
         .split(|c: char| !(c.is_ascii_alphanumeric() || c == '_' || c == '.'))
         .map(|word| word.trim_matches('.'))
@@ -185,7 +187,26 @@ fn value_span(text: &str, path: &str) -> Option<Range<usize>> {
     None
 }
 
-/// `line L, column C` and the line with `span` underlined, as toml shows its errors.
+/// A toml parse error on `text` in toml's layout, but with a long line shown around the error
+/// only and long words cut: toml quotes the whole line, and the whole of an unknown key.
+pub(crate) fn render_parse_error(text: &str, error: &toml::de::Error) -> String {
+    let message = short_words(error.message().trim_end());
+    match error
+        .span()
+        .filter(|s| s.start <= s.end && s.end <= text.len())
+    {
+        Some(span) if text.is_char_boundary(span.start) && text.is_char_boundary(span.end) => {
+            format!("TOML parse error at {}\n{message}", snippet(text, span))
+        }
+        _ => format!("TOML parse error: {message}"),
+    }
+}
+
+/// Characters of a line on either side of the error that are shown.
+const QUOTED: usize = 40;
+
+/// `line L, column C` and the line with `span` underlined, as toml shows its errors; of a long
+/// line, [`QUOTED`] characters on either side of the span.
 fn snippet(text: &str, span: Range<usize>) -> String {
     let start = text[..span.start].rfind('\n').map_or(0, |i| i + 1);
     let end = text[span.start..]
@@ -196,10 +217,27 @@ fn snippet(text: &str, span: Range<usize>) -> String {
     let column = text[start..span.start].chars().count();
     let width = text[span.start..span.end.min(end)].chars().count().max(1);
     let gutter = " ".repeat(number.to_string().len() + 1);
+    // The part of the line shown: from QUOTED characters before the span to QUOTED after it.
+    let first = column.saturating_sub(QUOTED);
+    let width = width.min(QUOTED);
+    let shown: String = line
+        .chars()
+        .skip(first)
+        .take(column - first + width + QUOTED)
+        .collect();
+    let (before, after) = (
+        if first > 0 { "…" } else { "" },
+        if line.chars().count() > column + width + QUOTED {
+            "…"
+        } else {
+            ""
+        },
+    );
+    let caret = column - first + before.chars().count();
     format!(
-        "line {number}, column {}\n{gutter}|\n{number} | {line}\n{gutter}|{}{}",
+        "line {number}, column {}\n{gutter}|\n{number} | {before}{shown}{after}\n{gutter}|{}{}",
         column + 1,
-        " ".repeat(column + 1),
+        " ".repeat(caret + 1),
         "^".repeat(width)
     )
 }
@@ -239,6 +277,29 @@ mod tests {
         let (first, pointed) = error("[band]\n\nhalf_wdth = \"2r\"\n");
         assert!(first.contains("line 3, column 1"), "{first}");
         assert_eq!(pointed, "3 | half_wdth = \"2r\"");
+    }
+
+    /// Errors on a long line show it around the error, and long names and values are cut: toml
+    /// quoted the whole line and the whole of an unknown key (found by tests/fuzz.rs).
+    #[test]
+    fn errors_on_long_lines_stay_short() {
+        let long = "a".repeat(5000);
+        for text in [
+            format!("[field]\nkind = \"ssp07\"\nkind {long}\n"),
+            format!("spacing = 0.014 {long}\n"),
+            format!("{long} = 1\n"),
+            format!("cell = \"{long}\"\n"),
+            format!("[output]\nattributes = [\"{long}\"]\n"),
+            format!("threads = 0 # {long}\nspacing = 1\n\n"),
+        ] {
+            let e = Config::from_toml(&text).unwrap_err().to_string();
+            assert!(e.chars().count() < 600, "{} characters: {e}", e.len());
+            assert!(e.contains("line "), "{e}");
+        }
+        let (first, pointed) = error(&format!("spacing = 0.014 {long}\n"));
+        assert_eq!(first, "TOML parse error at line 1, column 11");
+        assert!(pointed.starts_with("1 | spacing = 0.014 aaa"), "{pointed}");
+        assert!(pointed.ends_with("a…"), "{pointed}");
     }
 
     #[test]

@@ -78,6 +78,26 @@ impl Error {
     }
 }
 
+/// Every word of `message`, and every run of spaces, longer than 40 characters (a value or
+/// name quoted from the input) cut to 40, with "…": an error message stays a few lines whatever
+/// it quotes.
+pub(crate) fn short_words(message: &str) -> String {
+    const LONGEST: usize = 40;
+    let mut out = String::with_capacity(message.len().min(1024));
+    let (mut word, mut space) = (0, false);
+    for c in message.chars() {
+        let same = c.is_whitespace() == space && c != '\n';
+        word = if same { word + 1 } else { 1 };
+        space = c.is_whitespace();
+        if word <= LONGEST {
+            out.push(c);
+        } else if word == LONGEST + 1 {
+            out.push('…');
+        }
+    }
+    out
+}
+
 /// Returns an [`Error::Config`] with a formatted message.
 macro_rules! bail_config {
     ($($arg:tt)*) => {

@@ -5,7 +5,7 @@ use std::fmt;
 
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, short_words};
 
 /// A length either in multiples of the particle spacing r ("2r", "r", "r/2", "0.5r") or in
 /// world units (a plain number).
@@ -42,6 +42,7 @@ impl Length {
     pub fn parse(text: &str) -> Result<Length> {
         let t = text.trim();
         let bad = || {
+            let text = short_words(text);
             Error::config(format!(
                 "'{text}' is not a length: use e.g. 2r, r, r/2, r/4, 0.5r or 0.007"
             ))
@@ -110,6 +111,21 @@ pub(crate) fn positive(key: &str, v: f32) -> Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// An error quotes the start of a long text only (found by tests/fuzz.rs).
+    #[test]
+    fn errors_quote_long_texts_short() {
+        for text in [
+            "9".repeat(5000) + "x",
+            "2r".to_string() + &" ".repeat(5000) + "x",
+            "x".repeat(5000),
+            "1".to_string() + &"Q".repeat(5000),
+        ] {
+            let e = Length::parse(&text).unwrap_err().to_string();
+            assert!(e.len() < 200, "{e}");
+            assert!(e.contains("…"), "{e}");
+        }
+    }
 
     #[test]
     fn lengths_parse() {
