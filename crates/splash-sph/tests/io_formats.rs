@@ -1284,6 +1284,19 @@ fn text_without_line_breaks_gives_a_short_error() {
         header("ascii", "1", XYZ_PROPS) + &"8a".repeat(500) + " 1 2\n",
     );
     assert_fails(&long, None, &["cannot parse '", "…' as property 'x'"]);
+    // An extra value on a vertex line is quoted by its start (found by tests/fuzz.rs: a line
+    // ending in 3000 commas was quoted whole).
+    let extra = dir.file(
+        "extra.ply",
+        header("ascii", "1", XYZ_PROPS) + "1 2 3 " + &",".repeat(3000) + "\n",
+    );
+    assert_fails(
+        &extra,
+        None,
+        &["more values than the 3 properties", "…' on)"],
+    );
+    let message = read_particles(&extra, None).unwrap_err().to_string();
+    assert!(message.len() < 300, "{message}");
     let message = read_particles(&long, None).unwrap_err().to_string();
     assert!(message.len() < 300, "{message}");
 }

@@ -109,8 +109,9 @@ fn parse_vertex(
     }
     if let Some(extra) = tokens.next() {
         return Err(format!(
-            "more values than the {} properties of the 'vertex' element (from '{extra}' on)",
-            vertex.props.len()
+            "more values than the {} properties of the 'vertex' element (from '{}' on)",
+            vertex.props.len(),
+            super::short(extra)
         ));
     }
     Ok(Vec3::from_array(coordinates))
