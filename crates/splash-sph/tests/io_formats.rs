@@ -1318,3 +1318,55 @@ fn a_long_malformed_header_line_gives_a_short_error() {
         assert!(own < 300, "{} bytes: {message}", message.len());
     }
 }
+
+/// Element and property names are quoted by their start: a header's names may be as long as
+/// the header (found by tests/fuzz.rs: a 1500-character element name was quoted whole).
+#[test]
+fn long_names_in_a_header_are_quoted_short() {
+    let dir = TempDir::new("long-names");
+    let long = "n".repeat(3000);
+    let le = "binary_little_endian";
+    let cases = [
+        (
+            format!(
+                "ply\nformat {le} 1.0\nelement m{long} 2\nproperty list uchar float rgb\nelement vertex 0\n{XYZ_PROPS}end_header\n\x03"
+            ),
+            "truncated",
+        ),
+        (
+            header(
+                "ascii",
+                "0",
+                &format!("property list float int {long}\n{XYZ_PROPS}"),
+            ),
+            "non-integer length",
+        ),
+        (
+            header("ascii", "1", &format!("property float {long}\n{XYZ_PROPS}")) + "a 1 2 3\n",
+            "cannot parse 'a'",
+        ),
+        (
+            header(
+                "ascii",
+                "1",
+                &format!("property list uchar int {long}\n{XYZ_PROPS}"),
+            ) + "a 1 2 3\n",
+            "invalid list length 'a'",
+        ),
+        (
+            header(
+                le,
+                "1",
+                &format!("property list char int {long}\n{XYZ_PROPS}"),
+            ) + "\u{80}", // 0xc2: -62 as a char
+            "list length",
+        ),
+    ];
+    for (i, (text, expected)) in cases.into_iter().enumerate() {
+        let path = dir.file(&format!("long-{i}.ply"), text);
+        assert_fails(&path, None, &[expected, "…"]);
+        let message = read_particles(&path, None).unwrap_err().to_string();
+        let own = message.len() - path.to_string_lossy().len();
+        assert!(own < 300, "{} bytes: {message}", message.len());
+    }
+}

@@ -97,7 +97,8 @@ fn parse_vertex(
                 }
                 let value = token.parse().map_err(|_| {
                     let token = super::short(token);
-                    format!("cannot parse '{token}' as property '{}'", prop.name)
+                    let name = super::short(&prop.name);
+                    format!("cannot parse '{token}' as property '{name}'")
                 })?;
                 match coordinate {
                     Some(c) => coordinates[c] = value,
@@ -128,7 +129,8 @@ fn skip_list<'a>(
     if let Kind::List { .. } = prop.kind {
         let n: usize = token.parse().map_err(|_| {
             let token = super::short(token);
-            format!("invalid list length '{token}' for property '{}'", prop.name)
+            let name = super::short(&prop.name);
+            format!("invalid list length '{token}' for property '{name}'")
         })?;
         if n > 0 {
             tokens.nth(n - 1).ok_or_else(too_few)?;

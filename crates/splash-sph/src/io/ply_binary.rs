@@ -209,7 +209,7 @@ fn walk_record(
                 let n = len.to_len(bytes, big_endian).ok_or_else(|| {
                     format_failure!(
                         "negative list length for property '{}' of {} record {index} at byte offset {offset}",
-                        prop.name,
+                        super::short(&prop.name),
                         element.name
                     )
                 })?;

@@ -168,8 +168,8 @@ impl Element {
                             bail_format!(
                                 "malformed PLY header: list property '{}' of element '{}' has a \
                                  non-integer length type",
-                                p.name,
-                                def.name
+                                super::short(&p.name),
+                                super::short(&def.name)
                             );
                         }
                         Kind::List {
@@ -185,7 +185,8 @@ impl Element {
             })
             .collect::<Result<_>>()?;
         Ok(Self {
-            name: def.name.clone(),
+            // For messages only (a header's names may be a megabyte long).
+            name: super::short(&def.name),
             count: def.count,
             props,
         })
