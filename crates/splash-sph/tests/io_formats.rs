@@ -1370,3 +1370,43 @@ fn long_names_in_a_header_are_quoted_short() {
         assert!(own < 300, "{} bytes: {message}", message.len());
     }
 }
+
+/// Column lists in CSV errors stay short: a short row names the first few missing columns,
+/// each by the start of its name, and a header without `x` lists names up to a total length
+/// (found by tests/fuzz.rs: a 70 kB column name, and twelve long names, were listed whole).
+#[test]
+fn csv_column_lists_in_errors_stay_short() {
+    let dir = TempDir::new("csv-columns");
+    let long = "d".repeat(70_000);
+    let names: Vec<String> = (0..50).map(|i| format!("c{i}")).collect();
+    let cases = [
+        (
+            format!("x,y,z,{long}\n1,2,3,4\n5\n"),
+            vec![
+                "line 3: the row has only 1 columns",
+                "column 4 ('ddd",
+                "…')",
+            ],
+        ),
+        (
+            format!(
+                "x,y,z,{}\n{}\n1,2\n",
+                names.join(","),
+                vec!["1"; 53].join(",")
+            ),
+            vec!["missing column 3 ('z'), column 4 ('c0')", "and 47 more"],
+        ),
+        (
+            format!("{}\n1\n", vec!["w".repeat(39); 12].join(",")),
+            vec!["no column 'x'", "more)"],
+        ),
+    ];
+    for (i, (text, expected)) in cases.into_iter().enumerate() {
+        let path = dir.file(&format!("columns-{i}.csv"), text);
+        let expected: Vec<&str> = expected.to_vec();
+        assert_fails(&path, None, &expected);
+        let message = read_particles(&path, None).unwrap_err().to_string();
+        let own = message.len() - path.to_string_lossy().len();
+        assert!(own < 300, "{own} bytes: {message}");
+    }
+}

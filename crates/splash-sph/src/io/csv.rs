@@ -218,12 +218,19 @@ fn parse_row(
     }
     if found <= last {
         let missing = (found..=last).filter(|&i| table.xyz.contains(&i) || attributes.reads(i));
-        let missing: Vec<String> = missing
-            .map(|i| format!("column {} ('{}')", i + 1, name(i)))
+        let missing: Vec<usize> = missing.collect();
+        let shown: Vec<String> = missing
+            .iter()
+            .take(4)
+            .map(|&i| format!("column {} ('{}')", i + 1, super::short(name(i))))
             .collect();
+        let more = match missing.len().saturating_sub(shown.len()) {
+            0 => String::new(),
+            n => format!(" and {n} more"),
+        };
         bail_format!(
-            "line {line}: the row has only {found} columns; missing {}",
-            missing.join(", ")
+            "line {line}: the row has only {found} columns; missing {}{more}",
+            shown.join(", ")
         );
     }
     Ok(Vec3::from_array(coordinates))

@@ -370,6 +370,7 @@ fn non_finite(p: Vec3, at: &str) -> Failure {
 /// most this many names listed: a file with no line breaks must not become a megabyte of text.
 const QUOTED_CHARS: usize = 40;
 const LISTED_NAMES: usize = 12;
+const LISTED_CHARS: usize = 160;
 
 /// `text` as an error message quotes it: cut to [`QUOTED_CHARS`] characters, with "…".
 fn short(text: &str) -> String {
@@ -388,12 +389,22 @@ fn short_message(text: &str) -> String {
     }
 }
 
-/// Names joined by commas for an error message: at most [`LISTED_NAMES`], each [`short`].
+/// Names joined by commas for an error message: at most [`LISTED_NAMES`], each [`short`], and
+/// no more than [`LISTED_CHARS`] characters of them.
 fn listed<'a>(names: impl IntoIterator<Item = &'a str>) -> String {
     let names: Vec<&str> = names.into_iter().collect();
-    let mut out: Vec<String> = names.iter().take(LISTED_NAMES).map(|n| short(n)).collect();
-    if names.len() > LISTED_NAMES {
-        out.push(format!("… {} more", names.len() - LISTED_NAMES));
+    let mut out: Vec<String> = Vec::new();
+    let mut chars = 0;
+    for name in names.iter().take(LISTED_NAMES) {
+        let name = short(name);
+        chars += name.chars().count() + 2;
+        if chars > LISTED_CHARS && !out.is_empty() {
+            break;
+        }
+        out.push(name);
+    }
+    if names.len() > out.len() {
+        out.push(format!("… {} more", names.len() - out.len()));
     }
     out.join(", ")
 }
