@@ -370,7 +370,7 @@ fn non_finite(p: Vec3, at: &str) -> Failure {
 /// most this many names listed: a file with no line breaks must not become a megabyte of text.
 const QUOTED_CHARS: usize = 40;
 const LISTED_NAMES: usize = 12;
-const LISTED_CHARS: usize = 160;
+const LISTED_CHARS: usize = 120;
 
 /// `text` as an error message quotes it: cut to [`QUOTED_CHARS`] characters, with "…".
 fn short(text: &str) -> String {
