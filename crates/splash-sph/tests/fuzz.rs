@@ -781,9 +781,11 @@ fn encode(ty: &str, value: f64, encoding: &str, out: &mut Vec<u8>) {
     }
 }
 
-/// A PLY file: `elements` are (name, properties as (type, name) with a list as
-/// `list uchar int`, rows).
-fn ply(encoding: &str, elements: &[(&str, &[(&str, &str)], usize)]) -> Vec<u8> {
+/// Properties as (type, name), a list's type as `list uchar int`.
+type Props<'a> = &'a [(&'a str, &'a str)];
+
+/// A PLY file: `elements` are (name, properties, rows).
+fn ply(encoding: &str, elements: &[(&str, Props, usize)]) -> Vec<u8> {
     let mut out = format!("ply\nformat {encoding} 1.0\ncomment fuzz seed\n");
     for (name, props, count) in elements {
         let _ = writeln!(out, "element {name} {count}");
