@@ -300,8 +300,15 @@ PartitionName=splash Nodes={host} Default=YES MaxTime=INFINITE State=UP
     /// The daemons' logs and the jobs' outputs, for a failure message.
     fn logs(&self) -> String {
         let mut all = String::new();
-        for name in ["slurmctld.out", "slurmctld.log", "slurmd.out", "slurmd.log"] {
-            all += &tail(&self.dir.join(name), 15);
+        for daemon in ["slurmctld", "slurmd"] {
+            // The log file, or what the daemon printed before it could open one.
+            let log = self.dir.join(format!("{daemon}.log"));
+            let log = if log.exists() {
+                log
+            } else {
+                self.dir.join(format!("{daemon}.out"))
+            };
+            all += &tail(&log, 15);
         }
         for log in entries(&self.work().join("logs")) {
             all += &tail(&self.work().join("logs").join(log), 15);
@@ -328,15 +335,18 @@ PartitionName=splash Nodes={host} Default=YES MaxTime=INFINITE State=UP
         id.split(';').next().unwrap().to_owned()
     }
 
-    /// Whether the job (every task of an array) has left the queue.
+    /// Whether the job (every task of an array) has left the queue. An squeue that fails for
+    /// another reason than the job being gone (a slow controller) says no, and is asked again.
     fn done(&self, job: &str) -> bool {
         let out = self
             .client("squeue", 20)
             .args(["-h", "-o", "%i", "-j", job])
             .output()
             .unwrap();
-        // squeue -j of a finished job either prints nothing or says the ID is invalid.
-        String::from_utf8_lossy(&out.stdout).trim().is_empty()
+        // squeue -j of a finished job prints nothing, or says that the ID is invalid once the
+        // controller has forgotten it.
+        (out.status.success() && out.stdout.trim_ascii().is_empty())
+            || String::from_utf8_lossy(&out.stderr).contains("Invalid job id")
     }
 
     fn wait(&self, job: &str, deadline: Instant) {
@@ -502,9 +512,12 @@ fn a_slurm_array_with_a_cancelled_task_resubmitted_makes_every_frame() {
 
     // Cancel the victim once its first frame is written, while it works on the second.
     let first = mesh.join(name(victim_frames[0]));
-    while !first.exists() {
+    for tick in 0.. {
+        if first.exists() {
+            break;
+        }
         assert!(
-            Instant::now() < deadline && !cluster.done(&job),
+            Instant::now() < deadline && (tick % 25 != 0 || !cluster.done(&job)),
             "task {VICTIM} wrote no {} in time\n{}",
             first.display(),
             cluster.logs()
@@ -548,6 +561,16 @@ fn a_slurm_array_with_a_cancelled_task_resubmitted_makes_every_frame() {
         }
     }
     assert_eq!(states.len(), TASKS as usize, "{states:?}");
+    for task in 0..TASKS {
+        let log = events(&work, &job, task);
+        let written: Vec<_> = log
+            .iter()
+            .filter(|e| e["event"] == "frame")
+            .map(|e| e["output"].as_str().unwrap_or("?").to_owned())
+            .collect();
+        let summary = event(&log, "summary").map_or("no summary: killed".into(), |e| e.to_string());
+        eprintln!("slurm: task {job}_{task} wrote {written:?}; {summary}");
+    }
     let left = entries(&mesh);
     eprintln!("slurm: after the cancel, mesh/ has {left:?}; missing frames {lost:?}");
 
