@@ -110,6 +110,25 @@ fn alive(pid: u32) -> bool {
     })
 }
 
+/// Kills the processes working in the cluster directory `dir` (slurmstepd, the job scripts,
+/// srun, splash) or talking to its cluster.
+fn kill_jobs(dir: &Path) {
+    let conf = format!("SLURM_CONF={}", dir.join("slurm.conf").display());
+    for process in fs::read_dir("/proc").into_iter().flatten().flatten() {
+        let Ok(pid) = process.file_name().to_string_lossy().parse::<u32>() else {
+            continue;
+        };
+        let cwd = fs::read_link(process.path().join("cwd")).unwrap_or_default();
+        let environ = fs::read(process.path().join("environ")).unwrap_or_default();
+        if pid != std::process::id()
+            && (cwd.starts_with(dir)
+                || environ.split(|b| *b == 0).any(|var| var == conf.as_bytes()))
+        {
+            kill(pid);
+        }
+    }
+}
+
 const PREFIX: &str = "splash-slurm-";
 
 /// Daemons, jobs and directories that earlier runs left when they were killed before cleaning
@@ -142,18 +161,7 @@ fn remove_stale_clusters() {
                 kill_if(pid, daemon);
             }
         }
-        let conf = format!("SLURM_CONF={}", dir.join("slurm.conf").display());
-        for process in fs::read_dir("/proc").into_iter().flatten().flatten() {
-            let Ok(pid) = process.file_name().to_string_lossy().parse::<u32>() else {
-                continue;
-            };
-            let cwd = fs::read_link(process.path().join("cwd")).unwrap_or_default();
-            let environ = fs::read(process.path().join("environ")).unwrap_or_default();
-            if cwd.starts_with(&dir) || environ.split(|b| *b == 0).any(|var| var == conf.as_bytes())
-            {
-                kill(pid);
-            }
-        }
+        kill_jobs(&dir);
         let _ = fs::remove_dir_all(dir);
     }
 }
@@ -406,6 +414,8 @@ impl Drop for Cluster {
             let _ = child.kill();
             let _ = child.wait();
         }
+        // Whatever the cancel did not reach.
+        kill_jobs(&self.dir);
         if std::thread::panicking() {
             eprintln!("the cluster's files are kept in {}", self.dir.display());
         } else {
@@ -439,7 +449,7 @@ fn job_script() -> String {
         ("--cell r/2", "--cell r/4".into()),
         (
             "srun splash recon",
-            format!("srun {} recon", env!("CARGO_BIN_EXE_splash")),
+            format!("srun \"{}\" recon", env!("CARGO_BIN_EXE_splash")),
         ),
     ] {
         assert_eq!(
