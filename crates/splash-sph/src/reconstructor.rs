@@ -148,13 +148,13 @@ impl Reconstructor {
                     "the spacing r = {} is {ratio:.3}× the {} that the particles' \
                      density suggests: the mesh will be {}; check --spacing (--particle-radius is \
                      half the spacing)",
+                    figure(r),
+                    figure(estimate),
                     if ratio > 1.0 {
                         "a blob that fills the gaps between separate parts"
                     } else {
                         "broken into droplets around single particles"
                     },
-                    figure(r),
-                    figure(estimate)
                 ));
             }
         }
