@@ -49,7 +49,10 @@ fn faces(obj: &std::path::Path) -> usize {
 fn coincident_particles_give_a_sphere() {
     let dir = TempDir::new("coincident");
     for n in [20, 30, 100] {
-        let input = dir.file(&format!("p{n}.csv"), csv(&vec![Vec3::new(1.0, 2.0, 3.0); n]));
+        let input = dir.file(
+            &format!("p{n}.csv"),
+            csv(&vec![Vec3::new(1.0, 2.0, 3.0); n]),
+        );
         let out = dir.path(&format!("p{n}.obj"));
         let (code, stderr) = recon(&[
             input.to_str().unwrap(),
@@ -225,5 +228,8 @@ fn json_logs_are_json_lines_only() {
     }
     // `--log-format=json` counts as well.
     let (_, stderr) = recon(&[ball, "--spacing", "0.05", "--log-format=json", "-o", &out]);
-    assert!(stderr.lines().all(|l| l.starts_with("{\"event\":")), "{stderr}");
+    assert!(
+        stderr.lines().all(|l| l.starts_with("{\"event\":")),
+        "{stderr}"
+    );
 }
