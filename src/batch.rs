@@ -173,6 +173,8 @@ impl RunReport {
 pub trait Progress {
     fn started(&mut self, _plan: &Plan) {}
     fn spacing_estimated(&mut self, from: &Path, spacing: f32);
+    /// Something that makes the output suspect, about frame `input` or the run (None).
+    fn warning(&mut self, input: Option<&Path>, message: &str);
     fn frame_done(&mut self, outcome: &FrameOutcome, done: usize, total: usize);
 }
 
@@ -242,6 +244,14 @@ impl Batch {
             skipped: skipped.iter().map(|&i| self.inputs[i].clone()).collect(),
             to_do: to_do.len(),
         };
+        // A directory that cannot take the meshes fails the run now, not after each frame's
+        // reconstruction.
+        let mut dirs: Vec<&Path> = to_do.iter().map(|&i| output_dir(&outputs[i])).collect();
+        dirs.sort();
+        dirs.dedup();
+        for dir in dirs {
+            check_writable(dir)?;
+        }
         progress.started(&plan);
         let mut reconstructor = None;
         let mut spacing = self.config.spacing;
@@ -254,10 +264,19 @@ impl Batch {
         }
         let mut outcomes = Vec::with_capacity(to_do.len());
         let mut not_attempted = 0;
+        // The given spacing is compared with the first reconstructed frame's particles.
+        let mut checked = self.config.spacing.is_none();
         for (k, &i) in to_do.iter().enumerate() {
             let input = &self.inputs[i];
             let output = outputs[i].clone();
-            let result = self.frame(input, &output, &mut spacing, &mut reconstructor, progress);
+            let result = self.frame(
+                input,
+                &output,
+                &mut spacing,
+                &mut reconstructor,
+                &mut checked,
+                progress,
+            );
             let outcome = FrameOutcome {
                 input: input.clone(),
                 output,
@@ -303,6 +322,7 @@ impl Batch {
         output: &Path,
         spacing: &mut Option<f32>,
         reconstructor: &mut Option<Reconstructor>,
+        checked: &mut bool,
         progress: &mut dyn Progress,
     ) -> Result<FrameStats> {
         let start = Instant::now();
@@ -353,6 +373,12 @@ impl Batch {
                 ..self.config.clone()
             })?),
         };
+        if !*checked {
+            *checked = true;
+            for warning in reconstructor.warnings(&particles) {
+                progress.warning(Some(input), &warning);
+            }
+        }
         let rec =
             reconstruct_measured(reconstructor, &particles).context("reconstruction failed")?;
         let mut mesh = rec.mesh;
@@ -377,6 +403,38 @@ impl Batch {
         stats.timings.write = start.elapsed();
         Ok(stats)
     }
+}
+
+/// The directory a mesh is written into.
+fn output_dir(output: &Path) -> &Path {
+    match output.parent() {
+        Some(dir) if !dir.as_os_str().is_empty() => dir,
+        _ => Path::new("."),
+    }
+}
+
+/// Creates `dir` if needed and writes (and removes) a small file in it.
+fn check_writable(dir: &Path) -> Result<()> {
+    std::fs::create_dir_all(dir).map_err(|e| {
+        anyhow!(
+            "cannot create the output directory '{}': {e}; no frame was reconstructed",
+            dir.display()
+        )
+    })?;
+    let probe = dir.join(format!(".splash-write-check-{}", std::process::id()));
+    let written = std::fs::OpenOptions::new()
+        .write(true)
+        .create(true)
+        .truncate(true)
+        .open(&probe);
+    let _ = std::fs::remove_file(&probe);
+    written.map_err(|e| {
+        anyhow!(
+            "cannot write in the output directory '{}': {e}; no frame was reconstructed",
+            dir.display()
+        )
+    })?;
+    Ok(())
 }
 
 /// The particle velocities of frame `input`, from its `velocity` attribute.

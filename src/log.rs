@@ -5,6 +5,9 @@
 //! - `"start"`: `selected`, `shard` (`"K/N"` or null), `assigned`, `skipped` (outputs found
 //!   complete), `to_do`;
 //! - `"spacing"`: `file`, `spacing`;
+//! - `"warning"`: `time`, `file` (or null for the run), `message`;
+//! - `"error"`: `message`: the run could not start (a bad flag, a missing input); the exit
+//!   status is 2 for a usage error, else 1;
 //! - `"frame"`: `time` (UTC, RFC 3339), `frame` (number or null), `input`, `output`, `status`
 //!   (`"ok"` or `"error"`), and `particles`, `triangles`, `vertices`, `seconds` or `error`;
 //! - `"summary"`: `written`, `skipped`, `failed` (a list of `{frame, input, error}`),
@@ -69,6 +72,26 @@ impl Console {
             bar,
             format,
             verbosity,
+        }
+    }
+
+    /// Something that makes the output suspect, about `input` or the run.
+    pub fn warn(&self, input: Option<&Path>, message: &str) {
+        match self.format {
+            LogFormat::Json => eprintln!(
+                "{}",
+                json!({
+                    "event": "warning",
+                    "time": utc_now(),
+                    "file": input.map(|p| p.display().to_string()),
+                    "message": message,
+                })
+            ),
+            LogFormat::Plain if self.verbosity != Verbosity::Quiet => match input {
+                Some(input) => self.say(&format!("warning: {}: {message}", input.display())),
+                None => self.say(&format!("warning: {message}")),
+            },
+            LogFormat::Plain => {}
         }
     }
 
@@ -189,6 +212,10 @@ impl Progress for Console {
         }
     }
 
+    fn warning(&mut self, input: Option<&Path>, message: &str) {
+        self.warn(input, message);
+    }
+
     fn frame_done(&mut self, outcome: &FrameOutcome, done: usize, total: usize) {
         if self.format == LogFormat::Json {
             eprintln!("{}", frame_json(outcome));
@@ -222,6 +249,35 @@ impl Progress for Console {
             bar.set_position(done as u64);
         }
     }
+}
+
+/// An error that ends the run before or outside the frames, as `format` wants it.
+pub fn print_error(format: LogFormat, message: &str) {
+    match format {
+        LogFormat::Json => eprintln!("{}", json!({"event": "error", "message": message})),
+        LogFormat::Plain => eprintln!("error: {message}"),
+    }
+}
+
+/// The log format asked for on the command line, found before the arguments are parsed, so
+/// that argument errors come out in it too: `--log-format json` or `--log-format=json`.
+pub fn format_in_args(args: &[std::ffi::OsString]) -> LogFormat {
+    let mut found = LogFormat::Plain;
+    let mut words = args.iter().map(|a| a.to_string_lossy());
+    while let Some(word) = words.next() {
+        if word == "--" {
+            break;
+        }
+        let value = match word.strip_prefix("--log-format") {
+            Some("") => words.next().map(|w| w.into_owned()),
+            Some(rest) => rest.strip_prefix('=').map(str::to_string),
+            None => None,
+        };
+        if let Some(format) = value.and_then(|v| LogFormat::parse(&v).ok()) {
+            found = format;
+        }
+    }
+    found
 }
 
 fn seconds(outcome: &FrameOutcome) -> f64 {

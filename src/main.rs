@@ -247,14 +247,28 @@ struct Recon {
 }
 
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let args: Vec<std::ffi::OsString> = std::env::args_os().collect();
+    // Known before clap runs, so that its usage errors are JSON lines too.
+    let log_format = log::format_in_args(&args);
+    let cli = match Cli::try_parse_from(&args) {
+        Ok(cli) => cli,
+        Err(e) if log_format == LogFormat::Json && e.use_stderr() => {
+            let text = e.render().to_string();
+            // clap's first paragraph says what is wrong; the usage and hints follow.
+            let first = text.trim().split("\n\n").next().unwrap_or_default();
+            let message = first.trim_start_matches("error: ");
+            log::print_error(log_format, message);
+            return ExitCode::from(2);
+        }
+        Err(e) => e.exit(),
+    };
     let result = match cli.command {
         Command::Recon(args) => recon(*args),
         Command::Bench(args) => bench_cli::bench(args),
         Command::Config(ConfigCommand::Show(args)) => show_config(&args),
     };
     result.unwrap_or_else(|e| {
-        eprintln!("error: {e:#}");
+        log::print_error(log_format, &format!("{e:#}"));
         ExitCode::FAILURE
     })
 }
@@ -316,9 +330,10 @@ fn recon(args: Recon) -> Result<ExitCode> {
         _ => Verbosity::Normal,
     };
 
+    let mut console = Console::new(log_format, verbosity, std::io::stderr().is_terminal());
     let discovered = sequence::discover(&args.inputs)?;
     let mut inputs = discovered.files;
-    if !discovered.skipped.is_empty() && verbosity != Verbosity::Quiet {
+    if !discovered.skipped.is_empty() {
         let shown: Vec<String> = discovered
             .skipped
             .iter()
@@ -326,16 +341,19 @@ fn recon(args: Recon) -> Result<ExitCode> {
             .map(|p| format!("'{}'", p.display()))
             .collect();
         let more = discovered.skipped.len() - shown.len();
-        eprintln!(
-            "warning: {} files of the input directories are not part of the frame sequence and \
+        console.warn(
+            None,
+            &format!(
+                "{} files of the input directories are not part of the frame sequence and \
              are skipped: {}{}",
-            discovered.skipped.len(),
-            shown.join(", "),
-            if more > 0 {
-                format!(" and {more} more")
-            } else {
-                String::new()
-            }
+                discovered.skipped.len(),
+                shown.join(", "),
+                if more > 0 {
+                    format!(" and {more} more")
+                } else {
+                    String::new()
+                }
+            ),
         );
     }
     if let Some(frames) = &frames {
@@ -346,12 +364,14 @@ fn recon(args: Recon) -> Result<ExitCode> {
             .collect();
         if let Some((count, first)) = frames.missing(&present, 5)
             && count > 0
-            && verbosity != Verbosity::Quiet
         {
             let first: Vec<String> = first.iter().map(u64::to_string).collect();
-            eprintln!(
-                "warning: {count} frames of --frames have no input (first: {})",
-                first.join(", ")
+            console.warn(
+                None,
+                &format!(
+                    "{count} frames of --frames have no input (first: {})",
+                    first.join(", ")
+                ),
             );
         }
         if inputs.is_empty() {
@@ -375,7 +395,6 @@ fn recon(args: Recon) -> Result<ExitCode> {
         skip_existing: args.skip_existing,
         fail_fast: args.fail_fast,
     };
-    let mut console = Console::new(log_format, verbosity, std::io::stderr().is_terminal());
     let report = batch.run(&mut console)?;
     if let Some(path) = &args.report {
         bench_cli::write_recon_report(path, &report.outcomes, &batch.config, report_config)?;

@@ -239,6 +239,13 @@ impl Default for BandConfig {
     }
 }
 
+/// The smallest particle spacing a configuration takes: below it the field's r³ underflows f32
+/// (a ball scaled by 10⁻²⁰ gave an empty mesh).
+pub(crate) const MIN_SPACING: f32 = 1e-9;
+/// The largest particle spacing a configuration takes: above it the field's powers of r overflow
+/// f32 (`spacing = 1e30` gave an empty mesh).
+pub(crate) const MAX_SPACING: f32 = 1e9;
+
 impl Config {
     /// Reads and validates a TOML file; errors name the file (and the key).
     pub fn from_file(path: &Path) -> Result<Config> {
@@ -272,6 +279,14 @@ impl Config {
     pub fn validate(&self) -> Result<()> {
         if let Some(r) = self.spacing {
             positive("spacing", r)?;
+            if !(MIN_SPACING..=MAX_SPACING).contains(&r) {
+                bail_config!(
+                    "spacing {} is outside {MIN_SPACING:e} to {MAX_SPACING:e}, where the field's \
+                     powers of r (r³, 1/r³) stay within f32's range; scale the coordinates (to \
+                     metres, say) and the spacing with them",
+                    crate::error::figure(r)
+                );
+            }
         }
         positive("cell", self.cell.value())?;
         self.check_cell_against_spacing()?;

@@ -118,3 +118,13 @@ macro_rules! bail_limit {
         return Err($crate::error::Error::Limit(format!($($arg)*)))
     };
 }
+
+/// `x` for a message: plain for everyday magnitudes (0.014, 35.7), in scientific notation
+/// outside them (1.4e-22, 1e30), where plain digits run to dozens of places.
+pub(crate) fn figure(x: f32) -> String {
+    if x == 0.0 || (1e-4..1e6).contains(&x.abs()) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
+}

@@ -7,7 +7,7 @@ use glam::Vec3;
 
 use crate::attributes;
 use crate::config::{Config, Params};
-use crate::error::{Error, Result};
+use crate::error::{Error, Result, figure};
 use crate::mesh::TriMesh;
 use crate::recon::full_grid::{self, Grid};
 use crate::recon::{self, Reconstruction};
@@ -90,7 +90,75 @@ impl Reconstructor {
                 p.x, p.y, p.z
             )));
         }
+        self.check_resolution(positions)?;
         self.install(|| recon::reconstruct(positions, &self.params, observer))
+    }
+
+    /// Refuses coordinates so large that f32's steps there are a sizeable part of a cell: the
+    /// particles would sit on a coarse lattice of their own, and the mesh would be wrong
+    /// without a sign of it (a ball 10⁵ units from the origin at r = 0.014).
+    fn check_resolution(&self, positions: &[Vec3]) -> Result<()> {
+        let largest = positions
+            .iter()
+            .map(|p| p.abs().max_element())
+            .fold(0.0f32, f32::max);
+        // The distance between neighbouring f32 values near `largest`.
+        let step = largest * f32::EPSILON;
+        let cell = self.params.cell;
+        if step > cell / 4.0 {
+            return Err(Error::input(format!(
+                "coordinates up to {} are beyond f32's resolution for cell {}: f32 values \
+                 there are {} apart, more than a quarter of a cell; move the \
+                 origin into the fluid (subtract its centre from the coordinates) or use a larger \
+                 cell",
+                figure(largest),
+                figure(cell),
+                figure(step)
+            )));
+        }
+        Ok(())
+    }
+
+    /// Signs that the configuration does not fit `positions`, in words, for the caller to
+    /// show (the reconstruction goes ahead regardless): the frame is smaller than one cell, or
+    /// the spacing is 2× or more off what [`estimate_spacing`](crate::estimate_spacing) finds
+    /// in it. The estimate reads the whole frame, so callers check the first frame of a
+    /// sequence rather than every one.
+    pub fn warnings(&self, positions: &[Vec3]) -> Vec<String> {
+        let mut warnings = Vec::new();
+        let finite = positions.iter().filter(|p| p.is_finite());
+        let (lo, hi) = finite.fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &p| {
+            (lo.min(p), hi.max(p))
+        });
+        let (r, cell) = (self.params.spacing, self.params.cell);
+        let extent = (hi - lo).max_element();
+        if positions.len() > 1 && extent > 0.0 && extent < cell {
+            warnings.push(format!(
+                "the particles span {}, less than one cell ({}, at spacing r = {}): the mesh \
+                 can only be a blob; is the spacing right?",
+                figure(extent),
+                figure(cell),
+                figure(r)
+            ));
+        }
+        if let Some(estimate) = crate::estimate_spacing(positions) {
+            let ratio = r / estimate;
+            if !(0.5..=2.0).contains(&ratio) {
+                warnings.push(format!(
+                    "the spacing r = {} is {ratio:.3}× the {} that the particles' \
+                     density suggests: the mesh will be {}; check --spacing (--particle-radius is \
+                     half the spacing)",
+                    figure(r),
+                    figure(estimate),
+                    if ratio > 1.0 {
+                        "a blob that fills the gaps between separate parts"
+                    } else {
+                        "broken into droplets around single particles"
+                    },
+                ));
+            }
+        }
+        warnings
     }
 
     /// A per-particle vector quantity (velocities, say) interpolated onto the vertices of

@@ -342,7 +342,7 @@ fn bad_ply_files_are_reported() {
     assert_fails(
         &dir.file("typo.ply", typo),
         None,
-        &["malformed PLY header", "Line 5"],
+        &["malformed PLY header", "line 5"],
     );
     assert_fails(
         &dir.file("no-end.ply", "ply\nformat ascii 1.0\nelement vertex 1\n"),

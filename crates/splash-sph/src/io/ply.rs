@@ -85,6 +85,7 @@ fn read_header(reader: &mut BufReader<File>) -> Result<(Header, u64, usize)> {
             break;
         }
     }
+    check_header_lines(&bytes)?;
     let header = Parser::<DefaultElement>::new()
         .read_header(&mut Reader::new(bytes.as_slice()))
         .map_err(|e| {
@@ -126,4 +127,95 @@ fn read_header(reader: &mut BufReader<File>) -> Result<(Header, u64, usize)> {
         );
     }
     Ok((header, bytes.len() as u64, lines))
+}
+
+const SCALAR_TYPES: [&str; 16] = [
+    "char", "uchar", "short", "ushort", "int", "uint", "float", "double", "int8", "uint8", "int16",
+    "uint16", "int32", "uint32", "float32", "float64",
+];
+
+/// Says in words what is wrong with a header line, with its number and what was expected: the
+/// parser's own messages ("Couldn't parse line") name the line but not the problem.
+fn check_header_lines(header: &[u8]) -> Result<()> {
+    let mut format = false;
+    let mut element = false;
+    for (i, line) in header.split(|&b| b == b'\n').enumerate().skip(1) {
+        let n = i + 1;
+        let Ok(line) = std::str::from_utf8(line) else {
+            bail_format!("malformed PLY header: line {n} is not text (a PLY header is ASCII)");
+        };
+        if !line.is_ascii() {
+            bail_format!(
+                "malformed PLY header: line {n} ('{}') has non-ASCII characters (a PLY header \
+                 is ASCII)",
+                super::short(line.trim())
+            );
+        }
+        let words: Vec<&str> = line.split_ascii_whitespace().collect();
+        let got = || super::short(line.trim());
+        match words.first().copied() {
+            None if i + 1 < header.split(|&b| b == b'\n').count() - 1 => bail_format!(
+                "malformed PLY header: line {n} is blank (a PLY header has no blank lines)"
+            ),
+            None | Some("comment" | "obj_info" | "end_header") => {}
+            Some("format") => {
+                let encodings = ["ascii", "binary_little_endian", "binary_big_endian"];
+                if words.len() != 3
+                    || !encodings.contains(&words[1])
+                    || words[2].parse::<f32>().is_err()
+                {
+                    bail_format!(
+                        "malformed PLY header: line {n} is '{}', expected 'format ascii 1.0', \
+                         'format binary_little_endian 1.0' or 'format binary_big_endian 1.0'",
+                        got()
+                    );
+                }
+                format = true;
+            }
+            Some("element") => {
+                if words.len() != 3 || words[2].parse::<u64>().is_err() {
+                    bail_format!(
+                        "malformed PLY header: line {n} is '{}', expected 'element NAME COUNT' \
+                         with a whole number COUNT ('element vertex 1000')",
+                        got()
+                    );
+                }
+                element = true;
+            }
+            Some("property") => {
+                let scalar = |t: &str| SCALAR_TYPES.contains(&t);
+                let fine = match words.get(1).copied() {
+                    Some("list") => words.len() == 5 && scalar(words[2]) && scalar(words[3]),
+                    Some(t) => words.len() == 3 && scalar(t),
+                    None => false,
+                };
+                if !fine {
+                    bail_format!(
+                        "malformed PLY header: line {n} is '{}', expected 'property TYPE NAME' \
+                         ('property float x') or 'property list COUNT_TYPE TYPE NAME', TYPE one \
+                         of {}",
+                        got(),
+                        SCALAR_TYPES.join(" ")
+                    );
+                }
+                if !element {
+                    bail_format!(
+                        "malformed PLY header: line {n} declares a property before any \
+                         'element' line"
+                    );
+                }
+            }
+            Some(word) => bail_format!(
+                "malformed PLY header: line {n} starts with '{}', expected one of format, \
+                 comment, obj_info, element, property, end_header",
+                super::short(word)
+            ),
+        }
+    }
+    if !format {
+        bail_format!(
+            "malformed PLY header: no 'format' line (such as 'format binary_little_endian 1.0')"
+        );
+    }
+    Ok(())
 }

@@ -6,7 +6,7 @@
 //! costs one entry instead of a box full of empty cells.
 
 use crate::error::Result;
-use glam::{IVec3, Vec3};
+use glam::{DVec3, IVec3, Vec3};
 use rayon::prelude::*;
 use rustc_hash::FxHashMap;
 
@@ -75,9 +75,19 @@ impl HandlerArray {
         };
         let span = (hi - origin).max_element() as i64;
         if !particles.is_empty() && span >= 1 << AXIS_BITS {
+            // Measured in f64 from the coordinates: the cells of f32 division saturate at
+            // i32's range (2147483646 cells said nothing about the particles).
+            let (lo, hi) = particles.iter().fold(
+                (DVec3::splat(f64::INFINITY), DVec3::splat(f64::NEG_INFINITY)),
+                |(lo, hi), p| (lo.min(p.as_dvec3()), hi.max(p.as_dvec3())),
+            );
+            let extent = (hi - lo).max_element();
             bail_limit!(
-                "the particles span {span} lookup cells of {cell_size} along one axis; \
-                 at most {} fit (a particle has escaped far from the fluid?)",
+                "the particles span {} along one axis, {:.3e} lookup cells of {}; at most {} \
+                 fit (a particle has escaped far from the fluid?)",
+                crate::error::figure(extent as f32),
+                extent / f64::from(cell_size),
+                crate::error::figure(cell_size),
                 1u64 << AXIS_BITS
             );
         }

@@ -209,9 +209,13 @@ fn vertex_box(p: Vec3, cell: f32, w: f32) -> Result<(IVec3, IVec3)> {
     let lo = (p.as_dvec3() - w) / c;
     let hi = (p.as_dvec3() + w) / c;
     if lo.abs().max_element() >= MAX_VERTEX_COORD || hi.abs().max_element() >= MAX_VERTEX_COORD {
+        // The box's far corner, not the particle, is what leaves the grid (a cell of 1e30
+        // put the particle 2.929e-40 cells from the origin, and its box of half-width w out).
         bail_limit!(
-            "particle at {p} lies {:.3e} cells from the origin, beyond the grid's reach of {:.3e}",
-            p.as_dvec3().abs().max_element() / c,
+            "the band around the particle at {p} reaches {:.3e} cells of {} from the origin, \
+             beyond the grid's {:.3e}",
+            lo.abs().max(hi.abs()).max_element(),
+            crate::error::figure(cell),
             MAX_VERTEX_COORD
         );
     }

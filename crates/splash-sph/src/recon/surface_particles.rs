@@ -40,8 +40,10 @@ pub fn surface_particles(handlers: &HandlerArray, criteria: &SurfaceCriteria) ->
     let inv_h2 = 1.0 / (h * h);
     let flags = map_particles(handlers, h, |near, x| {
         let (gradient, neighbours) = colour_gradient(near, x, inv_h2);
-        // The particle itself is among its neighbours.
-        neighbours - 1.0 < criteria.min_neighbours as f32
+        // Neighbours at the particle's own position (itself, duplicates) are not counted: a
+        // point mass of 30 coincident particles has a zero gradient by symmetry and would
+        // otherwise count as inside, leaving no surface particle and an empty mesh.
+        neighbours < criteria.min_neighbours as f32
             || gradient.length() * scale > criteria.colour_threshold
     });
     handlers
@@ -52,7 +54,8 @@ pub fn surface_particles(handlers: &HandlerArray, criteria: &SurfaceCriteria) ->
         .collect()
 }
 
-/// Returns Σ (1 − q²)² (x − x_j)/h and the number of particles with q < 1.
+/// Returns Σ (1 − q²)² (x − x_j)/h and the number of particles with 0 < q < 1 (particles at
+/// `x` itself are left out).
 fn colour_gradient(near: &Neighbourhood, x: Vec3, inv_h2: f32) -> (Vec3, f32) {
     let inv_h = inv_h2.sqrt();
     let mut g = [[0.0f32; LANES]; 3];
@@ -71,7 +74,7 @@ fn colour_gradient(near: &Neighbourhood, x: Vec3, inv_h2: f32) -> (Vec3, f32) {
             g[0][l] += w * dx;
             g[1][l] += w * dy;
             g[2][l] += w * dz;
-            count[l] += if q2 < 1.0 { 1.0 } else { 0.0 };
+            count[l] += if q2 < 1.0 && q2 > 0.0 { 1.0 } else { 0.0 };
         }
     }
     let sum = |a: &[f32; LANES]| a.iter().sum::<f32>();
