@@ -132,3 +132,21 @@ fn bgeo_from_splashsurf_matches_the_ply() {
     let got = check_positions("splashsurf.bgeo");
     eprintln!("{:?}", got.attributes.keys().collect::<Vec<_>>());
 }
+
+#[test]
+fn vtk_xml_every_encoding_matches_the_ply() {
+    check("xml_ascii.vtu", 1e-5);
+    for name in [
+        "xml_binary.vtu",
+        "xml_binary_zlib.vtu",
+        "xml_binary_zlib_uint64.vtu",
+        "xml_appended_raw.vtu",
+        "xml_appended_raw_zlib_uint64.vtu",
+        "xml_appended_base64.vtu",
+        "xml_appended_base64_zlib.vtu",
+        "xml_binary_zlib_uint64_double.vtp",
+        "xml_appended_raw.vtp",
+    ] {
+        check_all(name);
+    }
+}
