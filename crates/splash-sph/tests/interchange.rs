@@ -150,3 +150,11 @@ fn vtk_xml_every_encoding_matches_the_ply() {
         check_all(name);
     }
 }
+
+#[test]
+fn bgeo_with_attributes_matches_the_ply() {
+    // Laid out as partio writes it, gzipped and plain; the script checks the .gz with the
+    // BGEO reader pysplashsurf adds to meshio.
+    check_all("partio_attributes.bgeo.gz");
+    check_all("partio_attributes.bgeo");
+}
