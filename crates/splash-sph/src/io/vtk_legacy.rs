@@ -299,8 +299,9 @@ impl<'a> Cursor<'a> {
             let bytes = n.checked_mul(num.size()).unwrap_or(usize::MAX);
             if bytes > remaining {
                 bail_format!(
-                    "truncated binary data: the array declared at byte offset {at} needs {n} \
-                     values of {} bytes from byte offset {}, but the file ends at byte offset {}",
+                    "truncated binary data: the array declared at byte offset {at} ({tuples} × \
+                     {width} values of {} bytes) needs {bytes} bytes from byte offset {}, but the \
+                     file ends at byte offset {}",
                     num.size(),
                     self.pos,
                     self.data.len()

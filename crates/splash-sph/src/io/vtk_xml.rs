@@ -199,7 +199,15 @@ pub(super) fn parse(data: &[u8]) -> Result<Particles> {
                     context.pop();
                 }
             }
-            Event::Eof => break,
+            Event::Eof => {
+                if let (Some(open), None) = (context.last(), file.appended) {
+                    bail_format!(
+                        "malformed XML: the file ends (byte offset {at}) inside <{}>",
+                        short(&String::from_utf8_lossy(open))
+                    );
+                }
+                break;
+            }
             _ => {}
         }
     }
