@@ -376,15 +376,30 @@ mod tests {
 
     #[test]
     fn double_extensions_are_one_extension() {
-        assert_eq!(input_stem(Path::new("h/fluid.0042.bgeo.gz")).unwrap(), "fluid.0042");
+        assert_eq!(
+            input_stem(Path::new("h/fluid.0042.bgeo.gz")).unwrap(),
+            "fluid.0042"
+        );
         assert_eq!(input_stem(Path::new("f_7.BGEO.SC")).unwrap(), "f_7");
         assert_eq!(input_stem(Path::new("f_7.ply")).unwrap(), "f_7");
         assert_eq!(input_stem(Path::new("f_7.gz")).unwrap(), "f_7");
         assert_eq!(path_frame_number(Path::new("fluid_12.bgeo.gz")), Some(12));
-        assert_eq!(input_extension(Path::new("a/F_1.Bgeo.Gz")).unwrap(), "bgeo.gz");
-        let files = ["f_1.bgeo.gz", "f_2.bgeo.gz", "f_3.bgeo.gz", "f_1.bgeo", "notes.txt"];
+        assert_eq!(
+            input_extension(Path::new("a/F_1.Bgeo.Gz")).unwrap(),
+            "bgeo.gz"
+        );
+        let files = [
+            "f_1.bgeo.gz",
+            "f_2.bgeo.gz",
+            "f_3.bgeo.gz",
+            "f_1.bgeo",
+            "notes.txt",
+        ];
         let (frames, left) = frame_files(files.iter().map(PathBuf::from).collect());
-        assert_eq!(frames, ["f_1.bgeo.gz", "f_2.bgeo.gz", "f_3.bgeo.gz"].map(PathBuf::from));
+        assert_eq!(
+            frames,
+            ["f_1.bgeo.gz", "f_2.bgeo.gz", "f_3.bgeo.gz"].map(PathBuf::from)
+        );
         assert_eq!(left, ["f_1.bgeo", "notes.txt"].map(PathBuf::from));
     }
 

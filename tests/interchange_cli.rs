@@ -20,13 +20,18 @@ fn splash(args: &[&std::ffi::OsStr]) -> (bool, String) {
         .output()
         .expect("cannot start splash");
     let stderr = String::from_utf8_lossy(&output.stderr).into_owned();
-    assert!(output.status.code().is_some() && !stderr.contains("panicked"), "{stderr}");
+    assert!(
+        output.status.code().is_some() && !stderr.contains("panicked"),
+        "{stderr}"
+    );
     (output.status.success(), stderr)
 }
 
 fn recon(input: &PathBuf, extra: &[&str], output: &PathBuf) -> String {
     let mut args: Vec<&std::ffi::OsStr> = vec!["recon".as_ref(), input.as_os_str()];
-    args.extend(["--spacing", "0.05", "--cell", "r", "--format", "ply", "-o"].map(std::ffi::OsStr::new));
+    args.extend(
+        ["--spacing", "0.05", "--cell", "r", "--format", "ply", "-o"].map(std::ffi::OsStr::new),
+    );
     args.push(output.as_os_str());
     args.extend(extra.iter().map(std::ffi::OsStr::new));
     let (ok, stderr) = splash(&args);
@@ -50,7 +55,11 @@ fn every_interchange_format_gives_the_ply_mesh() {
     let reference = dir.path("out/reference.ply");
     recon(&ply, &[], &reference);
     let expected = fs::read(&reference).unwrap();
-    assert!(expected.len() > 10_000, "a mesh of {} bytes", expected.len());
+    assert!(
+        expected.len() > 10_000,
+        "a mesh of {} bytes",
+        expected.len()
+    );
     let inputs = [
         "legacy_binary.vtk",
         "legacy_binary_v42_double.vtk",
@@ -68,10 +77,16 @@ fn every_interchange_format_gives_the_ply_mesh() {
     for (k, name) in inputs.iter().enumerate() {
         let output = dir.path(&format!("out/{k}.ply"));
         recon(&formats(name), &[], &output);
-        assert!(fs::read(&output).unwrap() == expected, "the mesh from {name} differs from the PLY's");
+        assert!(
+            fs::read(&output).unwrap() == expected,
+            "the mesh from {name} differs from the PLY's"
+        );
     }
     // --input-format overrides the extension.
-    let renamed = dir.file("in/particles.dat", fs::read(formats("xml_appended_raw.vtu")).unwrap());
+    let renamed = dir.file(
+        "in/particles.dat",
+        fs::read(formats("xml_appended_raw.vtu")).unwrap(),
+    );
     let output = dir.path("out/renamed.ply");
     recon(&renamed, &["--input-format", "vtu"], &output);
     assert!(fs::read(&output).unwrap() == expected, "--input-format vtu");
@@ -81,7 +96,11 @@ fn every_interchange_format_gives_the_ply_mesh() {
 fn bgeo_gz_sequences_are_scanned_and_matched() {
     let dir = TempDir::new("interchange-sequence");
     let bgeo = fs::read(formats("partio_attributes.bgeo.gz")).unwrap();
-    for name in ["sim/fluid_9.bgeo.gz", "sim/fluid_10.bgeo.gz", "sim/fluid_10.bgeo"] {
+    for name in [
+        "sim/fluid_9.bgeo.gz",
+        "sim/fluid_10.bgeo.gz",
+        "sim/fluid_10.bgeo",
+    ] {
         dir.file(name, &bgeo);
     }
     dir.file("sim/notes.txt", "not a frame\n");
@@ -96,7 +115,10 @@ fn bgeo_gz_sequences_are_scanned_and_matched() {
         out.as_os_str(),
     ]);
     assert!(ok, "{stderr}");
-    assert!(stderr.contains("fluid_10.bgeo") && stderr.contains("notes.txt"), "{stderr}");
+    assert!(
+        stderr.contains("fluid_10.bgeo") && stderr.contains("notes.txt"),
+        "{stderr}"
+    );
     assert_eq!(entries(&out), ["fluid_0009.obj", "fluid_0010.obj"]);
     // A pattern, with the frame number before the double extension.
     let pattern = dir.path("sim/fluid_*.bgeo.gz");

@@ -44,14 +44,23 @@ fn first_difference(got: &[f32], expected: &[f32], tolerance: f32) -> Option<Str
     if got.len() != expected.len() {
         return Some(format!("{} values, expected {}", got.len(), expected.len()));
     }
-    got.iter().zip(expected).enumerate().find_map(|(i, (&g, &e))| {
-        let same = if tolerance == 0.0 {
-            g.to_bits() == e.to_bits()
-        } else {
-            (g - e).abs() <= tolerance * e.abs().max(1e-3)
-        };
-        (!same).then(|| format!("value {i}: {g} (bits {:#x}), expected {e} (bits {:#x})", g.to_bits(), e.to_bits()))
-    })
+    got.iter()
+        .zip(expected)
+        .enumerate()
+        .find_map(|(i, (&g, &e))| {
+            let same = if tolerance == 0.0 {
+                g.to_bits() == e.to_bits()
+            } else {
+                (g - e).abs() <= tolerance * e.abs().max(1e-3)
+            };
+            (!same).then(|| {
+                format!(
+                    "value {i}: {g} (bits {:#x}), expected {e} (bits {:#x})",
+                    g.to_bits(),
+                    e.to_bits()
+                )
+            })
+        })
 }
 
 fn flat(points: &[Vec3]) -> Vec<f32> {
@@ -70,11 +79,16 @@ fn values(attribute: &Attribute) -> Vec<f32> {
 fn check(name: &str, tolerance: f32) {
     let expected = reference();
     let got = read_particles(&fixture(name), None).unwrap_or_else(|e| panic!("{name}: {e}"));
-    if let Some(d) = first_difference(&flat(&got.positions), &flat(&expected.positions), tolerance) {
+    if let Some(d) = first_difference(&flat(&got.positions), &flat(&expected.positions), tolerance)
+    {
         panic!("{name}: positions: {d}");
     }
     let names: Vec<&String> = got.attributes.keys().collect();
-    assert_eq!(names, ["density", "id", "velocity"], "{name}: attribute names");
+    assert_eq!(
+        names,
+        ["density", "id", "velocity"],
+        "{name}: attribute names"
+    );
     for (attribute, want) in &expected.attributes {
         let have = &got.attributes[attribute];
         assert_eq!(

@@ -247,7 +247,11 @@ fn format_names_and_extensions() {
         ("fluid.0042.bgeo.sc", InputFormat::Bgeo),
         ("run.xyz", InputFormat::Xyz),
     ] {
-        assert_eq!(InputFormat::from_path(Path::new(name)).unwrap(), format, "{name}");
+        assert_eq!(
+            InputFormat::from_path(Path::new(name)).unwrap(),
+            format,
+            "{name}"
+        );
     }
     assert!(InputFormat::from_path(Path::new("f.tar.gz")).is_err());
     assert_eq!(InputFormat::parse("vtp").unwrap(), InputFormat::VtkXml);

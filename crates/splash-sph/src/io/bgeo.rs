@@ -22,7 +22,11 @@ const MAX_INFLATED: u64 = 64 << 30;
 const HEADER_BYTES: usize = 5 + 4 + 8 * 4;
 
 pub(super) fn read(path: &Path) -> Result<Particles> {
-    let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("").to_ascii_lowercase();
+    let name = path
+        .file_name()
+        .and_then(|n| n.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase();
     if name.ends_with(".sc") {
         bail_format!(
             "Blosc-compressed BGEO (.bgeo.sc, Houdini's newer format) is not supported yet: \
@@ -47,8 +51,16 @@ fn inflate(data: &[u8]) -> Result<Vec<u8>> {
         .take(HEADER_BYTES as u64)
         .read_to_end(&mut head)
         .map_err(|e| format_failure!("gzip data is corrupt: {e}"))?;
-    let points = if head.len() == HEADER_BYTES { be_u32(&head, 9) as u64 } else { 0 };
-    let attributes = if head.len() == HEADER_BYTES { be_u32(&head, 25) as u64 } else { 0 };
+    let points = if head.len() == HEADER_BYTES {
+        be_u32(&head, 9) as u64
+    } else {
+        0
+    };
+    let attributes = if head.len() == HEADER_BYTES {
+        be_u32(&head, 25) as u64
+    } else {
+        0
+    };
     // Each attribute definition is at most 2 + 65535 + 2 + 4 + 4 × 65535 bytes, each point at
     // most 16 + 4 × 65535 × attributes bytes: a loose bound, tightened by MAX_INFLATED.
     let per_point = 16 + attributes.saturating_mul(4 * 65535);
@@ -57,7 +69,11 @@ fn inflate(data: &[u8]) -> Result<Vec<u8>> {
         .saturating_add(points.saturating_mul(per_point))
         .min(MAX_INFLATED)
         // Deflate inflates at most about 1032:1: a real file never meets this bound.
-        .min((data.len() as u64).saturating_mul(1032).saturating_add(4096));
+        .min(
+            (data.len() as u64)
+                .saturating_mul(1032)
+                .saturating_add(4096),
+        );
     let mut out = head;
     (&mut decoder)
         .take(limit + 1)
@@ -108,7 +124,8 @@ impl<'a> Cursor<'a> {
     fn count(&mut self, what: &str) -> Result<usize> {
         let at = self.pos;
         let n = self.i32(what)?;
-        usize::try_from(n).map_err(|_| format_failure!("the {what} at byte offset {at} is negative: {n}"))
+        usize::try_from(n)
+            .map_err(|_| format_failure!("the {what} at byte offset {at} is negative: {n}"))
     }
 }
 
@@ -199,12 +216,18 @@ fn parse(data: &[u8]) -> Result<Particles> {
             for record in records.chunks_exact(stride) {
                 num.decode_into(&record[offset..offset + 4 * d.size], true, &mut values);
             }
-            arrays.push(PointArray { name: d.name, width: d.size, values });
+            arrays.push(PointArray {
+                name: d.name,
+                width: d.size,
+                values,
+            });
         }
         offset += 4 * d.size;
     }
     point_arrays::particles(&positions, arrays).map_err(|e| match e {
-        Failure::Format(m) => Failure::Format(format!("{m} (BGEO point records from byte offset {start})")),
+        Failure::Format(m) => {
+            Failure::Format(format!("{m} (BGEO point records from byte offset {start})"))
+        }
         other => other,
     })
 }

@@ -7,6 +7,16 @@
 //!   list properties and the other elements are skipped.
 //! - Text tables (`.csv`, `.txt`): see [`read_particles`] for the accepted dialect.
 //! - Raw: little-endian `f32` `x y z` triples and nothing else.
+//! - Legacy VTK (`.vtk`), ascii or binary: points and every `POINT_DATA` array.
+//! - VTK XML (`.vtu`, `.vtp`): points and every `PointData` array, in every data mode and
+//!   encoding, zlib-compressed or not.
+//! - Classic BGEO (`.bgeo`, `.bgeo.gz`): positions and float, int and vector attributes.
+//! - `.xyz`: raw `f32` triples, or a text table when the file is text.
+//!
+//! Arrays of width 1 are scalar attributes, width 3 vectors, and other widths one scalar per
+//! component (`{name}_0`, …). Every count read from a file is checked against the bytes that
+//! can hold it before anything is allocated; compressed data is inflated no further than its
+//! header declares.
 //!
 //! Every reader error names the file and what is wrong with it, with the line (text) or byte
 //! offset (binary) where that helps. Coordinates must be finite. A frame without particles is
@@ -134,7 +144,8 @@ pub enum InputFormat {
     Xyz,
 }
 
-const INPUT_EXTENSIONS: &str = ".ply, .csv, .txt, .bin, .raw, .vtk, .vtu, .vtp, .bgeo, .bgeo.gz, .xyz";
+const INPUT_EXTENSIONS: &str =
+    ".ply, .csv, .txt, .bin, .raw, .vtk, .vtu, .vtp, .bgeo, .bgeo.gz, .xyz";
 
 /// The input names `--input-format` accepts.
 const INPUT_FORMATS: &str = "ply, csv, raw, vtk, vtu (or vtp), bgeo, xyz";

@@ -41,8 +41,11 @@ impl Num {
                 const N: usize = std::mem::size_of::<$t>();
                 out.extend(bytes.chunks_exact(N).map(|c| {
                     let b: [u8; N] = c.try_into().unwrap_or([0; N]);
-                    (if big_endian { <$t>::from_be_bytes(b) } else { <$t>::from_le_bytes(b) })
-                        as f32
+                    (if big_endian {
+                        <$t>::from_be_bytes(b)
+                    } else {
+                        <$t>::from_le_bytes(b)
+                    }) as f32
                 }))
             }};
         }

@@ -109,7 +109,10 @@ pub(super) fn parse(data: &[u8]) -> Result<Particles> {
                         let (at, line) = c.line()?;
                         let mut words = line.split_whitespace();
                         if !words.next().is_some_and(|w| w.eq_ignore_ascii_case(part)) {
-                            bail_format!("expected {part} at byte offset {at}, found '{}'", short(line));
+                            bail_format!(
+                                "expected {part} at byte offset {at}, found '{}'",
+                                short(line)
+                            );
                         }
                         let num = num_type(words.next().unwrap_or(""), at)?;
                         let len = if part == "OFFSETS" { n } else { size };
@@ -137,7 +140,10 @@ pub(super) fn parse(data: &[u8]) -> Result<Particles> {
                 for _ in 0..arrays_in_field {
                     let (at, line) = c.line()?;
                     let words: Vec<&str> = line.split_whitespace().collect();
-                    if words.first().is_some_and(|w| w.eq_ignore_ascii_case("METADATA")) {
+                    if words
+                        .first()
+                        .is_some_and(|w| w.eq_ignore_ascii_case("METADATA"))
+                    {
                         c.skip_metadata();
                         continue;
                     }
@@ -153,7 +159,11 @@ pub(super) fn parse(data: &[u8]) -> Result<Particles> {
                     };
                     let parse = |w: &str| {
                         w.parse::<usize>().map_err(|_| {
-                            format_failure!("'{}' at byte offset {at}: '{}' is not a count", short(line), short(w))
+                            format_failure!(
+                                "'{}' at byte offset {at}: '{}' is not a count",
+                                short(line),
+                                short(w)
+                            )
                         })
                     };
                     let (width, tuples) = (parse(width)?, parse(tuples)?);
@@ -168,11 +178,19 @@ pub(super) fn parse(data: &[u8]) -> Result<Particles> {
                                 point_count.unwrap_or(0)
                             );
                         }
-                        arrays.push(PointArray { name: name.to_owned(), width, values });
+                        arrays.push(PointArray {
+                            name: name.to_owned(),
+                            width,
+                            values,
+                        });
                     }
                 }
             }
-            "SCALARS" | "VECTORS" | "NORMALS" | "TENSORS" | "TEXTURE_COORDINATES"
+            "SCALARS"
+            | "VECTORS"
+            | "NORMALS"
+            | "TENSORS"
+            | "TEXTURE_COORDINATES"
             | "COLOR_SCALARS" => {
                 let tuples = match section {
                     Section::Point => point_count.unwrap_or(0),
@@ -191,9 +209,7 @@ pub(super) fn parse(data: &[u8]) -> Result<Particles> {
                         (width, num_type(arg(2)?, at)?)
                     }
                     "TEXTURE_COORDINATES" => (count(2)?, num_type(arg(3)?, at)?),
-                    "COLOR_SCALARS" => {
-                        (count(2)?, if c.binary { Num::U8 } else { Num::F32 })
-                    }
+                    "COLOR_SCALARS" => (count(2)?, if c.binary { Num::U8 } else { Num::F32 }),
                     "TENSORS" => (9, num_type(arg(2)?, at)?),
                     _ => (3, num_type(arg(2)?, at)?),
                 };
@@ -205,7 +221,11 @@ pub(super) fn parse(data: &[u8]) -> Result<Particles> {
                     values.iter_mut().for_each(|v| *v /= 255.0);
                 }
                 if section == Section::Point {
-                    arrays.push(PointArray { name: name.to_owned(), width, values });
+                    arrays.push(PointArray {
+                        name: name.to_owned(),
+                        width,
+                        values,
+                    });
                 }
             }
             "LOOKUP_TABLE" => {
@@ -271,13 +291,18 @@ impl<'a> Cursor<'a> {
 
     fn line(&mut self) -> Result<(usize, &'a str)> {
         let end = self.data.len();
-        self.next_line()
-            .ok_or_else(|| format_failure!("the file ends (byte offset {end}) where a line was expected"))
+        self.next_line().ok_or_else(|| {
+            format_failure!("the file ends (byte offset {end}) where a line was expected")
+        })
     }
 
     /// The first word of the next non-blank line, upper case, without consuming it.
     fn peek_keyword(&self) -> Option<String> {
-        let mut probe = Cursor { data: self.data, pos: self.pos, binary: self.binary };
+        let mut probe = Cursor {
+            data: self.data,
+            pos: self.pos,
+            binary: self.binary,
+        };
         let (_, line) = probe.next_line()?;
         Some(line.split_whitespace().next()?.to_ascii_uppercase())
     }

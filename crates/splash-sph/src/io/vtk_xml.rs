@@ -80,14 +80,20 @@ pub(super) fn parse(data: &[u8]) -> Result<Particles> {
             .iter()
             .position(|&b| b == b'>')
             .map(|i| start + i)
-            .ok_or_else(|| format_failure!("the AppendedData tag at byte offset {start} is not closed"))?;
+            .ok_or_else(|| {
+                format_failure!("the AppendedData tag at byte offset {start} is not closed")
+            })?;
         let tag = String::from_utf8_lossy(&data[start..close]);
         let base64 = !tag.contains("\"raw\"");
         let underscore = data[close..]
             .iter()
             .position(|&b| b == b'_')
             .map(|i| close + i + 1)
-            .ok_or_else(|| format_failure!("the AppendedData at byte offset {start} has no '_' before its data"))?;
+            .ok_or_else(|| {
+                format_failure!(
+                    "the AppendedData at byte offset {start} has no '_' before its data"
+                )
+            })?;
         let mut body = &data[underscore..];
         if base64 {
             let end = find(body, b"</AppendedData").unwrap_or(body.len());
@@ -138,7 +144,9 @@ pub(super) fn parse(data: &[u8]) -> Result<Particles> {
                         file.header64 = match attr(&tag, b"header_type").as_deref() {
                             None | Some("UInt32") => false,
                             Some("UInt64") => true,
-                            Some(other) => bail_format!("unsupported header_type '{}'", short(other)),
+                            Some(other) => {
+                                bail_format!("unsupported header_type '{}'", short(other))
+                            }
                         };
                         file.compressed = match attr(&tag, b"compressor").as_deref() {
                             None | Some("") => false,
@@ -158,7 +166,11 @@ pub(super) fn parse(data: &[u8]) -> Result<Particles> {
                                 short(&points)
                             )
                         })?;
-                        pieces.push(Piece { points, positions: None, arrays: Vec::new() });
+                        pieces.push(Piece {
+                            points,
+                            positions: None,
+                            arrays: Vec::new(),
+                        });
                     }
                     b"DataArray" => {
                         let spec = array_spec(&tag, at)?;
@@ -219,13 +231,19 @@ pub(super) fn parse(data: &[u8]) -> Result<Particles> {
 
     let mut positions = Vec::new();
     let mut columns: Vec<PointArray> = Vec::new();
-    let total: usize = pieces.iter().map(|p| p.points).fold(0, usize::saturating_add);
+    let total: usize = pieces
+        .iter()
+        .map(|p| p.points)
+        .fold(0, usize::saturating_add);
     for (index, piece) in pieces.into_iter().enumerate() {
         let Some(spec) = piece.positions else {
             if piece.points == 0 {
                 continue;
             }
-            bail_format!("Piece {index} has {} points but no Points array", piece.points);
+            bail_format!(
+                "Piece {index} has {} points but no Points array",
+                piece.points
+            );
         };
         if spec.width != 3 {
             bail_format!(
@@ -237,9 +255,16 @@ pub(super) fn parse(data: &[u8]) -> Result<Particles> {
         positions.extend(file.values(&spec, piece.points)?);
         for spec in piece.arrays {
             let values = file.values(&spec, piece.points)?;
-            match columns.iter_mut().find(|c| c.name == spec.name && c.width == spec.width) {
+            match columns
+                .iter_mut()
+                .find(|c| c.name == spec.name && c.width == spec.width)
+            {
                 Some(column) => column.values.extend(values),
-                None if index == 0 => columns.push(PointArray { name: spec.name, width: spec.width, values }),
+                None if index == 0 => columns.push(PointArray {
+                    name: spec.name,
+                    width: spec.width,
+                    values,
+                }),
                 None => {}
             }
         }
@@ -262,7 +287,10 @@ fn array_spec(tag: &BytesStart, at: usize) -> Result<ArraySpec> {
         "UInt64" => Num::U64,
         "Float32" => Num::F32,
         "Float64" => Num::F64,
-        other => bail_format!("the DataArray at byte offset {at} has unsupported type '{}'", short(other)),
+        other => bail_format!(
+            "the DataArray at byte offset {at} has unsupported type '{}'",
+            short(other)
+        ),
     };
     let width = match attr(tag, b"NumberOfComponents") {
         None => 1,
@@ -285,9 +313,14 @@ fn array_spec(tag: &BytesStart, at: usize) -> Result<ArraySpec> {
     };
     let offset = match (format, attr(tag, b"offset")) {
         (Format::Appended, Some(o)) => o.trim().parse::<usize>().map_err(|_| {
-            format_failure!("the DataArray at byte offset {at} has offset '{}'", short(&o))
+            format_failure!(
+                "the DataArray at byte offset {at} has offset '{}'",
+                short(&o)
+            )
         })?,
-        (Format::Appended, None) => bail_format!("the appended DataArray at byte offset {at} has no offset"),
+        (Format::Appended, None) => {
+            bail_format!("the appended DataArray at byte offset {at} has no offset")
+        }
         _ => 0,
     };
     Ok(ArraySpec {
@@ -305,7 +338,9 @@ fn finish(pieces: &mut [Piece], context: &[Vec<u8>], spec: ArraySpec, wanted: bo
     if !wanted {
         return Ok(());
     }
-    let Some(piece) = pieces.last_mut() else { return Ok(()) };
+    let Some(piece) = pieces.last_mut() else {
+        return Ok(());
+    };
     match context.last().map(Vec::as_slice) {
         Some(b"Points") if piece.positions.is_none() => piece.positions = Some(spec),
         Some(b"Points") => bail_format!("a second Points array at byte offset {}", spec.at),
@@ -318,7 +353,13 @@ impl File<'_> {
     /// The array's `points × width` values as `f32`.
     fn values(&self, spec: &ArraySpec, points: usize) -> Result<Vec<f32>> {
         let n = points.checked_mul(spec.width).unwrap_or(usize::MAX);
-        let what = || format!("array '{}' (DataArray at byte offset {})", short(&spec.name), spec.at);
+        let what = || {
+            format!(
+                "array '{}' (DataArray at byte offset {})",
+                short(&spec.name),
+                spec.at
+            )
+        };
         match spec.format {
             Format::Ascii => ascii(&spec.text, n, spec.num, &what()),
             Format::Binary => {
@@ -355,17 +396,29 @@ impl File<'_> {
     fn header_value(&self, bytes: &[u8], index: usize, what: &str) -> Result<usize> {
         let size = if self.header64 { 8 } else { 4 };
         let Some(b) = bytes.get(index * size..(index + 1) * size) else {
-            bail_format!("{what}: its binary data ends inside its header ({} bytes)", bytes.len());
+            bail_format!(
+                "{what}: its binary data ends inside its header ({} bytes)",
+                bytes.len()
+            );
         };
         // Through u64, not f32: sizes must be exact.
         let value = if self.header64 {
             let a: [u8; 8] = b.try_into().unwrap_or([0; 8]);
-            if self.big_endian { u64::from_be_bytes(a) } else { u64::from_le_bytes(a) }
+            if self.big_endian {
+                u64::from_be_bytes(a)
+            } else {
+                u64::from_le_bytes(a)
+            }
         } else {
             let a: [u8; 4] = b.try_into().unwrap_or([0; 4]);
-            u64::from(if self.big_endian { u32::from_be_bytes(a) } else { u32::from_le_bytes(a) })
+            u64::from(if self.big_endian {
+                u32::from_be_bytes(a)
+            } else {
+                u32::from_le_bytes(a)
+            })
         };
-        usize::try_from(value).map_err(|_| format_failure!("{what}: header value {value} is too large"))
+        usize::try_from(value)
+            .map_err(|_| format_failure!("{what}: header value {value} is too large"))
     }
 
     /// Decodes header + data (`bytes` may run on past the array's end).
@@ -404,7 +457,10 @@ impl File<'_> {
         let blocks = self.header_value(bytes, 0, what)?;
         let block = self.header_value(bytes, 1, what)?;
         let last = self.header_value(bytes, 2, what)?;
-        let header_len = blocks.checked_add(3).and_then(|b| b.checked_mul(hsize)).unwrap_or(usize::MAX);
+        let header_len = blocks
+            .checked_add(3)
+            .and_then(|b| b.checked_mul(hsize))
+            .unwrap_or(usize::MAX);
         if header_len > bytes.len() {
             bail_format!(
                 "{what}: its compression header declares {blocks} blocks, more than its {} bytes \
@@ -415,7 +471,10 @@ impl File<'_> {
         let last = if last == 0 { block } else { last };
         let total = match blocks {
             0 => 0,
-            b => (b - 1).checked_mul(block).and_then(|t| t.checked_add(last)).unwrap_or(usize::MAX),
+            b => (b - 1)
+                .checked_mul(block)
+                .and_then(|t| t.checked_add(last))
+                .unwrap_or(usize::MAX),
         };
         if total != expected || last > block {
             bail_format!(
@@ -449,8 +508,13 @@ impl File<'_> {
             let want = if i + 1 == blocks { last } else { block };
             let target = &mut out[i * block..i * block + want];
             let mut z = flate2::Decompress::new(true);
-            let status = z.decompress(&data[from..from + size], target, flate2::FlushDecompress::Finish);
-            let done = matches!(status, Ok(flate2::Status::StreamEnd)) && z.total_out() as usize == want;
+            let status = z.decompress(
+                &data[from..from + size],
+                target,
+                flate2::FlushDecompress::Finish,
+            );
+            let done =
+                matches!(status, Ok(flate2::Status::StreamEnd)) && z.total_out() as usize == want;
             if !done {
                 bail_format!(
                     "{what}: zlib block {i} of {blocks} is corrupt or does not inflate to its \
@@ -470,7 +534,11 @@ impl File<'_> {
 /// Base64 text, whitespace ignored; VTK encodes a header and its data separately, so padding
 /// may end a run in the middle: each padded run is decoded on its own.
 fn decode_base64(text: &[u8], what: &str) -> Result<Vec<u8>> {
-    let clean: Vec<u8> = text.iter().copied().filter(|b| !b.is_ascii_whitespace()).collect();
+    let clean: Vec<u8> = text
+        .iter()
+        .copied()
+        .filter(|b| !b.is_ascii_whitespace())
+        .collect();
     let mut out = Vec::with_capacity(clean.len() / 4 * 3);
     let mut start = 0;
     let engine = base64::engine::general_purpose::STANDARD;
@@ -488,10 +556,16 @@ fn decode_base64(text: &[u8], what: &str) -> Result<Vec<u8>> {
 
 fn ascii(text: &[u8], n: usize, num: Num, what: &str) -> Result<Vec<f32>> {
     if n > text.len() / 2 + 1 {
-        bail_format!("{what}: {n} values declared, more than its {} bytes of text can hold", text.len());
+        bail_format!(
+            "{what}: {n} values declared, more than its {} bytes of text can hold",
+            text.len()
+        );
     }
     let mut out = Vec::with_capacity(n);
-    for token in text.split(|b| b.is_ascii_whitespace()).filter(|t| !t.is_empty()) {
+    for token in text
+        .split(|b| b.is_ascii_whitespace())
+        .filter(|t| !t.is_empty())
+    {
         if out.len() == n {
             bail_format!("{what}: more than the {n} values declared");
         }
@@ -502,7 +576,11 @@ fn ascii(text: &[u8], n: usize, num: Num, what: &str) -> Result<Vec<f32>> {
         };
         match value {
             Some(v) => out.push(v),
-            None => bail_format!("{what}: value {} '{}' is not a number", out.len(), short(token)),
+            None => bail_format!(
+                "{what}: value {} '{}' is not a number",
+                out.len(),
+                short(token)
+            ),
         }
     }
     if out.len() != n {

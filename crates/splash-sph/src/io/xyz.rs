@@ -33,6 +33,8 @@ fn is_text(path: &Path) -> Result<bool> {
     let starts_like_text = head
         .iter()
         .find(|b| !b.is_ascii_whitespace())
-        .is_some_and(|&b| b.is_ascii_alphanumeric() || matches!(b, b'-' | b'+' | b'.' | b'#' | b'"'));
+        .is_some_and(|&b| {
+            b.is_ascii_alphanumeric() || matches!(b, b'-' | b'+' | b'.' | b'#' | b'"')
+        });
     Ok(!head.is_empty() && printable && starts_like_text)
 }
