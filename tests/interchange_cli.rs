@@ -5,7 +5,7 @@
 mod common;
 
 use std::fs;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use common::{TempDir, entries, repository};
@@ -27,7 +27,7 @@ fn splash(args: &[&std::ffi::OsStr]) -> (bool, String) {
     (output.status.success(), stderr)
 }
 
-fn recon(input: &PathBuf, extra: &[&str], output: &PathBuf) -> String {
+fn recon(input: &Path, extra: &[&str], output: &Path) -> String {
     let mut args: Vec<&std::ffi::OsStr> = vec!["recon".as_ref(), input.as_os_str()];
     args.extend(
         ["--spacing", "0.05", "--cell", "r", "--format", "ply", "-o"].map(std::ffi::OsStr::new),

@@ -194,7 +194,7 @@ fn parse(data: &[u8]) -> Result<Particles> {
     }
     let stride = floats_per_point * 4;
     let start = c.pos;
-    let needed = points.checked_mul(stride).unwrap_or(usize::MAX);
+    let needed = points.saturating_mul(stride);
     if needed > data.len() - start {
         bail_format!(
             "truncated BGEO data: {points} points of {stride} bytes from byte offset {start} need \

@@ -318,10 +318,10 @@ impl<'a> Cursor<'a> {
 
     /// `tuples × width` values of type `num`, as `f32`; `at` is the offset of the header line.
     fn values(&mut self, tuples: usize, width: usize, num: Num, at: usize) -> Result<Vec<f32>> {
-        let n = tuples.checked_mul(width).unwrap_or(usize::MAX);
+        let n = tuples.saturating_mul(width);
         let remaining = self.data.len() - self.pos;
         if self.binary {
-            let bytes = n.checked_mul(num.size()).unwrap_or(usize::MAX);
+            let bytes = n.saturating_mul(num.size());
             if bytes > remaining {
                 bail_format!(
                     "truncated binary data: the array declared at byte offset {at} ({tuples} × \
@@ -374,7 +374,7 @@ impl<'a> Cursor<'a> {
 
     fn skip_values(&mut self, n: usize, num: Num, at: usize) -> Result<()> {
         if self.binary {
-            let bytes = n.checked_mul(num.size()).unwrap_or(usize::MAX);
+            let bytes = n.saturating_mul(num.size());
             if bytes > self.data.len() - self.pos {
                 bail_format!(
                     "truncated binary data: the block declared at byte offset {at} needs {bytes} \

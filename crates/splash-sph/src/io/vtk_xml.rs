@@ -352,7 +352,7 @@ fn finish(pieces: &mut [Piece], context: &[Vec<u8>], spec: ArraySpec, wanted: bo
 impl File<'_> {
     /// The array's `points × width` values as `f32`.
     fn values(&self, spec: &ArraySpec, points: usize) -> Result<Vec<f32>> {
-        let n = points.checked_mul(spec.width).unwrap_or(usize::MAX);
+        let n = points.saturating_mul(spec.width);
         let what = || {
             format!(
                 "array '{}' (DataArray at byte offset {})",
@@ -423,7 +423,7 @@ impl File<'_> {
 
     /// Decodes header + data (`bytes` may run on past the array's end).
     fn binary(&self, bytes: &[u8], n: usize, num: Num, what: &str) -> Result<Vec<f32>> {
-        let expected = n.checked_mul(num.size()).unwrap_or(usize::MAX);
+        let expected = n.saturating_mul(num.size());
         let hsize = if self.header64 { 8 } else { 4 };
         let raw: std::borrow::Cow<[u8]> = if !self.compressed {
             let len = self.header_value(bytes, 0, what)?;
