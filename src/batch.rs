@@ -63,9 +63,7 @@ impl Output {
     }
 
     fn path_for(&self, input: &Path, format: MeshFormat) -> Result<PathBuf> {
-        let stem = input
-            .file_stem()
-            .map(|s| s.to_string_lossy().into_owned())
+        let stem = crate::sequence::input_stem(input)
             .ok_or_else(|| anyhow!("{}: no file name", input.display()))?;
         let ext = format.extension();
         Ok(match self {

@@ -228,7 +228,7 @@ struct Recon {
     #[arg(long, value_name = "FORMAT", default_value = "plain")]
     log_format: String,
 
-    /// Input format for every file: ply, csv or raw.
+    /// Input format for every file: ply, csv, raw, vtk, vtu (or vtp), bgeo or xyz.
     #[arg(long)]
     input_format: Option<String>,
 

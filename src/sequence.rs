@@ -34,7 +34,34 @@ fn last_digits(s: &str) -> Option<(usize, usize)> {
 
 /// The frame number of a path, from its file stem.
 pub fn path_frame_number(path: &Path) -> Option<u64> {
-    frame_number(&path.file_stem()?.to_string_lossy())
+    frame_number(&input_stem(path)?)
+}
+
+/// Double extensions of particle files: `fluid_0042.bgeo.gz` is frame 42 of stem `fluid_0042`.
+const DOUBLE_EXTENSIONS: [&str; 2] = [".bgeo.gz", ".bgeo.sc"];
+
+/// The file name without its particle extension, the double ones ([`DOUBLE_EXTENSIONS`])
+/// included: `f_7.ply` → `f_7`, `fluid.0042.bgeo.gz` → `fluid.0042`.
+pub fn input_stem(path: &Path) -> Option<String> {
+    let name = path.file_name()?.to_string_lossy();
+    let lower = name.to_ascii_lowercase();
+    for double in DOUBLE_EXTENSIONS {
+        if lower.len() > double.len() && lower.ends_with(double) {
+            return Some(name[..name.len() - double.len()].to_owned());
+        }
+    }
+    Some(path.file_stem()?.to_string_lossy().into_owned())
+}
+
+/// The particle extension, lower case, double ones included: `bgeo.gz`, `ply`.
+fn input_extension(path: &Path) -> Option<String> {
+    let name = path.file_name()?.to_string_lossy().to_ascii_lowercase();
+    for double in DOUBLE_EXTENSIONS {
+        if name.len() > double.len() && name.ends_with(double) {
+            return Some(double[1..].to_owned());
+        }
+    }
+    Some(path.extension()?.to_string_lossy().to_ascii_lowercase())
 }
 
 /// `stem` with its frame number zero-padded to at least `width` digits: `f_9` → `f_0009`.
@@ -78,7 +105,8 @@ pub fn discover(inputs: &[PathBuf]) -> Result<Discovered> {
             }
             if candidates.is_empty() {
                 bail!(
-                    "the directory '{}' holds no particle files (.ply, .csv, .txt, .bin, .raw)",
+                    "the directory '{}' holds no particle files (.ply, .csv, .txt, .bin, .raw, .vtk, \
+                     .vtu, .vtp, .bgeo, .bgeo.gz, .xyz)",
                     input.display()
                 );
             }
@@ -125,10 +153,7 @@ pub struct Discovered {
 /// frame number, those without one are left out, and of the rest the largest group sharing
 /// one extension is the sequence (a tie goes to the extension that sorts first).
 fn frame_files(candidates: Vec<PathBuf>) -> (Vec<PathBuf>, Vec<PathBuf>) {
-    let extension = |p: &PathBuf| {
-        p.extension()
-            .map(|e| e.to_string_lossy().to_ascii_lowercase())
-    };
+    let extension = |p: &PathBuf| input_extension(p);
     let numbered = candidates.iter().any(|p| path_frame_number(p).is_some());
     let in_sequence = |p: &PathBuf| !numbered || path_frame_number(p).is_some();
     let mut counts: BTreeMap<Option<String>, usize> = BTreeMap::new();
@@ -348,6 +373,35 @@ impl Shard {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn double_extensions_are_one_extension() {
+        assert_eq!(
+            input_stem(Path::new("h/fluid.0042.bgeo.gz")).unwrap(),
+            "fluid.0042"
+        );
+        assert_eq!(input_stem(Path::new("f_7.BGEO.SC")).unwrap(), "f_7");
+        assert_eq!(input_stem(Path::new("f_7.ply")).unwrap(), "f_7");
+        assert_eq!(input_stem(Path::new("f_7.gz")).unwrap(), "f_7");
+        assert_eq!(path_frame_number(Path::new("fluid_12.bgeo.gz")), Some(12));
+        assert_eq!(
+            input_extension(Path::new("a/F_1.Bgeo.Gz")).unwrap(),
+            "bgeo.gz"
+        );
+        let files = [
+            "f_1.bgeo.gz",
+            "f_2.bgeo.gz",
+            "f_3.bgeo.gz",
+            "f_1.bgeo",
+            "notes.txt",
+        ];
+        let (frames, left) = frame_files(files.iter().map(PathBuf::from).collect());
+        assert_eq!(
+            frames,
+            ["f_1.bgeo.gz", "f_2.bgeo.gz", "f_3.bgeo.gz"].map(PathBuf::from)
+        );
+        assert_eq!(left, ["f_1.bgeo", "notes.txt"].map(PathBuf::from));
+    }
 
     #[test]
     fn frame_numbers_come_from_the_last_digits() {

@@ -380,7 +380,7 @@ fn bad_inputs_are_reported_and_write_nothing() {
     let cases: Vec<Case> = vec![
         ("missing.ply", None, &["cannot open the file"]),
         (
-            "points.xyz",
+            "points.pts",
             Some(csv(&points, false).into()),
             &["cannot tell the particle format", "extension"],
         ),
@@ -456,7 +456,7 @@ fn bad_options_are_refused_before_any_work() {
     let cases: &[(&[&str], &[&str])] = &[
         (&["--cell", "foo"], &["--cell", "'foo'", "not a length"]),
         (&["--format", "stl"], &["unknown mesh format 'stl'"]),
-        (&["--input-format", "vtk"], &["unknown input format 'vtk'"]),
+        (&["--input-format", "stl"], &["unknown input format 'stl'"]),
         (&["--threads", "0"], &["--threads must be at least 1"]),
         (&["--spacing", "0"], &["spacing must be a positive length"]),
         // Cells far larger than the spacing: 1e30 spun for ever, 0.5 wrote an empty mesh.

@@ -54,10 +54,12 @@ impl Particles {
     }
 }
 
-/// Reads one particle frame: PLY (ascii or binary), CSV/TXT tables, or raw little-endian
-/// float32 x y z triples (``.bin``/``.raw``).
+/// Reads one particle frame: PLY (ascii or binary), CSV/TXT tables, raw little-endian
+/// float32 x y z triples (``.bin``/``.raw``), legacy VTK (``.vtk``), VTK XML (``.vtu``,
+/// ``.vtp``), classic BGEO (``.bgeo``, ``.bgeo.gz``) or ``.xyz`` (raw triples, or text).
 ///
-/// ``format`` (``"ply"``, ``"csv"`` or ``"raw"``) overrides the guess from the extension.
+/// ``format`` (``"ply"``, ``"csv"``, ``"raw"``, ``"vtk"``, ``"vtu"``, ``"bgeo"`` or ``"xyz"``)
+/// overrides the guess from the extension.
 /// The GIL is released while reading.
 ///
 /// Raises FileNotFoundError for a missing file, OSError when it cannot be read, and

@@ -233,11 +233,29 @@ fn format_names_and_extensions() {
     );
     assert!(InputFormat::from_path(Path::new("ply")).is_err());
     assert_eq!(InputFormat::parse("CSV").unwrap(), InputFormat::Csv);
-    let err = InputFormat::parse("vtk").unwrap_err().to_string();
+    let err = InputFormat::parse("stl").unwrap_err().to_string();
     assert!(
-        err.contains("'vtk'") && err.contains("ply, csv or raw"),
+        err.contains("'stl'") && err.contains("ply, csv, raw, vtk, vtu (or vtp), bgeo, xyz"),
         "{err}"
     );
+    for (name, format) in [
+        ("f.vtk", InputFormat::Vtk),
+        ("f.vtu", InputFormat::VtkXml),
+        ("f.VTP", InputFormat::VtkXml),
+        ("f.bgeo", InputFormat::Bgeo),
+        ("fluid.0042.bgeo.gz", InputFormat::Bgeo),
+        ("fluid.0042.bgeo.sc", InputFormat::Bgeo),
+        ("run.xyz", InputFormat::Xyz),
+    ] {
+        assert_eq!(
+            InputFormat::from_path(Path::new(name)).unwrap(),
+            format,
+            "{name}"
+        );
+    }
+    assert!(InputFormat::from_path(Path::new("f.tar.gz")).is_err());
+    assert_eq!(InputFormat::parse("vtp").unwrap(), InputFormat::VtkXml);
+    assert_eq!(InputFormat::parse("BGEO").unwrap(), InputFormat::Bgeo);
 
     assert_eq!(MeshFormat::parse("ply").unwrap(), MeshFormat::PlyBinary);
     assert_eq!(

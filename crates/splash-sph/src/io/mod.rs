@@ -7,6 +7,16 @@
 //!   list properties and the other elements are skipped.
 //! - Text tables (`.csv`, `.txt`): see [`read_particles`] for the accepted dialect.
 //! - Raw: little-endian `f32` `x y z` triples and nothing else.
+//! - Legacy VTK (`.vtk`), ascii or binary: points and every `POINT_DATA` array.
+//! - VTK XML (`.vtu`, `.vtp`): points and every `PointData` array, in every data mode and
+//!   encoding, zlib-compressed or not.
+//! - Classic BGEO (`.bgeo`, `.bgeo.gz`): positions and float, int and vector attributes.
+//! - `.xyz`: raw `f32` triples, or a text table when the file is text.
+//!
+//! Arrays of width 1 are scalar attributes, width 3 vectors, and other widths one scalar per
+//! component (`{name}_0`, …). Every count read from a file is checked against the bytes that
+//! can hold it before anything is allocated; compressed data is inflated no further than its
+//! header declares.
 //!
 //! Every reader error names the file and what is wrong with it, with the line (text) or byte
 //! offset (binary) where that helps. Coordinates must be finite. A frame without particles is
@@ -20,6 +30,7 @@ mod failure;
 
 mod atomic;
 mod attribute_columns;
+mod bgeo;
 mod csv;
 mod lines;
 mod obj;
@@ -28,9 +39,13 @@ mod ply_ascii;
 mod ply_binary;
 mod ply_layout;
 mod ply_write;
+mod point_arrays;
 mod pov;
 mod raw;
 mod records;
+mod vtk_legacy;
+mod vtk_xml;
+mod xyz;
 
 use std::collections::BTreeMap;
 use std::fs::File;
@@ -102,6 +117,10 @@ pub fn read_particles(path: &Path, format: Option<InputFormat>) -> crate::Result
         InputFormat::Ply => ply::read(path),
         InputFormat::Csv => csv::read(path),
         InputFormat::Raw => raw::read(path),
+        InputFormat::Vtk => vtk_legacy::read(path),
+        InputFormat::VtkXml => vtk_xml::read(path),
+        InputFormat::Bgeo => bgeo::read(path),
+        InputFormat::Xyz => xyz::read(path),
     }
     .map_err(|e| e.into_error(path))
 }
@@ -115,9 +134,21 @@ pub enum InputFormat {
     Csv,
     /// Raw little-endian `f32` `x y z` triples (`.bin`, `.raw`).
     Raw,
+    /// Legacy VTK, ascii or binary (`.vtk`).
+    Vtk,
+    /// VTK XML unstructured grid or poly data (`.vtu`, `.vtp`).
+    VtkXml,
+    /// Classic BGEO, version 5, plain or gzip-compressed (`.bgeo`, `.bgeo.gz`).
+    Bgeo,
+    /// `.xyz`: raw little-endian `f32` triples, or a text table when the file is text.
+    Xyz,
 }
 
-const INPUT_EXTENSIONS: &str = ".ply, .csv, .txt, .bin, .raw";
+const INPUT_EXTENSIONS: &str =
+    ".ply, .csv, .txt, .bin, .raw, .vtk, .vtu, .vtp, .bgeo, .bgeo.gz, .xyz";
+
+/// The input names `--input-format` accepts.
+const INPUT_FORMATS: &str = "ply, csv, raw, vtk, vtu (or vtp), bgeo, xyz";
 
 impl InputFormat {
     /// The format implied by the file's extension, case-insensitively: `.ply`; `.csv` and `.txt`
@@ -131,9 +162,14 @@ impl InputFormat {
             Some("ply") => Ok(Self::Ply),
             Some("csv" | "txt") => Ok(Self::Csv),
             Some("bin" | "raw") => Ok(Self::Raw),
+            Some("vtk") => Ok(Self::Vtk),
+            Some("vtu" | "vtp") => Ok(Self::VtkXml),
+            Some("bgeo") => Ok(Self::Bgeo),
+            Some("xyz") => Ok(Self::Xyz),
+            Some("gz" | "sc") if has_bgeo_stem(path) => Ok(Self::Bgeo),
             _ => bail_config!(
                 "cannot tell the particle format of '{}' from its extension: known extensions are \
-                 {INPUT_EXTENSIONS} (or give the input format explicitly: ply, csv or raw)",
+                 {INPUT_EXTENSIONS} (or give the input format explicitly: {INPUT_FORMATS})",
                 path.display()
             ),
         }
@@ -145,9 +181,20 @@ impl InputFormat {
             "ply" => Ok(Self::Ply),
             "csv" => Ok(Self::Csv),
             "raw" => Ok(Self::Raw),
-            _ => bail_config!("unknown input format '{name}': expected ply, csv or raw"),
+            "vtk" => Ok(Self::Vtk),
+            "vtu" | "vtp" | "vtk-xml" => Ok(Self::VtkXml),
+            "bgeo" => Ok(Self::Bgeo),
+            "xyz" => Ok(Self::Xyz),
+            _ => bail_config!("unknown input format '{name}': expected {INPUT_FORMATS}"),
         }
     }
+}
+
+/// Whether `path` is `….bgeo.gz` or `….bgeo.sc` (any case).
+fn has_bgeo_stem(path: &Path) -> bool {
+    path.file_stem()
+        .and_then(|s| Path::new(s).extension())
+        .is_some_and(|e| e.eq_ignore_ascii_case("bgeo"))
 }
 
 /// Opens a particle file, returning it with its length in bytes.
