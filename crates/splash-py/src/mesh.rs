@@ -140,6 +140,7 @@ impl Mesh {
             }
             let attributes = VertexAttributes {
                 velocities: velocities.as_deref(),
+                ..Default::default()
             };
             io::write_mesh_file_with(&path, &mesh, &attributes, format)
         })

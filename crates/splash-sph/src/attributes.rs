@@ -1,19 +1,115 @@
-//! Particle quantities carried onto mesh vertices, for renderers: a velocity per vertex lets
-//! them blur by motion.
+//! Particle quantities carried onto mesh vertices, for renderers and analysis: a velocity per
+//! vertex lets renderers blur by motion; density, pressure or any other attribute can colour
+//! the surface.
 //!
-//! A vertex gets the average of the particle velocities within the field's support R, weighted
+//! A vertex gets the average of the particle values within the field's support R, weighted
 //! by the kernel of the SSP07 field, k(s) = max(0, (1 − s²)³) with s = |x − x_j| / R (eq. 5 of
-//! Solenthaler et al. 2007): the weights that place the surface there.
+//! Solenthaler et al. 2007), divided by the sum of the weights (Shepard normalisation), so a
+//! constant attribute is reproduced exactly and a linear one closely away from the fluid's
+//! edge.
 
 use crate::error::Result;
+use crate::io::Attribute;
 use glam::Vec3;
 use rayon::prelude::*;
 
 use crate::neighbours::handler_array::HandlerArray;
 
-/// Velocities of `vertices`, interpolated from the particles' with support `support`. A vertex
-/// with no particle within the support (which the field's surface never has) gets zero.
-pub fn interpolate_velocities(
+/// Per-particle `attributes` (each one value per particle) interpolated onto `vertices`, with
+/// support `support`, through one neighbour structure: each vertex gets the Shepard-normalised
+/// kernel mean of the particles within the support, so a constant attribute stays that
+/// constant. A vertex with no particle within the support (which the field's surface never
+/// has) gets zero.
+pub fn interpolate(
+    vertices: &[Vec3],
+    particles: &[Vec3],
+    attributes: &[&Attribute],
+    support: f32,
+) -> Result<Vec<Attribute>> {
+    let widths: Vec<usize> = attributes
+        .iter()
+        .map(|a| match a {
+            Attribute::Scalar(_) => 1,
+            Attribute::Vector(_) => 3,
+        })
+        .collect();
+    for a in attributes {
+        let n = match a {
+            Attribute::Scalar(s) => s.len(),
+            Attribute::Vector(v) => v.len(),
+        };
+        if n != particles.len() {
+            bail_input!("{} particles but {n} attribute values", particles.len());
+        }
+    }
+    let k: usize = widths.iter().sum();
+    let mut flat = vec![0.0f32; vertices.len() * k];
+    if k > 0
+        && !particles.is_empty()
+        && support.partial_cmp(&0.0) == Some(std::cmp::Ordering::Greater)
+    {
+        // The values ride along the handler array's sort as channels, one per component.
+        let mut channels: Vec<Vec<f32>> = Vec::with_capacity(k);
+        for a in attributes {
+            match a {
+                Attribute::Scalar(s) => channels.push(s.clone()),
+                Attribute::Vector(v) => {
+                    channels.extend((0..3).map(|c| v.iter().map(|v| v[c]).collect()))
+                }
+            }
+        }
+        let handlers = HandlerArray::with_channels(particles, support, channels)?;
+        let inv_r2 = 1.0 / (support * support);
+        flat.par_chunks_mut(k)
+            .zip(vertices.par_iter())
+            .for_each(|(out, &x)| {
+                let mut weight = 0.0f32;
+                let c = handlers.cell_of(x);
+                handlers.for_each_in_cells(c - 1, c + 1, |range| {
+                    for i in range {
+                        let t =
+                            (1.0 - (handlers.positions[i] - x).length_squared() * inv_r2).max(0.0);
+                        let w = t * t * t;
+                        if w > 0.0 {
+                            weight += w;
+                            for (o, channel) in out.iter_mut().zip(&handlers.channels) {
+                                *o += w * channel[i];
+                            }
+                        }
+                    }
+                });
+                if weight > 0.0 {
+                    let inv = 1.0 / weight;
+                    out.iter_mut().for_each(|o| *o *= inv);
+                }
+            });
+    }
+    let mut offset = 0;
+    Ok(widths
+        .iter()
+        .map(|&w| {
+            let column = |c: usize| flat.iter().skip(offset + c).step_by(k.max(1));
+            let a = if w == 1 {
+                Attribute::Scalar(column(0).copied().collect())
+            } else {
+                Attribute::Vector(
+                    column(0)
+                        .zip(column(1))
+                        .zip(column(2))
+                        .map(|((&x, &y), &z)| Vec3::new(x, y, z))
+                        .collect(),
+                )
+            };
+            offset += w;
+            a
+        })
+        .collect())
+}
+
+/// Velocities of `vertices`, interpolated from the particles' with support `support`: see
+/// [`interpolate`].
+#[cfg(test)]
+fn interpolate_velocities(
     vertices: &[Vec3],
     particles: &[Vec3],
     velocities: &[Vec3],
@@ -26,41 +122,11 @@ pub fn interpolate_velocities(
             velocities.len()
         );
     }
-    if particles.is_empty() || support.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
-        return Ok(vec![Vec3::ZERO; vertices.len()]);
+    let velocities = Attribute::Vector(velocities.to_vec());
+    match interpolate(vertices, particles, &[&velocities], support)?.pop() {
+        Some(Attribute::Vector(v)) => Ok(v),
+        _ => unreachable!("one vector in, one vector out"),
     }
-    // Velocities ride along the handler array's sort as three channels.
-    let channels = (0..3)
-        .map(|a| velocities.iter().map(|v| v[a]).collect())
-        .collect();
-    let handlers = HandlerArray::with_channels(particles, support, channels)?;
-    let inv_r2 = 1.0 / (support * support);
-    Ok(vertices
-        .par_iter()
-        .map(|&x| {
-            let (mut sum, mut weight) = (Vec3::ZERO, 0.0f32);
-            let c = handlers.cell_of(x);
-            handlers.for_each_in_cells(c - 1, c + 1, |range| {
-                for i in range {
-                    let p = handlers.positions[i];
-                    let t = (1.0 - (p - x).length_squared() * inv_r2).max(0.0);
-                    let k = t * t * t;
-                    let v = Vec3::new(
-                        handlers.channels[0][i],
-                        handlers.channels[1][i],
-                        handlers.channels[2][i],
-                    );
-                    sum += k * v;
-                    weight += k;
-                }
-            });
-            if weight > 0.0 {
-                sum / weight
-            } else {
-                Vec3::ZERO
-            }
-        })
-        .collect())
 }
 
 #[cfg(test)]
