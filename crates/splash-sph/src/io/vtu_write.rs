@@ -189,3 +189,120 @@ fn array(
     out.write_all(BASE64.encode(&compressed).as_bytes())?;
     writeln!(out, "\n        </DataArray>")
 }
+
+#[cfg(test)]
+mod tests {
+    use std::collections::BTreeMap;
+
+    use glam::Vec3;
+
+    use super::super::{Attribute, MeshFormat, Particles, VertexAttributes, write_mesh_with};
+    use crate::mesh::TriMesh;
+
+    fn triangle() -> TriMesh {
+        TriMesh {
+            vertices: vec![Vec3::ZERO, Vec3::X, Vec3::Y],
+            normals: vec![Vec3::Z; 3],
+            triangles: vec![[0, 1, 2]],
+        }
+    }
+
+    fn written(named: &[(String, Attribute)], format: MeshFormat) -> std::io::Result<Vec<u8>> {
+        let mut out = Vec::new();
+        let attributes = VertexAttributes {
+            named,
+            ..Default::default()
+        };
+        write_mesh_with(&triangle(), &attributes, format, &mut out).map(|()| out)
+    }
+
+    #[test]
+    fn ply_names_attributes_and_formats_without_room_refuse() {
+        let named = vec![
+            ("velocity".to_string(), Attribute::Vector(vec![Vec3::X; 3])),
+            ("density".to_string(), Attribute::Scalar(vec![1000.0; 3])),
+            ("vorticity".to_string(), Attribute::Vector(vec![Vec3::Y; 3])),
+        ];
+        let text = String::from_utf8(written(&named, MeshFormat::PlyAscii).unwrap()).unwrap();
+        let properties: Vec<&str> = text
+            .lines()
+            .filter_map(|l| l.strip_prefix("property float "))
+            .collect();
+        assert_eq!(
+            properties,
+            ["x", "y", "z", "nx", "ny", "nz", "vx", "vy", "vz", "density"]
+                .into_iter()
+                .chain(["vorticity_x", "vorticity_y", "vorticity_z"])
+                .collect::<Vec<_>>()
+        );
+        assert!(text.contains("\n1 0 0 0 0 1 1 0 0 1000 0 1 0\n"), "{text}");
+        for format in [MeshFormat::Obj, MeshFormat::Pov] {
+            let e = written(&named, format).unwrap_err().to_string();
+            assert!(e.contains("cannot hold vertex attributes (velocity, density, vorticity)"));
+        }
+        let short = vec![("density".to_string(), Attribute::Scalar(vec![1.0]))];
+        let e = written(&short, MeshFormat::Vtu).unwrap_err().to_string();
+        assert!(e.contains("1 values of 'density' for 3 vertices"), "{e}");
+        let spaced = vec![("a b".to_string(), Attribute::Scalar(vec![1.0; 3]))];
+        for format in [MeshFormat::PlyBinary, MeshFormat::Vtk] {
+            assert!(written(&spaced, format).is_err());
+        }
+        let clash = vec![("nx".to_string(), Attribute::Scalar(vec![1.0; 3]))];
+        assert!(written(&clash, MeshFormat::PlyBinary).is_err());
+    }
+
+    #[test]
+    fn xml_arrays_are_compressed_blocks_with_their_header() {
+        use base64::Engine as _;
+        use std::io::Read;
+        let out = String::from_utf8(written(&[], MeshFormat::Vtp).unwrap()).unwrap();
+        let points = out.split("Name=\"Points\"").nth(1).unwrap();
+        let data = points
+            .split('>')
+            .nth(1)
+            .unwrap()
+            .split('<')
+            .next()
+            .unwrap()
+            .trim();
+        // A header of 4 u64s is 32 bytes, 44 base64 characters.
+        let header = super::BASE64.decode(&data[..44]).unwrap();
+        let h: Vec<u64> = header
+            .chunks(8)
+            .map(|c| u64::from_le_bytes(c.try_into().unwrap()))
+            .collect();
+        assert_eq!(h[..3], [1, super::BLOCK as u64, 36]);
+        let block = super::BASE64.decode(&data[44..]).unwrap();
+        assert_eq!(block.len() as u64, h[3]);
+        let mut raw = Vec::new();
+        flate2::read::ZlibDecoder::new(&block[..])
+            .read_to_end(&mut raw)
+            .unwrap();
+        let expected: Vec<u8> = bytemuck::cast_slice(&triangle().vertices).to_vec();
+        assert_eq!(raw, expected);
+    }
+
+    #[test]
+    fn a_box_keeps_the_particles_inside_with_their_attributes() {
+        let mut p = Particles {
+            positions: vec![
+                Vec3::ZERO,
+                Vec3::splat(1e30),
+                Vec3::ONE,
+                Vec3::splat(f32::NAN),
+            ],
+            attributes: BTreeMap::from([
+                ("id".into(), Attribute::Scalar(vec![0.0, 1.0, 2.0, 3.0])),
+                (
+                    "v".into(),
+                    Attribute::Vector(vec![Vec3::X, Vec3::Y, Vec3::Z, Vec3::ONE]),
+                ),
+            ]),
+        };
+        assert_eq!(p.retain_in_box([0.0, 0.0, 0.0, 1.0, 1.0, 1.0]), 2);
+        assert_eq!(p.positions, [Vec3::ZERO, Vec3::ONE]);
+        assert_eq!(p.attributes["id"], Attribute::Scalar(vec![0.0, 2.0]));
+        assert_eq!(p.attributes["v"], Attribute::Vector(vec![Vec3::X, Vec3::Z]));
+        assert_eq!(p.retain_in_box([0.0, 0.0, 0.0, 1.0, 1.0, 1.0]), 0);
+    }
+}
