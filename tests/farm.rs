@@ -656,7 +656,7 @@ fn meshes_read_back_equal_with_velocities_and_axes() {
     assert!(u.iter().all(|u| (*u - turn(&velocity)).length() < 1e-5));
     assert_eq!(faces, mesh.triangles);
 
-    // Velocities need an input that has them, and a PLY output.
+    // Velocities need an input that has them, and a PLY or VTK output.
     let plain = dir.file("plain/f_1.ply", ply(&particles, None));
     splash_env(
         &fast(&[
@@ -671,13 +671,13 @@ fn meshes_read_back_equal_with_velocities_and_axes() {
         &[],
     )
     .failed()
-    .has("none of the properties vx vy vz or velocity_x velocity_y velocity_z");
+    .has("has no particle attribute 'velocity'; it has none");
     splash_env(
         &fast(&[&input, &"-o", &dir.path("o/"), &"--attributes", &"velocity"]),
         &[],
     )
     .failed()
-    .has("needs PLY output");
+    .has("needs PLY, VTK, VTU or VTP output");
     assert!(!dir.path("o").exists() && !dir.path("p").exists());
 }
 

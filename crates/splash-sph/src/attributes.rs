@@ -79,8 +79,7 @@ pub fn interpolate(
                     }
                 });
                 if weight > 0.0 {
-                    let inv = 1.0 / weight;
-                    out.iter_mut().for_each(|o| *o *= inv);
+                    out.iter_mut().for_each(|o| *o /= weight);
                 }
             });
     }

@@ -169,7 +169,7 @@ fn array(
     let blocks: Vec<Vec<u8>> = bytes
         .par_chunks(BLOCK)
         .map(|chunk| {
-            let mut z = ZlibEncoder::new(Vec::with_capacity(chunk.len() / 2), Compression::new(6));
+            let mut z = ZlibEncoder::new(Vec::with_capacity(chunk.len() / 2), Compression::fast());
             z.write_all(chunk)?;
             z.finish()
         })
