@@ -623,6 +623,7 @@ fn meshes_read_back_equal_with_velocities_and_axes() {
     let vertex_velocities = vec![velocity; mesh.vertices.len()];
     let attributes = VertexAttributes {
         velocities: Some(&vertex_velocities),
+        ..Default::default()
     };
     write_mesh_with(&mesh, &attributes, MeshFormat::PlyBinary, &mut direct).unwrap();
     assert_eq!(
