@@ -430,12 +430,23 @@ fn particle_attributes(
         };
         // The reader leaves attributes as they are; interpolated, one of these would spread.
         let bad = match &attribute {
-            Attribute::Scalar(s) => s.iter().position(|x| !x.is_finite()),
-            Attribute::Vector(v) => v.iter().position(|x| !x.is_finite()),
+            Attribute::Scalar(s) => s
+                .iter()
+                .position(|x| !x.is_finite())
+                .map(|i| (i, s[i].to_string())),
+            Attribute::Vector(v) => v
+                .iter()
+                .position(|x| !x.is_finite())
+                .map(|i| (i, format!("({}, {}, {})", v[i].x, v[i].y, v[i].z))),
         };
-        if let Some(i) = bad {
+        if let Some((i, value)) = bad {
+            let what = if name == "velocity" {
+                "velocities"
+            } else {
+                name
+            };
             bail!(
-                "'{}': particle {i} has a non-finite {name}",
+                "cannot read {what} from '{}': particle {i} has a non-finite {name} {value}",
                 input.display()
             );
         }
