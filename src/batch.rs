@@ -1,6 +1,7 @@
 //! A run over many frames: one mesh per input file, each written whole or not at all, a failing
 //! frame reported without stopping the others.
 
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -9,7 +10,7 @@ use anyhow::{Context, Result, anyhow, bail};
 use splash_sph::io::{self, VertexAttributes};
 use splash_sph::{
     Attribute, Config, FrameStats, InputFormat, MeshFormat, Particles, Reconstructor, TriMesh,
-    Vec3, estimate_spacing, read_particles,
+    attribute_names, estimate_spacing, read_particles,
 };
 
 use crate::memory::reconstruct_measured;
@@ -223,9 +224,11 @@ impl Batch {
         // Every output of the whole sequence is checked, so that all shards agree.
         let outputs = self.outputs()?;
         self.config.validate()?;
-        if self.config.output.velocities() && !self.format.holds_velocities() {
+        if !self.config.output.attributes.is_empty() && !self.format.holds_attributes() {
             bail!(
-                "--attributes velocity needs PLY output (--format ply or ply-ascii): {} files have no place for them",
+                "--attributes {} needs PLY, VTK, VTU or VTP output (--format ply, ply-ascii, vtk, \
+                 vtu or vtp): .{} files have no place for vertex attributes",
+                self.config.output.attributes.join(","),
                 self.format.extension()
             );
         }
@@ -324,26 +327,37 @@ impl Batch {
         progress: &mut dyn Progress,
     ) -> Result<FrameStats> {
         let start = Instant::now();
+        let mut frame = read_particles(input, self.input_format)?;
+        let outside_box = match self.config.particle_aabb {
+            Some(aabb) => frame.retain_in_box(aabb),
+            None => 0,
+        };
         let Particles {
             positions: particles,
-            mut attributes,
-        } = read_particles(input, self.input_format)?;
-        let velocities = if self.config.output.velocities() {
-            Some(velocities(input, attributes.remove("velocity"))?)
-        } else {
-            None
-        };
-        // The other attributes are not needed during the reconstruction.
-        drop(attributes);
+            attributes,
+        } = frame;
+        let wanted = particle_attributes(input, attributes, &self.config.output.attributes)?;
         let read = start.elapsed();
         if particles.is_empty() {
             // Nothing to reconstruct, and nothing to estimate a spacing from.
+            let empty: Vec<(String, Attribute)> = wanted
+                .iter()
+                .map(|(name, a)| {
+                    let empty = match a {
+                        Attribute::Scalar(_) => Attribute::Scalar(Vec::new()),
+                        Attribute::Vector(_) => Attribute::Vector(Vec::new()),
+                    };
+                    (name.clone(), empty)
+                })
+                .collect();
             let attributes = VertexAttributes {
-                velocities: velocities.as_ref().map(|_| &[][..]),
+                named: &empty,
+                ..Default::default()
             };
             io::write_mesh_file_with(output, &TriMesh::default(), &attributes, self.format)?;
             let mut stats = FrameStats::default();
             stats.timings.read = read;
+            stats.particles_outside_box = outside_box;
             return Ok(stats);
         }
         // One spacing, hence one grid, for the whole sequence.
@@ -380,23 +394,29 @@ impl Batch {
         let rec =
             reconstruct_measured(reconstructor, &particles).context("reconstruction failed")?;
         let mut mesh = rec.mesh;
-        let mut vertex_velocities = velocities
-            .map(|v| reconstructor.interpolate(&mesh, &particles, &v))
-            .transpose()?;
+        let columns: Vec<&Attribute> = wanted.iter().map(|(_, a)| a).collect();
+        let interpolated = reconstructor.interpolate_all(&mesh, &particles, &columns)?;
+        drop(columns);
+        let names = wanted.into_iter().map(|(name, _)| name);
+        let mut vertex_attributes: Vec<(String, Attribute)> = names.zip(interpolated).collect();
         drop(particles);
         let start = Instant::now();
         if let Some(axis) = self.config.output.up_axis {
             axis.rotate(&mut mesh.vertices);
             axis.rotate(&mut mesh.normals);
-            if let Some(v) = &mut vertex_velocities {
-                axis.rotate(v);
+            for (_, a) in &mut vertex_attributes {
+                if let Attribute::Vector(v) = a {
+                    axis.rotate(v);
+                }
             }
         }
         let attributes = VertexAttributes {
-            velocities: vertex_velocities.as_deref(),
+            named: &vertex_attributes,
+            ..Default::default()
         };
         io::write_mesh_file_with(output, &mesh, &attributes, self.format)?;
         let mut stats = rec.stats;
+        stats.particles_outside_box = outside_box;
         stats.timings.read = read;
         stats.timings.write = start.elapsed();
         Ok(stats)
@@ -435,32 +455,60 @@ fn check_writable(dir: &Path) -> Result<()> {
     Ok(())
 }
 
-/// The particle velocities of frame `input`, from its `velocity` attribute.
-fn velocities(input: &Path, attribute: Option<Attribute>) -> Result<Vec<Vec3>> {
-    let context = || format!("cannot read velocities from '{}'", input.display());
-    let velocities = match attribute {
-        Some(Attribute::Vector(velocities)) => velocities,
-        Some(Attribute::Scalar(_)) => bail!(
-            "{}: its 'velocity' is one number per particle, not the vector of vx vy vz or \
-             velocity_x velocity_y velocity_z",
-            context()
-        ),
-        None => bail!(
-            "{}: it has none of the properties vx vy vz or velocity_x velocity_y velocity_z",
-            context()
-        ),
-    };
-    // The reader leaves attributes as they are; interpolated, one of these would spread.
-    if let Some((i, v)) = velocities.iter().enumerate().find(|(_, v)| !v.is_finite()) {
-        bail!(
-            "{}: particle {i} has a non-finite velocity ({}, {}, {})",
-            context(),
-            v.x,
-            v.y,
-            v.z
-        );
+/// The attributes `names` (canonical spellings) of frame `input`, found through the alias
+/// table, in the order asked; the frame's other attributes are dropped.
+fn particle_attributes(
+    input: &Path,
+    mut attributes: BTreeMap<String, Attribute>,
+    names: &[String],
+) -> Result<Vec<(String, Attribute)>> {
+    let mut out = Vec::with_capacity(names.len());
+    for name in names {
+        let Some(attribute) = attribute_names::take(&mut attributes, name) else {
+            let mut has: Vec<&str> = attributes.keys().map(String::as_str).collect();
+            has.extend(out.iter().map(|(n, _): &(String, Attribute)| n.as_str()));
+            has.sort_unstable();
+            let shown: Vec<&str> = has.iter().take(12).copied().collect();
+            bail!(
+                "'{}' has no particle attribute '{name}'; it has {}{}",
+                input.display(),
+                if has.is_empty() {
+                    "none".to_string()
+                } else {
+                    shown.join(", ")
+                },
+                if has.len() > shown.len() {
+                    format!(" and {} more", has.len() - shown.len())
+                } else {
+                    String::new()
+                }
+            );
+        };
+        // The reader leaves attributes as they are; interpolated, one of these would spread.
+        let bad = match &attribute {
+            Attribute::Scalar(s) => s
+                .iter()
+                .position(|x| !x.is_finite())
+                .map(|i| (i, s[i].to_string())),
+            Attribute::Vector(v) => v
+                .iter()
+                .position(|x| !x.is_finite())
+                .map(|i| (i, format!("({}, {}, {})", v[i].x, v[i].y, v[i].z))),
+        };
+        if let Some((i, value)) = bad {
+            let what = if name == "velocity" {
+                "velocities"
+            } else {
+                name
+            };
+            bail!(
+                "cannot read {what} from '{}': particle {i} has a non-finite {name} {value}",
+                input.display()
+            );
+        }
+        out.push((name.clone(), attribute));
     }
-    Ok(velocities)
+    Ok(out)
 }
 
 #[cfg(test)]

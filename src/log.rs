@@ -304,6 +304,7 @@ fn frame_json(outcome: &FrameOutcome) -> serde_json::Value {
             "particles": stats.particles,
             "triangles": stats.triangles,
             "vertices": stats.vertices,
+            "particles_outside_box": stats.particles_outside_box,
             "seconds": (seconds(outcome) * 1e3).round() / 1e3,
         }),
         Err(e) => json!({"status": "error", "error": format!("{e:#}")}),

@@ -106,8 +106,9 @@ struct ConfigArgs {
     #[arg(long)]
     max_memory: Option<String>,
 
-    /// Mesh format: obj, ply (binary little-endian), ply-ascii, or pov (POV-Ray mesh2 include,
-    /// .inc). Default: from the output file's extension, else obj.
+    /// Mesh format: obj, ply (binary little-endian), ply-ascii, pov (POV-Ray mesh2 include,
+    /// .inc), vtk (legacy binary), vtu or vtp (VTK XML, zlib-compressed). Default: from the
+    /// output file's extension, else obj.
     #[arg(long)]
     format: Option<String>,
 
@@ -116,10 +117,19 @@ struct ConfigArgs {
     #[arg(long, value_name = "AXIS")]
     up_axis: Option<String>,
 
-    /// Per-vertex attributes to write (PLY only): velocity, interpolated from the particles'
-    /// vx vy vz with the field's kernel, written as vx vy vz.
+    /// Per-vertex attributes to write (PLY, VTK, VTU, VTP): particle attributes by name
+    /// (velocity, density, …; v, vel and vx vy vz all find velocity), interpolated onto the
+    /// vertices with the kernel-weighted mean of the particles around each.
     #[arg(long, value_name = "LIST")]
     attributes: Option<String>,
+
+    /// Drop the particles outside this box before reconstructing (their count is logged).
+    #[arg(
+        long,
+        value_name = "MINX,MINY,MINZ,MAXX,MAXY,MAXZ",
+        allow_hyphen_values = true
+    )]
+    particle_aabb: Option<String>,
 }
 
 impl ConfigArgs {
@@ -168,6 +178,9 @@ impl ConfigArgs {
         }
         if let Some(a) = &self.attributes {
             config.output.attributes = OutputConfig::parse_attributes(a).context("--attributes")?;
+        }
+        if let Some(b) = &self.particle_aabb {
+            config.particle_aabb = Some(splash_sph::parse_aabb(b).context("--particle-aabb")?);
         }
         config.validate()?;
         Ok(config)
@@ -307,7 +320,7 @@ fn recon(args: Recon) -> Result<ExitCode> {
         (None, None) => match output.extension() {
             Some(ext) => bail!(
                 "the output name's .{ext} extension is not a mesh format splash writes (.obj, \
-                 .ply, .inc); rename the output or give --format"
+                 .ply, .inc, .vtk, .vtu, .vtp); rename the output or give --format"
             ),
             None => MeshFormat::Obj,
         },

@@ -18,6 +18,7 @@ use crate::memory;
 #[derive(Debug, Clone, Default, Serialize, Deserialize)]
 pub struct Figures {
     pub particles: f64,
+    pub particles_outside_box: f64,
     pub surface_particles: f64,
     /// #particles_surf / #particles_total (Table 1).
     pub surface_particle_ratio: f64,
@@ -76,6 +77,7 @@ impl Figures {
         let grid_vertices = s.grid_vertices() as f64;
         Figures {
             particles: s.particles as f64,
+            particles_outside_box: s.particles_outside_box as f64,
             surface_particles: s.surface_particles as f64,
             surface_particle_ratio: ratio(s.surface_particles as f64, s.particles as f64),
             grid_res_x: s.grid[0] as f64,

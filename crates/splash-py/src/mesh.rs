@@ -7,7 +7,7 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use splash_sph::io::{self, VertexAttributes};
-use splash_sph::{MeshFormat, TriMesh, UpAxis};
+use splash_sph::{Attribute, MeshFormat, TriMesh, UpAxis};
 
 use crate::arrays;
 use crate::errors::to_py;
@@ -84,12 +84,13 @@ impl Mesh {
     /// Writes the mesh to ``path`` atomically (a reader sees the old file or the new one),
     /// creating missing directories.
     ///
-    /// ``format``: ``"obj"``, ``"ply"`` (binary), ``"ply-ascii"`` or ``"pov"``; by default the
-    /// configuration's ``output.format``, else the one the extension implies (``.obj``,
-    /// ``.ply``, ``.inc``), else OBJ. ``up_axis``: ``"z"`` or ``"y"`` turns the written
+    /// ``format``: ``"obj"``, ``"ply"`` (binary), ``"ply-ascii"``, ``"pov"``, ``"vtk"``,
+    /// ``"vtu"`` or ``"vtp"``; by default the configuration's ``output.format``, else the one
+    /// the extension implies (``.obj``, ``.ply``, ``.inc``, ``.vtk``, ``.vtu``, ``.vtp``), else
+    /// OBJ. ``up_axis``: ``"z"`` or ``"y"`` turns the written
     /// coordinates so that that axis is up (the arrays are left as they are); by default the
-    /// configuration's ``output.up_axis``. PLY files get the ``velocity`` attribute, when
-    /// the mesh has one, as the vertex properties ``vx vy vz``. The GIL is released while
+    /// configuration's ``output.up_axis``. PLY and VTK files get every attribute of the mesh
+    /// (``velocity`` as the PLY properties ``vx vy vz``); OBJ and POV-Ray files leave them out. The GIL is released while
     /// writing.
     ///
     /// Raises OSError when the file cannot be written, ValueError for an unknown format or
@@ -114,32 +115,45 @@ impl Mesh {
             normals: arrays::points(normals.as_any(), "mesh.normals")?.into_vec(),
             triangles: arrays::triangles(self.faces.bind(py).as_any(), "mesh.faces")?,
         };
-        let velocity = self.attributes.bind(py).get_item("velocity")?;
-        let mut velocities = match velocity {
-            Some(v) if format.holds_velocities() => {
-                Some(arrays::points(&v, "mesh.attributes['velocity']")?.into_vec())
+        // Every attribute, where the format has room for them: (V,) arrays as numbers, (V, 3)
+        // arrays as vectors.
+        let mut named: Vec<(String, Attribute)> = Vec::new();
+        if format.holds_attributes() {
+            for (key, value) in self.attributes.bind(py).iter() {
+                let name: String = key.extract()?;
+                let what = format!("mesh.attributes['{name}']");
+                let ndim: usize = value.getattr("ndim")?.extract()?;
+                let attribute = if ndim == 1 {
+                    Attribute::Scalar(arrays::scalars(&value, &what)?)
+                } else {
+                    Attribute::Vector(arrays::points(&value, &what)?.into_vec())
+                };
+                let rows = match &attribute {
+                    Attribute::Scalar(s) => s.len(),
+                    Attribute::Vector(v) => v.len(),
+                };
+                if rows != mesh.vertices.len() {
+                    return Err(PyValueError::new_err(format!(
+                        "{what} has {rows} rows for {} vertices",
+                        mesh.vertices.len()
+                    )));
+                }
+                named.push((name, attribute));
             }
-            _ => None,
-        };
-        if let Some(v) = &velocities
-            && v.len() != mesh.vertices.len()
-        {
-            return Err(PyValueError::new_err(format!(
-                "mesh.attributes['velocity'] has {} rows for {} vertices",
-                v.len(),
-                mesh.vertices.len()
-            )));
         }
         py.detach(|| {
             if let Some(axis) = up_axis {
                 axis.rotate(&mut mesh.vertices);
                 axis.rotate(&mut mesh.normals);
-                if let Some(v) = &mut velocities {
-                    axis.rotate(v);
+                for (_, a) in &mut named {
+                    if let Attribute::Vector(v) = a {
+                        axis.rotate(v);
+                    }
                 }
             }
             let attributes = VertexAttributes {
-                velocities: velocities.as_deref(),
+                named: &named,
+                ..Default::default()
             };
             io::write_mesh_file_with(&path, &mesh, &attributes, format)
         })

@@ -5,7 +5,7 @@ use std::time::{Duration, Instant};
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use splash_sph::{Clock, Config, FrameStats, Reconstruction, Reconstructor, Vec3};
+use splash_sph::{Attribute, Clock, Config, FrameStats, Reconstruction, Reconstructor, Vec3};
 
 use crate::arrays::{self, Points};
 use crate::errors::to_py;
@@ -147,10 +147,20 @@ fn run(
     pools::install(threads, || {
         let rec = reconstructor.reconstruct_observed(positions, &mut Clock::default())?;
         let interpolation = Instant::now();
-        let attributes = attributes
+        // One neighbour search for all of them.
+        let columns: Vec<Attribute> = attributes
             .iter()
-            .map(|values| reconstructor.interpolate(&rec.mesh, positions, values))
-            .collect::<splash_sph::Result<_>>()?;
+            .map(|values| Attribute::Vector(values.to_vec()))
+            .collect();
+        let columns: Vec<&Attribute> = columns.iter().collect();
+        let attributes = reconstructor
+            .interpolate_all(&rec.mesh, positions, &columns)?
+            .into_iter()
+            .map(|a| match a {
+                Attribute::Vector(v) => v,
+                Attribute::Scalar(_) => unreachable!("vectors in, vectors out"),
+            })
+            .collect();
         Ok(Output {
             rec,
             attributes,

@@ -45,6 +45,10 @@ pub struct Config {
     pub field: FieldConfig,
     /// How meshes are written.
     pub output: OutputConfig,
+    /// `[min x, min y, min z, max x, max y, max z]`: particles outside this box (bounds
+    /// included in it) are dropped before the reconstruction, with their attributes. All are
+    /// kept when absent.
+    pub particle_aabb: Option<[f32; 6]>,
 }
 
 /// Which grid vertices get a field value, and in what order.
@@ -108,11 +112,54 @@ pub struct OutputConfig {
     pub format: Option<MeshFormat>,
     /// Rotates the mesh on output so that this axis is up; coordinates as they are when absent.
     pub up_axis: Option<UpAxis>,
-    /// Per-vertex attributes interpolated from the particles and written (PLY): `velocity`.
+    /// Per-vertex attributes interpolated from the particles and written (PLY, VTK, VTU,
+    /// VTP): any particle attribute by name, in the canonical spelling of
+    /// [`attribute_names`](crate::attribute_names) (`velocity` for `v`, `vel`, `vx vy vz`).
     pub attributes: Vec<String>,
 }
 
-/// The vertex attributes that can be interpolated and written.
+/// What is wrong with an attribute name that no mesh file could hold.
+fn attribute_name_problem(name: &str) -> Option<String> {
+    if name.is_empty() || name.chars().any(|c| c.is_whitespace() || c.is_control()) {
+        return Some(format!(
+            "the attribute name '{name}' is empty or holds spaces"
+        ));
+    }
+    if name
+        .chars()
+        .any(|c| matches!(c, '"' | '<' | '>' | '&' | ','))
+    {
+        return Some(format!(
+            "the attribute name '{name}' holds one of \" < > & , (VTK XML names cannot)"
+        ));
+    }
+    None
+}
+
+/// Parses `--particle-aabb MINX,MINY,MINZ,MAXX,MAXY,MAXZ`.
+pub fn parse_aabb(text: &str) -> Result<[f32; 6]> {
+    let values: Vec<&str> = text.split(',').map(str::trim).collect();
+    let mut out = [0.0f32; 6];
+    if values.len() != 6 {
+        bail_config!(
+            "expected six numbers MINX,MINY,MINZ,MAXX,MAXY,MAXZ, got {}",
+            values.len()
+        );
+    }
+    for (o, v) in out.iter_mut().zip(&values) {
+        *o = match v.parse::<f32>() {
+            Ok(x) => x,
+            Err(_) => bail_config!("'{v}' is not a number"),
+        };
+    }
+    if !(0..3).all(|i| out[i].is_finite() && out[i + 3].is_finite() && out[i] <= out[i + 3]) {
+        bail_config!("each minimum must be finite and at most its maximum: {text}");
+    }
+    Ok(out)
+}
+
+/// The vertex attribute every particle format can name (any particle attribute can be asked
+/// for: see [`OutputConfig::attributes`]).
 pub const ATTRIBUTES: [&str; 1] = ["velocity"];
 
 impl OutputConfig {
@@ -121,17 +168,14 @@ impl OutputConfig {
         self.attributes.iter().any(|a| a == "velocity")
     }
 
-    /// Parses a comma-separated list as a user writes it (`velocity`; `velocities` is accepted).
+    /// Parses a comma-separated list as a user writes it: names of particle attributes, each
+    /// turned into its canonical spelling (`v`, `vel`, `velocities` → `velocity`), once each.
     pub fn parse_attributes(text: &str) -> Result<Vec<String>> {
-        let mut out = Vec::new();
+        let mut out: Vec<String> = Vec::new();
         for name in text.split(',').map(str::trim).filter(|n| !n.is_empty()) {
-            let name = if name == "velocities" {
-                "velocity"
-            } else {
-                name
-            };
-            if !ATTRIBUTES.contains(&name) {
-                bail_config!("unknown attribute '{name}': expected velocity");
+            let name = crate::attribute_names::canonical(name);
+            if let Some(problem) = attribute_name_problem(name) {
+                bail_config!("{problem}");
             }
             if !out.iter().any(|n| n == name) {
                 out.push(name.to_string());
@@ -217,6 +261,7 @@ impl Default for Config {
             threads: None,
             max_memory: None,
             output: OutputConfig::default(),
+            particle_aabb: None,
         }
     }
 }
@@ -312,14 +357,26 @@ impl Config {
             bail_config!("threads must be at least 1");
         }
         for name in &self.output.attributes {
-            if !ATTRIBUTES.contains(&name.as_str()) {
-                bail_config!("output.attributes: unknown attribute '{name}': expected velocity");
+            if let Some(problem) = attribute_name_problem(name) {
+                bail_config!("output.attributes: {problem}");
             }
         }
-        if self.output.velocities() && self.output.format.is_some_and(|f| !f.holds_velocities()) {
+        if let Some(format) = self.output.format
+            && !self.output.attributes.is_empty()
+            && !format.holds_attributes()
+        {
             bail_config!(
-                "output.attributes = [\"velocity\"] needs PLY output: .{} files have no place for them",
-                self.output.format.map_or("obj", |f| f.extension())
+                "output.attributes needs PLY, VTK, VTU or VTP output: .{} files have no place \
+                 for vertex attributes",
+                format.extension()
+            );
+        }
+        if let Some(b) = &self.particle_aabb
+            && !(0..3).all(|i| b[i].is_finite() && b[i + 3].is_finite() && b[i] <= b[i + 3])
+        {
+            bail_config!(
+                "particle_aabb must be six finite numbers MINX, MINY, MINZ, MAXX, MAXY, MAXZ with \
+                 each minimum at most its maximum"
             );
         }
         self.field.validate()?;

@@ -27,6 +27,7 @@
 #[macro_use]
 mod error;
 
+pub mod attribute_names;
 mod attributes;
 mod config;
 mod config_errors;
@@ -45,6 +46,7 @@ pub mod report;
 pub use bytes::Bytes;
 pub use config::{
     ATTRIBUTES, BandConfig, Config, Engine, Normals, OutputConfig, SlicesConfig, SurfaceParticles,
+    parse_aabb,
 };
 pub use error::{Error, Result};
 pub use glam::Vec3;

@@ -8,6 +8,7 @@ use glam::Vec3;
 use crate::attributes;
 use crate::config::{Config, Params};
 use crate::error::{Error, Result, figure};
+use crate::io::Attribute;
 use crate::mesh::TriMesh;
 use crate::recon::full_grid::{self, Grid};
 use crate::recon::{self, Reconstruction};
@@ -161,22 +162,31 @@ impl Reconstructor {
         warnings
     }
 
-    /// A per-particle vector quantity (velocities, say) interpolated onto the vertices of
+    /// A per-particle attribute (velocities, densities, …) interpolated onto the vertices of
     /// `mesh`: the kernel-weighted mean of the particles within the field's support, with the
-    /// weights k(s) = max(0, (1 − s²)³) of SSP07. `values` has one entry per position.
+    /// weights k(s) = max(0, (1 − s²)³) of SSP07, normalised by their sum (Shepard), so that a
+    /// constant attribute stays that constant. `values` has one entry per position; the result
+    /// one per vertex, of the same kind.
     pub fn interpolate(
         &self,
         mesh: &TriMesh,
         positions: &[Vec3],
-        values: &[Vec3],
-    ) -> Result<Vec<Vec3>> {
+        values: &Attribute,
+    ) -> Result<Attribute> {
+        let mut all = self.interpolate_all(mesh, positions, &[values])?;
+        Ok(all.pop().expect("one attribute in, one out"))
+    }
+
+    /// [`interpolate`](Self::interpolate) for several attributes at once, through one
+    /// neighbour search.
+    pub fn interpolate_all(
+        &self,
+        mesh: &TriMesh,
+        positions: &[Vec3],
+        values: &[&Attribute],
+    ) -> Result<Vec<Attribute>> {
         self.install(|| {
-            attributes::interpolate_velocities(
-                &mesh.vertices,
-                positions,
-                values,
-                self.params.support,
-            )
+            attributes::interpolate(&mesh.vertices, positions, values, self.params.support)
         })
     }
 

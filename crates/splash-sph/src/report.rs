@@ -159,8 +159,10 @@ pub struct FrameStats {
     pub spacing: f32,
     /// Marching Cubes cell size, in world units.
     pub cell: f32,
-    /// Particles of the frame.
+    /// Particles of the frame (inside the particle box, when one is given).
     pub particles: usize,
+    /// Particles dropped for lying outside the particle box (set by callers that filter).
+    pub particles_outside_box: usize,
     /// Surface particles (Sec. 4): 0 for the engines that do not look for them.
     pub surface_particles: usize,
     /// Bricks of 8³ vertices holding surface vertices.
@@ -250,11 +252,19 @@ impl fmt::Display for FrameStats {
         let t = &self.timings;
         write!(
             f,
-            "{} particles ({} surface), {} surface vertices, {} triangles; \
+            "{} particles ({} surface{}), {} surface vertices, {} triangles; \
              read {:.0} ms, sort {:.0} ms, t_sp {:.0} ms, band {:.0} ms, t_sf {:.0} ms, \
              t_tri {:.0} ms, write {:.0} ms; {:.1} MB arrays, {:.1} MB peak heap, {:.1} MB peak RSS{}",
             self.particles,
             self.surface_particles,
+            if self.particles_outside_box > 0 {
+                format!(
+                    "; {} outside the particle box, dropped",
+                    self.particles_outside_box
+                )
+            } else {
+                String::new()
+            },
             self.surface_vertices,
             self.triangles,
             ms(t.read),

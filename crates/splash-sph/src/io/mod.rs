@@ -22,8 +22,10 @@
 //! offset (binary) where that helps. Coordinates must be finite. A frame without particles is
 //! valid and reads as empty `Vec`s.
 //!
-//! Meshes are written as OBJ or PLY (binary little-endian or ascii), atomically when written to
-//! a file with [`write_mesh_file`].
+//! Meshes are written as OBJ, PLY (binary little-endian or ascii), POV-Ray `mesh2`, VTK legacy
+//! binary or VTK XML (`.vtu`, `.vtp`), atomically when written to a file with
+//! [`write_mesh_file`]. PLY and VTK files can carry per-vertex attributes
+//! ([`VertexAttributes`]).
 
 #[macro_use]
 mod failure;
@@ -44,7 +46,9 @@ mod pov;
 mod raw;
 mod records;
 mod vtk_legacy;
+mod vtk_write;
 mod vtk_xml;
+mod vtu_write;
 mod xyz;
 
 use std::collections::BTreeMap;
@@ -85,6 +89,34 @@ impl Particles {
     /// Whether the frame has no particles.
     pub fn is_empty(&self) -> bool {
         self.positions.is_empty()
+    }
+
+    /// Drops the particles outside the box `[min x, min y, min z, max x, max y, max z]`
+    /// (bounds included; a non-finite position is outside), and their attribute values;
+    /// returns how many were dropped.
+    pub fn retain_in_box(&mut self, aabb: [f32; 6]) -> usize {
+        let (lo, hi) = (Vec3::from_slice(&aabb[..3]), Vec3::from_slice(&aabb[3..]));
+        let keep: Vec<bool> = self
+            .positions
+            .iter()
+            .map(|p| p.cmpge(lo).all() && p.cmple(hi).all())
+            .collect();
+        let dropped = keep.iter().filter(|&&k| !k).count();
+        if dropped == 0 {
+            return 0;
+        }
+        fn retain<T>(values: &mut Vec<T>, keep: &[bool]) {
+            let mut k = keep.iter();
+            values.retain(|_| *k.next().unwrap_or(&false));
+        }
+        retain(&mut self.positions, &keep);
+        for a in self.attributes.values_mut() {
+            match a {
+                Attribute::Scalar(s) => retain(s, &keep),
+                Attribute::Vector(v) => retain(v, &keep),
+            }
+        }
+        dropped
     }
 }
 
@@ -224,6 +256,12 @@ pub enum MeshFormat {
     PlyAscii,
     /// A POV-Ray include file declaring a `mesh2` object (see [`POV_OBJECT`]).
     Pov,
+    /// VTK legacy binary `POLYDATA` (`.vtk`).
+    Vtk,
+    /// VTK XML unstructured grid (`.vtu`), binary and zlib-compressed.
+    Vtu,
+    /// VTK XML poly data (`.vtp`), binary and zlib-compressed.
+    Vtp,
 }
 
 /// The name a `--format pov` file declares its mesh under: `object { SplashMesh … }`.
@@ -236,44 +274,113 @@ impl MeshFormat {
             Self::Obj => "obj",
             Self::PlyBinary | Self::PlyAscii => "ply",
             Self::Pov => "inc",
+            Self::Vtk => "vtk",
+            Self::Vtu => "vtu",
+            Self::Vtp => "vtp",
         }
     }
 
-    /// Whether the format can carry per-vertex velocities (PLY `vx vy vz`).
+    /// Whether the format can carry per-vertex attributes (PLY properties, VTK point data).
+    pub fn holds_attributes(self) -> bool {
+        !matches!(self, Self::Obj | Self::Pov)
+    }
+
+    /// Whether the format can carry per-vertex velocities: see
+    /// [`holds_attributes`](Self::holds_attributes).
     pub fn holds_velocities(self) -> bool {
-        matches!(self, Self::PlyBinary | Self::PlyAscii)
+        self.holds_attributes()
     }
 
     /// Parses a format name as given on the command line: `obj`, `ply` (binary little-endian),
-    /// `ply-ascii` or `pov` (POV-Ray `mesh2` include, `.inc`).
+    /// `ply-ascii`, `pov` (POV-Ray `mesh2` include, `.inc`), `vtk` (legacy binary), `vtu` or
+    /// `vtp` (XML, compressed).
     pub fn parse(name: &str) -> crate::Result<Self> {
         match name.trim().to_ascii_lowercase().as_str() {
             "obj" => Ok(Self::Obj),
             "ply" => Ok(Self::PlyBinary),
             "ply-ascii" => Ok(Self::PlyAscii),
             "pov" | "inc" => Ok(Self::Pov),
-            _ => bail_config!("unknown mesh format '{name}': expected obj, ply, ply-ascii or pov"),
+            "vtk" => Ok(Self::Vtk),
+            "vtu" => Ok(Self::Vtu),
+            "vtp" => Ok(Self::Vtp),
+            _ => bail_config!(
+                "unknown mesh format '{name}': expected obj, ply, ply-ascii, pov, vtk, vtu or vtp"
+            ),
         }
     }
 
-    /// The format implied by the extension (`.obj`, `.ply` as binary, `.inc` as POV-Ray),
-    /// case-insensitively.
+    /// The format implied by the extension (`.obj`, `.ply` as binary, `.inc` as POV-Ray,
+    /// `.vtk`, `.vtu`, `.vtp`), case-insensitively.
     pub fn from_path(path: &Path) -> Option<Self> {
         let extension = path.extension()?.to_str()?.to_ascii_lowercase();
         match extension.as_str() {
             "obj" => Some(Self::Obj),
             "ply" => Some(Self::PlyBinary),
             "inc" => Some(Self::Pov),
+            "vtk" => Some(Self::Vtk),
+            "vtu" => Some(Self::Vtu),
+            "vtp" => Some(Self::Vtp),
             _ => None,
         }
     }
 }
 
-/// Per-vertex data written beside the mesh, where the format has room for it.
+/// Per-vertex data written beside the mesh, where the format has room for it (PLY, VTK; OBJ
+/// and POV-Ray files refuse it).
+///
+/// In PLY, the vector `velocity` is written as the properties `vx vy vz`, any other vector
+/// `name` as `name_x name_y name_z`, a scalar as a property of its name (all `float`). VTK
+/// files get point data arrays of the attributes' names (vectors with 3 components).
 #[derive(Clone, Copy, Debug, Default)]
 pub struct VertexAttributes<'a> {
-    /// One velocity per vertex, written as the PLY vertex properties `vx vy vz` (float).
+    /// One velocity per vertex, written as the attribute `velocity` (before `named`).
     pub velocities: Option<&'a [Vec3]>,
+    /// Further attributes by name, one value per vertex each.
+    pub named: &'a [(String, Attribute)],
+}
+
+/// A borrowed attribute column.
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum AttributeValues<'a> {
+    Scalar(&'a [f32]),
+    Vector(&'a [Vec3]),
+}
+
+impl AttributeValues<'_> {
+    fn len(&self) -> usize {
+        match self {
+            Self::Scalar(s) => s.len(),
+            Self::Vector(v) => v.len(),
+        }
+    }
+}
+
+impl<'a> VertexAttributes<'a> {
+    /// Whether there is nothing to write.
+    pub fn is_empty(&self) -> bool {
+        self.velocities.is_none() && self.named.is_empty()
+    }
+
+    /// Every attribute by name, `velocity` first.
+    pub(crate) fn arrays(&self) -> Vec<(&'a str, AttributeValues<'a>)> {
+        let velocities = self
+            .velocities
+            .map(|v| ("velocity", AttributeValues::Vector(v)));
+        velocities
+            .into_iter()
+            .chain(self.named.iter().map(|(name, a)| {
+                let values = match a {
+                    Attribute::Scalar(s) => AttributeValues::Scalar(s),
+                    Attribute::Vector(v) => AttributeValues::Vector(v),
+                };
+                (name.as_str(), values)
+            }))
+            .collect()
+    }
+}
+
+fn invalid_input(message: String) -> io::Error {
+    io::Error::new(io::ErrorKind::InvalidInput, message)
 }
 
 /// Writes `mesh` in `format`. `normals` must be empty or have one entry per vertex; without
@@ -291,25 +398,29 @@ pub fn write_mesh_with(
     w: &mut impl Write,
 ) -> io::Result<()> {
     check_mesh(mesh)?;
-    if let Some(velocities) = attributes.velocities {
-        if !format.holds_velocities() {
-            return Err(io::Error::new(
-                io::ErrorKind::InvalidInput,
-                format!(
-                    ".{} files cannot hold vertex velocities",
-                    format.extension()
-                ),
-            ));
+    if !attributes.is_empty() && !format.holds_attributes() {
+        let names: Vec<&str> = attributes.arrays().iter().map(|(n, _)| *n).collect();
+        return Err(invalid_input(format!(
+            ".{} files cannot hold vertex attributes ({}): write PLY, VTK, VTU or VTP",
+            format.extension(),
+            listed(names)
+        )));
+    }
+    let arrays = attributes.arrays();
+    for (i, (name, values)) in arrays.iter().enumerate() {
+        if values.len() != mesh.vertices.len() {
+            return Err(invalid_input(format!(
+                "mesh has {} values of '{}' for {} vertices",
+                values.len(),
+                short(name),
+                mesh.vertices.len()
+            )));
         }
-        if velocities.len() != mesh.vertices.len() {
-            return Err(io::Error::new(
-                io::ErrorKind::InvalidInput,
-                format!(
-                    "mesh has {} velocities for {} vertices",
-                    velocities.len(),
-                    mesh.vertices.len()
-                ),
-            ));
+        if arrays[..i].iter().any(|(n, _)| n == name) {
+            return Err(invalid_input(format!(
+                "the vertex attribute '{}' is given twice",
+                short(name)
+            )));
         }
     }
     let mut out = BufWriter::with_capacity(1 << 16, w);
@@ -318,6 +429,14 @@ pub fn write_mesh_with(
         MeshFormat::PlyBinary => ply_write::write(mesh, attributes, false, &mut out)?,
         MeshFormat::PlyAscii => ply_write::write(mesh, attributes, true, &mut out)?,
         MeshFormat::Pov => pov::write(mesh, &mut out)?,
+        MeshFormat::Vtk => vtk_write::write(mesh, attributes, &mut out)?,
+        MeshFormat::Vtu => vtu_write::write(
+            mesh,
+            attributes,
+            vtu_write::Kind::UnstructuredGrid,
+            &mut out,
+        )?,
+        MeshFormat::Vtp => vtu_write::write(mesh, attributes, vtu_write::Kind::PolyData, &mut out)?,
     }
     out.flush()
 }

@@ -1,18 +1,17 @@
-//! PLY mesh output: `float x y z [nx ny nz] [vx vy vz]` vertices (normals, then velocities when
-//! given) and `list uchar int vertex_indices` faces,
+//! PLY mesh output: `float x y z [nx ny nz] [attributes…]` vertices (normals, then the vertex
+//! attributes: the vector `velocity` as `vx vy vz`, another vector `name` as `name_x name_y
+//! name_z`, a scalar under its name) and `list uchar int vertex_indices` faces,
 //! the layout Blender and POV-Ray tooling read. ply_rs_bw writes the header; the payload is
 //! written here in bulk.
 
 use std::io::{self, Write};
-
-use glam::Vec3;
 
 use ply_rs_bw::ply::{
     Addable, DefaultElement, ElementDef, Encoding, Header, PropertyDef, PropertyType, ScalarType,
 };
 use ply_rs_bw::writer::Writer;
 
-use super::VertexAttributes;
+use super::{AttributeValues, VertexAttributes};
 use crate::mesh::TriMesh;
 
 /// Binary payload is gathered into blocks of about this size before each write.
@@ -37,16 +36,60 @@ pub(super) fn write(
             ),
         ));
     }
-    let velocities = attributes.velocities.unwrap_or_default();
-    Writer::<DefaultElement>::new().write_header(out, &header(mesh, velocities, ascii))?;
+    let arrays = attributes.arrays();
+    let names = property_names(&arrays);
+    let reserved = ["x", "y", "z", "nx", "ny", "nz"];
+    for (i, name) in names.iter().enumerate() {
+        if name.is_empty() || name.chars().any(|c| c.is_whitespace() || c.is_control()) {
+            return Err(io::Error::new(
+                io::ErrorKind::InvalidInput,
+                format!("a PLY property name cannot be empty or hold spaces: '{name}'"),
+            ));
+        }
+        if reserved.contains(&name.as_str()) || names[..i].contains(name) {
+            return Err(io::Error::new(
+                io::ErrorKind::InvalidInput,
+                format!("the vertex attributes would write the PLY property '{name}' twice"),
+            ));
+        }
+    }
+    Writer::<DefaultElement>::new().write_header(out, &header(mesh, &names, ascii))?;
     if ascii {
-        write_ascii(mesh, velocities, out)
+        write_ascii(mesh, &arrays, out)
     } else {
-        write_binary(mesh, velocities, out)
+        write_binary(mesh, &arrays, out)
     }
 }
 
-fn header(mesh: &TriMesh, velocities: &[Vec3], ascii: bool) -> Header {
+/// The PLY properties of the attributes, in order.
+fn property_names(arrays: &[(&str, AttributeValues)]) -> Vec<String> {
+    let mut names = Vec::new();
+    for (name, values) in arrays {
+        match values {
+            AttributeValues::Scalar(_) => names.push(name.to_string()),
+            AttributeValues::Vector(_) if *name == "velocity" => {
+                names.extend(["vx", "vy", "vz"].map(str::to_owned))
+            }
+            AttributeValues::Vector(_) => {
+                names.extend(["x", "y", "z"].map(|c| format!("{name}_{c}")))
+            }
+        }
+    }
+    names
+}
+
+/// Appends vertex `i`'s attribute values to `row`.
+fn attribute_row(arrays: &[(&str, AttributeValues)], i: usize, row: &mut Vec<f32>) {
+    row.clear();
+    for (_, values) in arrays {
+        match values {
+            AttributeValues::Scalar(s) => row.push(s[i]),
+            AttributeValues::Vector(v) => row.extend_from_slice(&v[i].to_array()),
+        }
+    }
+}
+
+fn header(mesh: &TriMesh, attribute_names: &[String], ascii: bool) -> Header {
     let mut header = Header::new();
     header.encoding = if ascii {
         Encoding::Ascii
@@ -60,9 +103,7 @@ fn header(mesh: &TriMesh, velocities: &[Vec3], ascii: bool) -> Header {
     if !mesh.normals.is_empty() {
         names.extend(["nx", "ny", "nz"]);
     }
-    if !velocities.is_empty() {
-        names.extend(["vx", "vy", "vz"]);
-    }
+    names.extend(attribute_names.iter().map(String::as_str));
     for name in names {
         let float = PropertyType::Scalar(ScalarType::Float);
         vertex
@@ -79,8 +120,13 @@ fn header(mesh: &TriMesh, velocities: &[Vec3], ascii: bool) -> Header {
     header
 }
 
-fn write_binary(mesh: &TriMesh, velocities: &[Vec3], out: &mut impl Write) -> io::Result<()> {
+fn write_binary(
+    mesh: &TriMesh,
+    arrays: &[(&str, AttributeValues)],
+    out: &mut impl Write,
+) -> io::Result<()> {
     let mut block = Vec::with_capacity(BLOCK_BYTES + 32);
+    let mut row = Vec::new();
     for (i, v) in mesh.vertices.iter().enumerate() {
         for x in v.to_array() {
             block.extend_from_slice(&x.to_le_bytes());
@@ -90,10 +136,9 @@ fn write_binary(mesh: &TriMesh, velocities: &[Vec3], out: &mut impl Write) -> io
                 block.extend_from_slice(&x.to_le_bytes());
             }
         }
-        if let Some(u) = velocities.get(i) {
-            for x in u.to_array() {
-                block.extend_from_slice(&x.to_le_bytes());
-            }
+        attribute_row(arrays, i, &mut row);
+        for x in &row {
+            block.extend_from_slice(&x.to_le_bytes());
         }
         flush_full(&mut block, out)?;
     }
@@ -117,14 +162,20 @@ fn flush_full(block: &mut Vec<u8>, out: &mut impl Write) -> io::Result<()> {
     Ok(())
 }
 
-fn write_ascii(mesh: &TriMesh, velocities: &[Vec3], out: &mut impl Write) -> io::Result<()> {
+fn write_ascii(
+    mesh: &TriMesh,
+    arrays: &[(&str, AttributeValues)],
+    out: &mut impl Write,
+) -> io::Result<()> {
+    let mut row = Vec::new();
     for (i, v) in mesh.vertices.iter().enumerate() {
         write!(out, "{} {} {}", v.x, v.y, v.z)?;
         if let Some(n) = mesh.normals.get(i) {
             write!(out, " {} {} {}", n.x, n.y, n.z)?;
         }
-        if let Some(u) = velocities.get(i) {
-            write!(out, " {} {} {}", u.x, u.y, u.z)?;
+        attribute_row(arrays, i, &mut row);
+        for x in &row {
+            write!(out, " {x}")?;
         }
         writeln!(out)?;
     }

@@ -1,0 +1,126 @@
+//! One table of the usual spellings of particle attributes, so that `--attributes velocity`
+//! finds a frame's velocities whatever its file calls them: `velocity`, `v` (Houdini), `vel`,
+//! `velocities`, or the components `vx vy vz`, `velocity_x velocity_y velocity_z`, `v_x …`,
+//! `vel_x …` when a reader left them as three numbers.
+//!
+//! Names compare ignoring ASCII case. A name that is in no row stands for itself.
+
+use std::collections::BTreeMap;
+
+use glam::Vec3;
+
+use crate::io::Attribute;
+
+/// Canonical name, then the spellings that mean it. The canonical name is the one written to
+/// meshes.
+const ALIASES: &[(&str, &[&str])] = &[
+    ("velocity", &["velocity", "velocities", "vel", "vels", "v"]),
+    ("normal", &["normal", "normals", "n"]),
+    ("density", &["density", "densities", "rho", "dens"]),
+    ("pressure", &["pressure", "pressures"]),
+    ("mass", &["mass", "masses"]),
+    ("id", &["id", "ids", "particle_id", "pid"]),
+];
+
+/// The canonical name of `name`: `v` and `vel` are `velocity`, `rho` is `density`; a name of
+/// no row comes back as it is.
+pub fn canonical(name: &str) -> &str {
+    let name = name.trim();
+    ALIASES
+        .iter()
+        .find(|(_, spellings)| spellings.iter().any(|s| s.eq_ignore_ascii_case(name)))
+        .map_or(name, |(canonical, _)| canonical)
+}
+
+/// The spellings of `name`'s canonical name (just `name` when it has no row).
+fn spellings(name: &str) -> Vec<&str> {
+    let canonical = canonical(name);
+    match ALIASES.iter().find(|(c, _)| *c == canonical) {
+        Some((_, spellings)) => spellings.to_vec(),
+        None => vec![canonical],
+    }
+}
+
+/// Takes the attribute that `requested` names out of `attributes`: the one of that exact name,
+/// else one whose name is another spelling of it, else a vector assembled from three scalar
+/// components (`{s}x {s}y {s}z` or `{s}_x {s}_y {s}_z` for a spelling `s`). None when the frame
+/// has none of these.
+pub fn take(attributes: &mut BTreeMap<String, Attribute>, requested: &str) -> Option<Attribute> {
+    if let Some(a) = attributes.remove(requested) {
+        return Some(a);
+    }
+    let spellings = spellings(requested);
+    let key = attributes
+        .keys()
+        .find(|k| spellings.iter().any(|s| s.eq_ignore_ascii_case(k)))
+        .cloned();
+    if let Some(key) = key {
+        return attributes.remove(&key);
+    }
+    for s in &spellings {
+        for separator in ["", "_"] {
+            let names = ["x", "y", "z"].map(|c| format!("{s}{separator}{c}"));
+            let keys = names.each_ref().map(|n| {
+                attributes
+                    .iter()
+                    .find(|(k, a)| k.eq_ignore_ascii_case(n) && matches!(a, Attribute::Scalar(_)))
+                    .map(|(k, _)| k.clone())
+            });
+            if let [Some(x), Some(y), Some(z)] = keys {
+                let mut column = |k: &str| match attributes.remove(k) {
+                    Some(Attribute::Scalar(values)) => values,
+                    _ => unreachable!("checked to be a scalar above"),
+                };
+                let (x, y, z) = (column(&x), column(&y), column(&z));
+                let vectors = x
+                    .iter()
+                    .zip(&y)
+                    .zip(&z)
+                    .map(|((&x, &y), &z)| Vec3::new(x, y, z))
+                    .collect();
+                return Some(Attribute::Vector(vectors));
+            }
+        }
+    }
+    None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn spellings_find_the_attribute() {
+        assert_eq!(canonical("V"), "velocity");
+        assert_eq!(canonical("velocities"), "velocity");
+        assert_eq!(canonical("rho"), "density");
+        assert_eq!(canonical("temperature"), "temperature");
+        let velocity = Attribute::Vector(vec![Vec3::X]);
+        for name in ["v", "vel", "Velocity", "velocity"] {
+            let mut attributes = BTreeMap::from([(name.to_string(), velocity.clone())]);
+            assert_eq!(
+                take(&mut attributes, "velocity"),
+                Some(velocity.clone()),
+                "{name}"
+            );
+            assert!(attributes.is_empty());
+        }
+        for triple in [
+            ["vx", "vy", "vz"],
+            ["velocity_x", "velocity_y", "velocity_z"],
+        ] {
+            let mut attributes: BTreeMap<String, Attribute> = triple
+                .iter()
+                .zip([1.0, 2.0, 3.0])
+                .map(|(n, x)| (n.to_string(), Attribute::Scalar(vec![x])))
+                .collect();
+            attributes.insert("density".into(), Attribute::Scalar(vec![1000.0]));
+            let v = take(&mut attributes, "vel");
+            assert_eq!(v, Some(Attribute::Vector(vec![Vec3::new(1.0, 2.0, 3.0)])));
+            assert_eq!(attributes.len(), 1);
+        }
+        let mut attributes = BTreeMap::from([("rho".to_string(), Attribute::Scalar(vec![2.0]))]);
+        assert!(take(&mut attributes, "pressure").is_none());
+        assert!(take(&mut attributes, "density").is_some());
+    }
+}
