@@ -237,13 +237,19 @@ mod tests {
         ]);
         assert_eq!(limit("0::/job/step\n", &v2), Some(2 << 30));
         assert_eq!(limit("0::/\n", &v2), None);
-        let own = files(&[("/cg/job/memory.max", "1073741824"), ("/cg/memory.max", "4294967296")]);
+        let own = files(&[
+            ("/cg/job/memory.max", "1073741824"),
+            ("/cg/memory.max", "4294967296"),
+        ]);
         assert_eq!(limit("0::/job", &own), Some(1 << 30));
         // v1: the memory controller's line; the top of the mount where the group's own
         // directory is not visible (a container); 2⁶³ rounded to pages is no limit.
         let v1 = files(&[
             ("/cg/memory/memory.limit_in_bytes", "536870912\n"),
-            ("/cg/memory/docker/abc/memory.limit_in_bytes", "9223372036854771712\n"),
+            (
+                "/cg/memory/docker/abc/memory.limit_in_bytes",
+                "9223372036854771712\n",
+            ),
         ]);
         let text = "9:name=systemd:/\n4:memory:/docker/abc\n3:cpuset:/\n0::/\n";
         assert_eq!(limit(text, &v1), Some(512 << 20));
@@ -264,12 +270,21 @@ mod tests {
             }
         };
         assert_eq!(slurm_limit(env(&[])), None);
-        assert_eq!(slurm_limit(env(&[("SLURM_MEM_PER_NODE", "4000")])), Some(4000 << 20));
         assert_eq!(
-            slurm_limit(env(&[("SLURM_MEM_PER_CPU", "1500"), ("SLURM_CPUS_ON_NODE", "4")])),
+            slurm_limit(env(&[("SLURM_MEM_PER_NODE", "4000")])),
+            Some(4000 << 20)
+        );
+        assert_eq!(
+            slurm_limit(env(&[
+                ("SLURM_MEM_PER_CPU", "1500"),
+                ("SLURM_CPUS_ON_NODE", "4")
+            ])),
             Some(6000 << 20)
         );
-        assert_eq!(slurm_limit(env(&[("SLURM_MEM_PER_CPU", "1500")])), Some(1500 << 20));
+        assert_eq!(
+            slurm_limit(env(&[("SLURM_MEM_PER_CPU", "1500")])),
+            Some(1500 << 20)
+        );
         assert_eq!(
             slurm_limit(env(&[
                 ("SLURM_MEM_PER_NODE", "2G"),
@@ -285,7 +300,10 @@ mod tests {
     #[test]
     fn the_default_limit_is_four_fifths_of_what_is_available() {
         let meminfo = "MemTotal:       24684092 kB\nMemFree:        22456780 kB\nMemAvailable:   24229568 kB\n";
-        assert_eq!(meminfo_field(meminfo, "MemAvailable:"), Some(24229568 * 1024));
+        assert_eq!(
+            meminfo_field(meminfo, "MemAvailable:"),
+            Some(24229568 * 1024)
+        );
         assert_eq!(meminfo_field(meminfo, "Nope:"), None);
         assert_eq!(limit_from(Some(10 << 30)), 8 << 30);
         assert_eq!(limit_from(None), 8 << 30);
