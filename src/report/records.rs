@@ -49,6 +49,8 @@ pub struct Figures {
     pub t_total: f64,
     /// Exact peak heap of the reconstruction (counting allocator), input particles excluded.
     pub heap_peak: f64,
+    /// The engine's estimate of its heap, checked against --max-memory before it allocated.
+    pub heap_planned: f64,
     pub heap_handler_array: f64,
     pub heap_surface_particles: f64,
     pub heap_band: f64,
@@ -99,6 +101,7 @@ impl Figures {
             t_write: secs(t.write),
             t_total: secs(t.read + t.reconstruction() + t.write),
             heap_peak: s.heap_peak as f64,
+            heap_planned: s.planned_bytes as f64,
             heap_handler_array: h.handler_array as f64,
             heap_surface_particles: h.surface_particles as f64,
             heap_band: h.band as f64,

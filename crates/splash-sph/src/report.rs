@@ -180,6 +180,9 @@ pub struct FrameStats {
     /// Largest sum of the bytes held at once by the reconstruction's own arrays (handler array,
     /// band, field values, mesh), measured from their capacities.
     pub peak_bytes: usize,
+    /// The heap the engine estimated it would need, checked against the memory limit before
+    /// its big allocations (0 where it made no estimate: the slices engine before it ran).
+    pub planned_bytes: u64,
     /// Peak heap of the reconstruction, the largest of the observer's stage figures (0 without
     /// an observer that measures heap).
     pub heap_peak: usize,

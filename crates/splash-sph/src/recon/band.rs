@@ -7,6 +7,7 @@
 //!
 //! Vertex `v` sits at `v * cell` in world coordinates, so the grid is the same in every frame.
 
+use super::budget;
 use crate::error::Result;
 use glam::{IVec3, Vec3};
 use rayon::prelude::*;
@@ -44,22 +45,52 @@ pub fn brick_of(v: IVec3) -> IVec3 {
 
 impl Band {
     /// Marks every vertex in the box of half-width `half_width` around each surface particle.
+    #[cfg(test)]
     pub fn around(surface: &[Vec3], cell: f32, half_width: f32) -> Result<Band> {
+        Band::around_within(surface, cell, half_width, |_| Ok(()))
+    }
+
+    /// [`Band::around`], calling `budget` with the number of (brick, particle) pairs that
+    /// building it takes (16 bytes each, twice while they are gathered) before allocating
+    /// them: a cell far smaller than the band makes billions.
+    pub fn around_within(
+        surface: &[Vec3],
+        cell: f32,
+        half_width: f32,
+        budget: impl FnOnce(u64) -> Result<()>,
+    ) -> Result<Band> {
         let boxes: Vec<(IVec3, IVec3)> = surface
             .par_iter()
             .map(|&p| vertex_box(p, cell, half_width))
             .collect::<Result<_>>()?;
-        // One (brick, particle) pair per brick a particle's box touches, grouped by brick.
-        let mut pairs: Vec<BrickParticle> = boxes
+        let bricks_of = |&(lo, hi): &(IVec3, IVec3)| -> u64 {
+            let n = brick_of(hi) - brick_of(lo) + 1;
+            n.to_array()
+                .iter()
+                .fold(1u64, |a, &k| a.saturating_mul(k.max(0) as u64))
+        };
+        let count = boxes
             .par_iter()
-            .enumerate()
-            .flat_map_iter(|(i, &(lo, hi))| {
-                let (a, b) = (brick_of(lo), brick_of(hi));
-                (a.z..=b.z).flat_map(move |z| {
-                    (a.y..=b.y).flat_map(move |y| (a.x..=b.x).map(move |x| ((z, y, x), i as u32)))
-                })
-            })
-            .collect();
+            .map(bricks_of)
+            .reduce(|| 0, u64::saturating_add);
+        budget(count)?;
+        let len = usize::try_from(count).unwrap_or(usize::MAX);
+        // One (brick, particle) pair per brick a particle's box touches, grouped by brick.
+        let mut pairs: Vec<BrickParticle> = budget::try_vec(len, || {
+            format!("the band's {count} (brick, particle) pairs")
+        })?;
+        pairs.par_extend(
+            boxes
+                .par_iter()
+                .enumerate()
+                .flat_map_iter(|(i, &(lo, hi))| {
+                    let (a, b) = (brick_of(lo), brick_of(hi));
+                    (a.z..=b.z).flat_map(move |z| {
+                        (a.y..=b.y)
+                            .flat_map(move |y| (a.x..=b.x).map(move |x| ((z, y, x), i as u32)))
+                    })
+                }),
+        );
         pairs.par_sort_unstable();
         let groups: Vec<&[BrickParticle]> = pairs.chunk_by(|a, b| a.0 == b.0).collect();
         let (bricks, masks) = groups
@@ -83,8 +114,14 @@ impl Band {
     pub fn full(lo: Vec3, hi: Vec3, cell: f32, margin: f32) -> Result<Band> {
         let (vlo, vhi) = Band::full_extent(lo, hi, cell, margin)?;
         let (a, b) = (brick_of(vlo), brick_of(vhi));
-        let mut bricks = Vec::new();
-        let mut masks = Vec::new();
+        let n = (b - a + 1)
+            .to_array()
+            .iter()
+            .fold(1u64, |n, &k| n.saturating_mul(k.max(0) as u64));
+        let n = usize::try_from(n).unwrap_or(usize::MAX);
+        let what = || format!("the {n} bricks of the full grid");
+        let mut bricks = budget::try_vec(n, what)?;
+        let mut masks = budget::try_vec(n, what)?;
         for z in a.z..=b.z {
             for y in a.y..=b.y {
                 for x in a.x..=b.x {

@@ -13,21 +13,23 @@ use rayon::prelude::*;
 use super::band::{BRICK, Band};
 use super::field_sampling::BrickValues;
 use super::halo::{Halo, offset};
+use crate::error::Result;
 use crate::mesh::marching_cubes::{case_index, cases};
 
 /// Grows the band until no surface cell has an open face; `sample` gives the field on a band
-/// of new vertices. Returns the number of vertices added.
+/// of new vertices, told how many bricks the band will have at most with them (to check the
+/// memory limit as the band grows). Returns the number of vertices added.
 pub fn close_band(
     band: &mut Band,
     values: &mut BrickValues,
-    mut sample: impl FnMut(&Band) -> BrickValues,
-) -> usize {
+    mut sample: impl FnMut(&Band, usize) -> Result<BrickValues>,
+) -> Result<usize> {
     let mut added = 0;
     let mut scan = band.bricks.clone();
     loop {
         let missing = missing_vertices(band, values, &scan);
         if missing.is_empty() {
-            return added;
+            return Ok(added);
         }
         added += missing.len();
         let grown = Band::from_vertices(&missing, band.cell);
@@ -37,7 +39,7 @@ pub fn close_band(
             .iter()
             .flat_map(|&b| (0..27).map(move |n| b + IVec3::new(n % 3, n / 3 % 3, n / 9) - 1))
             .collect();
-        let grown_values = sample(&grown);
+        let grown_values = sample(&grown, band.bricks.len() + grown.bricks.len())?;
         band.merge(values, grown, grown_values);
         scan.sort_unstable_by_key(|b| (b.z, b.y, b.x));
         scan.dedup();

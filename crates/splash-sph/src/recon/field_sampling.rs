@@ -6,6 +6,8 @@ use glam::{IVec3, Vec3};
 use rayon::prelude::*;
 
 use super::band::{BRICK, BRICK_VERTICES, Band, local_index};
+use super::budget;
+use crate::error::Result;
 use crate::field::ScalarField;
 use crate::neighbours::handler_array::HandlerArray;
 use crate::neighbours::neighbourhood::Neighbourhood;
@@ -17,7 +19,10 @@ pub fn sample_field<F: ScalarField + ?Sized>(
     band: &Band,
     handlers: &HandlerArray,
     field: &F,
-) -> BrickValues {
+) -> Result<BrickValues> {
+    let mut out = budget::try_vec(band.bricks.len(), || {
+        format!("the field values of {} bricks", band.bricks.len())
+    })?;
     let cell = band.cell;
     let reach = field.support();
     let own_reach = field.reach_channel();
@@ -68,7 +73,8 @@ pub fn sample_field<F: ScalarField + ?Sized>(
                 values
             },
         )
-        .collect()
+        .collect_into_vec(&mut out);
+    Ok(out)
 }
 
 /// Lowest corners of the cubes of side `step` tiling the cube of side `side` at `lo`.

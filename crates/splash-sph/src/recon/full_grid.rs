@@ -7,8 +7,8 @@ use crate::config::{Engine, Params};
 use crate::error::Result;
 use glam::{IVec3, Vec3};
 
-use super::band::{BRICK_VERTICES, Band, brick_of};
-use crate::bytes::human;
+use super::band::{Band, brick_of};
+use super::budget::{self, PER_BRICK, PER_PARTICLE, mul};
 
 /// The vertices of the particles' bounding box widened by the field's support.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -27,62 +27,66 @@ impl Grid {
     /// Vertices per axis (the paper's "grid res.": 243 × 204 × 243 at r becomes
     /// 485 × 409 × 486 at r/2, i.e. n → 2n − 1).
     pub fn resolution(&self) -> [u64; 3] {
-        (self.hi - self.lo + 1).to_array().map(|n| n.max(0) as u64)
+        (self.hi.as_i64vec3() - self.lo.as_i64vec3() + 1)
+            .to_array()
+            .map(|n| n.max(0) as u64)
     }
 
+    /// Vertices of the grid, saturating at u64::MAX.
     pub fn vertices(&self) -> u64 {
-        self.resolution().iter().product()
+        self.resolution()
+            .iter()
+            .fold(1, |a, &n| a.saturating_mul(n))
     }
 
-    /// Bricks of 8³ vertices covering the grid, as [`Band::full`] allocates them.
+    /// Bricks of 8³ vertices covering the grid, as [`Band::full`] allocates them (saturating).
     pub fn bricks(&self) -> u64 {
-        let n = brick_of(self.hi) - brick_of(self.lo) + 1;
-        n.to_array().iter().map(|&k| k.max(0) as u64).product()
+        let n = brick_of(self.hi).as_i64vec3() - brick_of(self.lo).as_i64vec3() + 1;
+        n.to_array()
+            .iter()
+            .fold(1u64, |a, &k| a.saturating_mul(k.max(0) as u64))
     }
 }
 
-/// Heap bytes per brick of a full band, besides its values: mask, coordinates, index entry
-/// and the triangulation's per-brick edge table (measured, rounded up).
-const BRICK_OVERHEAD: u64 = 64 + 12 + 40 + 480;
-/// Heap bytes per particle: the handler array (sort pairs, positions, cell starts).
-const PER_PARTICLE: u64 = 48;
-
-/// Peak heap an engine needs on `grid`, in bytes, without the mesh (which follows the surface
-/// and is not known beforehand: on fixtures/frame_0040 at r/2 the full gather's measured peak
-/// is 1.45× this figure, the scatter's 0.98×, its sums dominating); None for the narrow band
-/// and the slices engine, whose memory follows the surface.
+/// Peak heap an engine needs on `grid`, in bytes, with the mesh estimated from the particle
+/// count (see [`budget`]); None for the narrow band and the slices engine, whose memory
+/// follows the surface and is estimated as they find it. The full gather holds the handler
+/// array, the values of every brick and the mesh; the scatter its per-vertex sums with the
+/// values, then the values with the mesh and the normals' handler array.
 pub fn needed_bytes(params: &Params, grid: &Grid, particles: usize) -> Result<Option<u64>> {
-    let band = grid.bricks() * (BRICK_VERTICES as u64 * 4 + BRICK_OVERHEAD);
+    let band = mul(grid.bricks(), PER_BRICK);
+    let handlers = mul(particles as u64, PER_PARTICLE);
+    let mesh = budget::mesh_bytes(budget::mesh_vertices(
+        params,
+        budget::surface_guess(particles),
+    ));
     Ok(match params.engine {
         Engine::NarrowBand | Engine::Slices => None,
-        Engine::FullGather => Some(band + particles as u64 * PER_PARTICLE),
-        // One set of the field's sums per vertex, then the values per brick.
+        Engine::FullGather => Some(band.saturating_add(handlers).saturating_add(mesh)),
         Engine::Scatter => {
             let sums = params.scattering()?.sums_per_vertex() * size_of::<f32>();
-            Some(band + grid.vertices() * sums as u64)
+            let scatter = mul(grid.vertices(), sums as u64);
+            let triangulation = handlers.saturating_add(mesh);
+            Some(band.saturating_add(scatter.max(triangulation)))
         }
     })
 }
 
-/// Refuses a full-grid engine whose grid needs more than the memory limit.
-pub fn check(params: &Params, grid: &Grid, particles: usize) -> Result<()> {
-    let (engine, limit) = (params.engine, params.max_memory);
+/// Refuses a full-grid engine whose grid needs more than the memory limit; returns the
+/// estimate (None for the other engines).
+pub fn check(params: &Params, grid: &Grid, particles: usize) -> Result<Option<u64>> {
     let Some(need) = needed_bytes(params, grid, particles)? else {
-        return Ok(());
+        return Ok(None);
     };
-    if need > limit {
-        let [x, y, z] = grid.resolution();
-        bail_limit!(
-            "the {} engine would need about {} for its full grid of {x} × {y} × {z} = {} vertices, \
-             above the limit of {} (--max-memory); use the narrow-band engine, a larger cell, or \
-             raise --max-memory",
-            engine.name(),
-            human(need),
-            grid.vertices(),
-            human(limit)
-        );
-    }
-    Ok(())
+    let [x, y, z] = grid.resolution();
+    budget::check(params, need, || {
+        format!(
+            "its full grid of {x} × {y} × {z} = {} vertices (the narrow-band engine needs only \
+             the surface's)",
+            grid.vertices()
+        )
+    })
+    .map(Some)
 }
 
 /// Every vertex of the particles' bounding box widened by the field's support.

@@ -4,6 +4,7 @@
 
 pub(crate) mod band;
 pub(crate) mod band_closure;
+pub(crate) mod budget;
 pub(crate) mod field_sampling;
 pub(crate) mod full_grid;
 pub(crate) mod halo;
@@ -67,7 +68,8 @@ pub(crate) fn reconstruct(
         }
         engine @ (Engine::FullGather | Engine::Scatter) => {
             let grid = grid?;
-            full_grid::check(params, &grid, particles.len())?;
+            stages.stats.planned_bytes =
+                full_grid::check(params, &grid, particles.len())?.unwrap_or(0);
             if engine == Engine::Scatter {
                 scatter::reconstruct(particles, params, &grid, stages)
             } else {

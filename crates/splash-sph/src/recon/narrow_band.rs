@@ -5,8 +5,9 @@
 use glam::Vec3;
 
 use super::Reconstruction;
-use super::band::Band;
+use super::band::{BRICK_VERTICES, Band};
 use super::band_closure::close_band;
+use super::budget::{self, PER_BRICK, mul};
 use super::field_sampling::sample_field;
 use super::full_grid;
 use super::prepared::{finish, prepare, triangles_and_normals};
@@ -29,28 +30,79 @@ pub(crate) fn gather(
         support: field.support(),
         ..params.clone()
     };
+    let held = prepared.heap_bytes() as u64;
+    // The mesh is estimated from the surface particles; the full gather has none, and its
+    // estimate was checked on the grid before it started.
+    let mut surface_count = None;
     let mut band = if params.engine == Engine::NarrowBand {
         let surface = stages.run(Stage::SurfaceParticles, || {
             surface_particles(&prepared.handlers, &SurfaceCriteria::of(params))
         });
         stages.stats.surface_particles = surface.len();
+        surface_count = Some(surface.len() as u64);
+        let n = surface.len();
         stages.run(Stage::Band, || {
-            Band::around(&surface, params.cell, params.band_half_width)
+            Band::around_within(&surface, params.cell, params.band_half_width, |pairs| {
+                // The pairs, twice while gathered, beside the particles' boxes.
+                let need = held
+                    .saturating_add(mul(pairs, 32))
+                    .saturating_add(mul(n as u64, 36));
+                budget::check(params, need, || {
+                    format!(
+                        "the band around {n} surface particles ({pairs} pairs of a brick of \
+                         8³ cells and a particle reaching it)"
+                    )
+                })
+                .map(drop)
+            })
         })?
     } else {
         stages.run(Stage::Band, || full_grid::band(particles, params))?
     };
-    let mut values = stages.run(Stage::ScalarField, || sample_field(&band, samples, field));
+    let surface = surface_count.unwrap_or_else(|| budget::surface_guess(particles.len()));
+    let mesh = budget::mesh_bytes(budget::mesh_vertices(params, surface));
+    // The band's bricks, their values and the mesh, before the values are sampled.
+    let need_for = |bricks: usize| {
+        held.saturating_add(mul(bricks as u64, PER_BRICK))
+            .saturating_add(mesh)
+    };
+    let bricks_what = |bricks: usize| {
+        move || {
+            format!(
+                "the field values of a band of {bricks} bricks of 8³ vertices and a mesh of \
+                 about {} vertices",
+                budget::mesh_vertices(params, surface)
+            )
+        }
+    };
+    let planned = budget::check(
+        params,
+        need_for(band.bricks.len()),
+        bricks_what(band.bricks.len()),
+    )?;
+    if params.engine == Engine::NarrowBand {
+        stages.stats.planned_bytes = planned;
+    }
+    let mut values = stages.run(Stage::ScalarField, || sample_field(&band, samples, field))?;
     stages.stats.closure_vertices = stages.run(Stage::Band, || {
-        close_band(&mut band, &mut values, |grown| {
+        close_band(&mut band, &mut values, |grown, bricks| {
+            budget::check(params, need_for(bricks), bricks_what(bricks))?;
             sample_field(grown, samples, field)
         })
-    });
+    })?;
+    let held = held + (band.heap_bytes() + values.capacity() * BRICK_VERTICES * 4) as u64;
     let triangulation = triangles_and_normals(
         &mut stages,
         params,
         field,
-        || triangulate(&band, &values),
+        || {
+            triangulate(&band, &values, |mesh| {
+                budget::check(params, held.saturating_add(mesh), || {
+                    "the mesh of the band's surface".into()
+                })
+                .map(drop)
+            })
+        },
         || Ok(samples),
     )?;
     Ok(finish(

@@ -8,6 +8,7 @@ use glam::Vec3;
 
 use super::Reconstruction;
 use super::band::{BRICK_VERTICES, Band};
+use super::budget::{self, PER_PARTICLE, mul};
 use super::field_sampling::BrickValues;
 use super::normals::set_normals;
 use super::triangulation::Triangulation;
@@ -45,6 +46,10 @@ pub(super) fn prepare(
     stages: &mut Stages<'_>,
 ) -> Result<Prepared> {
     let field = Arc::clone(&params.field);
+    let n = particles.len();
+    budget::check(params, mul(n as u64, PER_PARTICLE), || {
+        format!("the handler array of {n} particles")
+    })?;
     // The handler array comes first here, as the colour field needs the neighbours too.
     let mut handlers = stages.run(Stage::HandlerArray, || {
         HandlerArray::new(particles, lookup_cell(params))
@@ -75,11 +80,11 @@ pub(super) fn triangles_and_normals<H: Borrow<HandlerArray>>(
     stages: &mut Stages<'_>,
     params: &Params,
     field: &dyn ScalarField,
-    triangles: impl FnOnce() -> Triangulation,
+    triangles: impl FnOnce() -> Result<Triangulation>,
     handlers: impl FnOnce() -> Result<H>,
 ) -> Result<Triangulation> {
     stages.run(Stage::Triangulation, || {
-        let mut t = triangles();
+        let mut t = triangles()?;
         let (mesh, bricks) = (&mut t.mesh, &t.brick_vertices);
         set_normals(params.normals, mesh, bricks, params.cell, handlers, field)?;
         Ok(t)

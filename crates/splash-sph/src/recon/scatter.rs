@@ -11,6 +11,7 @@ use glam::{IVec3, Vec3};
 
 use super::Reconstruction;
 use super::band::{BRICK, BRICK_VERTICES, Band, local_index};
+use super::budget;
 use super::field_sampling::BrickValues;
 use super::full_grid::{self, Grid};
 use super::prepared::{finish, triangles_and_normals};
@@ -40,7 +41,15 @@ pub fn reconstruct(
         &mut stages,
         params,
         field,
-        || triangulate(&band, &values),
+        || {
+            triangulate(&band, &values, |mesh| {
+                let held = (band.heap_bytes() + values.capacity() * BRICK_VERTICES * 4) as u64;
+                budget::check(params, held.saturating_add(mesh), || {
+                    "the mesh of the full grid's surface".into()
+                })
+                .map(drop)
+            })
+        },
         || HandlerArray::new(particles, field.support() / 2.0),
     )?;
     Ok(finish(stages.stats, &band, &values, 0, triangulation))
@@ -107,13 +116,9 @@ pub fn scatter_field(
             }
         }
     }
-    let mut values: BrickValues = Vec::new();
-    if values.try_reserve_exact(band.bricks.len()).is_err() {
-        bail_limit!(
-            "cannot allocate the field values of {} bricks",
-            band.bricks.len()
-        );
-    }
+    let mut values: BrickValues = budget::try_vec(band.bricks.len(), || {
+        format!("the field values of {} bricks", band.bricks.len())
+    })?;
     for (&brick, mask) in band.bricks.iter().zip(&band.masks) {
         let mut v = [f32::NAN; BRICK_VERTICES];
         let base = brick * BRICK;

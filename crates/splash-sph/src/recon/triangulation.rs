@@ -13,8 +13,10 @@ use glam::{IVec3, Vec3};
 use rayon::prelude::*;
 
 use super::band::{BRICK, Band, brick_of, local_index};
+use super::budget;
 use super::field_sampling::{BrickValues, vertex_position};
 use super::halo::{Halo, neighbour_slot, offset};
+use crate::error::{Error, Result};
 use crate::mesh::TriMesh;
 use crate::mesh::marching_cubes::{
     case_index, cases, crossing_normal, edge_axis, edge_corners, edge_crossing,
@@ -48,7 +50,17 @@ pub struct Triangulation {
     pub surface_cells: usize,
 }
 
-pub fn triangulate(band: &Band, values: &BrickValues) -> Triangulation {
+/// Bytes the triangulation holds per brick besides its vertices: the edge table.
+pub const PER_BRICK_EDGES: u64 = size_of::<BrickEdges>() as u64;
+
+/// Triangulates the band; `budget` is given the mesh's bytes (the per-brick parts and the
+/// mesh they are copied into, [`mesh_bytes`]) once its vertices and triangles are counted,
+/// before the mesh is allocated.
+pub fn triangulate(
+    band: &Band,
+    values: &BrickValues,
+    budget: impl FnOnce(u64) -> Result<()>,
+) -> Result<Triangulation> {
     let cell = band.cell;
     let mut edges: Vec<BrickEdges> = band
         .bricks
@@ -62,7 +74,16 @@ pub fn triangulate(band: &Band, values: &BrickValues) -> Triangulation {
     let mut brick_vertices = Vec::with_capacity(edges.len());
     for e in &mut edges {
         e.first = next;
-        next += e.positions.len() as u32;
+        next = u32::try_from(e.positions.len())
+            .ok()
+            .and_then(|n| next.checked_add(n))
+            .ok_or_else(|| {
+                Error::limit(format!(
+                    "the mesh would have more than {} vertices, the most its indices can \
+                     number; use a larger cell",
+                    u32::MAX
+                ))
+            })?;
         if !e.positions.is_empty() {
             brick_vertices.push(e.first as usize..next as usize);
         }
@@ -76,10 +97,17 @@ pub fn triangulate(band: &Band, values: &BrickValues) -> Triangulation {
         })
         .collect();
     let surface_cells = per_brick.iter().map(|(_, n)| n).sum();
+    let triangles: usize = per_brick.iter().map(|(t, _)| t.len()).sum();
+    budget(mesh_bytes(
+        next.into(),
+        triangles as u64,
+        edges.len() as u64,
+    ))?;
+    let what = || format!("a mesh of {next} vertices and {triangles} triangles");
     let mut mesh = TriMesh {
-        vertices: Vec::with_capacity(next as usize),
-        normals: Vec::with_capacity(next as usize),
-        triangles: Vec::with_capacity(per_brick.iter().map(|(t, _)| t.len()).sum()),
+        vertices: budget::try_vec(next as usize, what)?,
+        normals: budget::try_vec(next as usize, what)?,
+        triangles: budget::try_vec(triangles, what)?,
     };
     for e in &edges {
         mesh.vertices.extend_from_slice(&e.positions);
@@ -88,11 +116,23 @@ pub fn triangulate(band: &Band, values: &BrickValues) -> Triangulation {
     for (t, _) in &per_brick {
         mesh.triangles.extend_from_slice(t);
     }
-    Triangulation {
+    Ok(Triangulation {
         mesh,
         brick_vertices,
         surface_cells,
-    }
+    })
+}
+
+/// Peak heap of the triangulation of a mesh of `vertices` and `triangles` over `bricks`:
+/// per brick its edge table, its vertices' positions and normals and its triangles, then the
+/// mesh they are copied into, then the field normals' gradients (12 bytes a vertex).
+pub fn mesh_bytes(vertices: u64, triangles: u64, bricks: u64) -> u64 {
+    let per_vertex = 2 * 2 * size_of::<Vec3>() as u64 + size_of::<Vec3>() as u64;
+    let per_triangle = 2 * size_of::<[u32; 3]>() as u64;
+    vertices
+        .saturating_mul(per_vertex)
+        .saturating_add(triangles.saturating_mul(per_triangle))
+        .saturating_add(bricks.saturating_mul(PER_BRICK_EDGES))
 }
 
 /// Vertices on the sign-changing edges leaving this brick's vertices in +x, +y, +z, where at

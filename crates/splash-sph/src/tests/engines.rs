@@ -75,8 +75,32 @@ fn full_grid_engines_refuse_above_the_memory_limit() {
         };
         assert!(e.contains("--max-memory") && e.contains("MB"), "{e}");
     }
-    // The narrow band's memory follows the surface: no grid-sized plan to refuse.
-    assert!(reconstruct(&ball, &p, Engine::NarrowBand).is_ok());
+    // The narrow band's memory follows the surface: it fits where the full grid does not,
+    // and is refused, as an error, below its own estimate.
+    let roomy = Params {
+        max_memory: 4 << 20,
+        ..p.clone()
+    };
+    assert!(reconstruct(&ball, &roomy, Engine::NarrowBand).is_ok());
+    for engine in [Engine::FullGather, Engine::Scatter] {
+        assert!(
+            reconstruct(
+                &ball,
+                &Params {
+                    max_memory: 1 << 20,
+                    ..p.clone()
+                },
+                engine
+            )
+            .is_err()
+        );
+    }
+    for engine in [Engine::NarrowBand, Engine::Slices] {
+        match reconstruct(&ball, &p, engine) {
+            Err(crate::Error::Limit(e)) => assert!(e.contains("--max-memory"), "{e}"),
+            other => panic!("{engine:?} under 100 KiB: {:?}", other.map(|_| ())),
+        }
+    }
 }
 
 #[test]

@@ -32,7 +32,7 @@ fn gathered_ssp07_matches_brute_force() {
     let cell = 0.7 * r;
     let handlers = HandlerArray::new(&ps, 2.0 * r).unwrap();
     let band = Band::full(Vec3::splat(-7.0 * r), Vec3::splat(7.0 * r), cell, 4.0 * r).unwrap();
-    let values = sample_field(&band, &handlers, &field);
+    let values = sample_field(&band, &handlers, &field).unwrap();
     let mut all = Neighbourhood::default();
     let (mut checked, mut inside, mut near_surface) = (0, 0, 0);
     for (b, brick) in band.bricks.iter().enumerate() {
@@ -84,7 +84,7 @@ fn gathered_anisotropic_matches_brute_force() {
     let (field, handlers) = (fitted.field.as_ref(), &fitted.handlers);
     let cell = 0.7 * r;
     let band = Band::full(Vec3::splat(-9.0 * r), Vec3::splat(9.0 * r), cell, 0.0).unwrap();
-    let values = sample_field(&band, handlers, field);
+    let values = sample_field(&band, handlers, field).unwrap();
     // Every particle, with its channels.
     let mut all = Neighbourhood::default();
     all.gather_box(handlers, Vec3::splat(-0.1), Vec3::splat(0.1), 0.0, None);

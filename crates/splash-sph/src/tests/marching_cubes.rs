@@ -42,7 +42,7 @@ fn random_field(n: i32, seed: u64) -> (Band, Vec<[f32; BRICK_VERTICES]>) {
 fn random_fields_give_closed_oriented_surfaces() {
     for (n, seed) in [(5, 1), (10, 2), (14, 3), (20, 4), (9, 5)] {
         let (band, values) = random_field(n, seed);
-        let t = triangulate(&band, &values);
+        let t = triangulate(&band, &values, |_| Ok(())).unwrap();
         let topo = topology(&t.mesh);
         assert!(topo.triangles > 100, "n {n}: {topo:?}");
         assert!(topo.is_closed_manifold(), "n {n}: {topo:?}");

@@ -11,6 +11,7 @@ use glam::{IVec3, Vec3};
 use rayon::prelude::*;
 use rustc_hash::FxHashSet;
 
+use crate::error::Result;
 use crate::neighbours::handler_array::HandlerArray;
 use crate::neighbours::neighbourhood;
 
@@ -30,6 +31,59 @@ impl Block {
     pub fn heap_bytes(&self) -> usize {
         self.particles.capacity() * size_of::<u32>()
     }
+
+    /// An upper estimate of the heap its marching holds at its peak, with `channels`
+    /// per-particle channels, a reach of `reach` cubes and the mesh aside: the lookup cache
+    /// (its column arrays, and an entry per particle and column within reach, at most the
+    /// disk of the reach: particles of the margin have fewer), the block's copies of its particles, and four slice caches (the
+    /// paper's two, with their neighbours; 3 at most on the fixtures).
+    pub fn planned_bytes(&self, channels: usize, reach: f32) -> u64 {
+        block_bytes(
+            self.particles.len() as u64,
+            self.size + 2 * self.margin,
+            channels,
+            reach,
+        )
+    }
+}
+
+/// [`Block::planned_bytes`] of a block of `cubes` per side with its margins, holding
+/// `particles`.
+pub fn block_bytes(particles: u64, cubes: i32, channels: usize, reach: f32) -> u64 {
+    let side = (cubes.max(0) + 1) as u64;
+    let columns = side * side;
+    let disk = (std::f64::consts::PI * f64::from(reach).powi(2)).ceil() as u64;
+    let entries = particles
+        .saturating_mul(disk.min(columns))
+        .saturating_mul(8);
+    let copies = particles.saturating_mul(12 + 24 + 4 + 4 * channels as u64);
+    let slices = 4 * columns * 4 + 3 * columns * 4;
+    entries.saturating_add(copies).saturating_add(slices)
+}
+
+/// Cubes of margin on each side of a block, for a reach of `reach` world units.
+pub fn margin(reach: f32, cell: f32) -> i32 {
+    (reach / cell).ceil() as i32 + 1
+}
+
+/// The most particles found in a block's box (its cubes, margins and reach) centred on one of
+/// 64 particles spread over the handler order: an estimate of the fullest block, made before
+/// the blocks are built (which takes memory of its own).
+pub fn fullest_block_guess(handlers: &HandlerArray, reach: f32, cell: f32, size: i32) -> u64 {
+    let n = handlers.positions.len();
+    let half = (size + 2 * margin(reach, cell)) as f32 * cell / 2.0 + reach;
+    (0..n)
+        .step_by((n / 64).max(1))
+        .collect::<Vec<_>>()
+        .par_iter()
+        .map(|&i| {
+            let p = handlers.positions[i];
+            let mut count = 0u64;
+            handlers.for_each_in_box(p - half, p + half, |r| count += r.len() as u64);
+            count
+        })
+        .max()
+        .unwrap_or(0)
 }
 
 /// The blocks whose cubes some particle reaches, in (z, y, x) order, with their particles. `reach`
@@ -41,11 +95,25 @@ pub fn subdivide(
     own_reach: Option<usize>,
     cell: f32,
     size: i32,
-) -> Vec<Block> {
+    budget: impl FnOnce(u64) -> Result<()>,
+) -> Result<Vec<Block>> {
     // A margin covering the reach, plus one cube so that no particle's nearest corner lies on
     // the forced boundary.
-    let margin = (reach / cell).ceil() as i32 + 1;
+    let margin = margin(reach, cell);
     let cube = |p: Vec3| (p / cell).floor().as_ivec3();
+    // The (block, particle) pairs of the key sets, before they are built.
+    let pairs = handlers
+        .positions
+        .par_iter()
+        .map(|&p| {
+            let (a, b) = (cube(p - reach), cube(p + reach));
+            let n = b.div_euclid(IVec3::splat(size)) - a.div_euclid(IVec3::splat(size)) + 1;
+            n.to_array()
+                .iter()
+                .fold(1u64, |a, &k| a.saturating_mul(k.max(0) as u64))
+        })
+        .reduce(|| 0, u64::saturating_add);
+    budget(pairs)?;
     let mut keys: Vec<IVec3> = handlers
         .positions
         .par_iter()
@@ -71,7 +139,8 @@ pub fn subdivide(
         .into_iter()
         .collect();
     keys.sort_unstable_by_key(|k| (k.z, k.y, k.x));
-    keys.into_par_iter()
+    Ok(keys
+        .into_par_iter()
         .map(|key| {
             let lo = key * size;
             let box_lo = (lo - margin).as_vec3() * cell;
@@ -98,5 +167,5 @@ pub fn subdivide(
             }
         })
         .filter(|b| !b.particles.is_empty())
-        .collect()
+        .collect())
 }

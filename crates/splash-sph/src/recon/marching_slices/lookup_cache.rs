@@ -10,6 +10,9 @@
 
 use glam::{DVec3, IVec3};
 
+use crate::error::{Error, Result};
+use crate::recon::budget;
+
 /// One particle's influence on one column.
 #[derive(Debug, Clone, Copy)]
 struct Entry {
@@ -38,26 +41,38 @@ impl LookupCache {
     /// 0..=`cubes` on each axis (`particles` = world position / cube size − the block's
     /// origin), each reaching `reach(i)` cubes. Columns and slices on the block's boundary
     /// get no entries, which forces the field there to its empty (outside) value (Sec. 3).
-    pub fn build(particles: &[DVec3], cubes: i32, reach: impl Fn(usize) -> f64) -> LookupCache {
+    pub fn build(
+        particles: &[DVec3],
+        cubes: i32,
+        reach: impl Fn(usize) -> f64,
+    ) -> Result<LookupCache> {
         let side = cubes as usize + 1;
         let max_reach = (0..particles.len()).map(&reach).fold(0.0, f64::max);
-        let mut counts = vec![0u32; side * side + 1];
+        let what = || format!("the lookup cache of a block of {side}² columns");
+        let mut counts = budget::try_filled(side * side + 1, 0u32, what)?;
         for_each_entry(particles, cubes, &reach, |column, _| counts[column] += 1);
-        let mut start = Vec::with_capacity(counts.len());
+        let mut start = budget::try_vec(counts.len(), what)?;
         let mut total = 0u32;
         for &c in &counts {
             start.push(total);
-            total += c;
+            total = total.checked_add(c).ok_or_else(|| {
+                Error::limit(format!(
+                    "a block of the slices engine would hold more than {} particle entries; \
+                     use a larger cell or smaller blocks (--block)",
+                    u32::MAX
+                ))
+            })?;
         }
+        drop(counts);
         let mut fill = start.clone();
-        let mut entries = vec![
-            Entry {
-                particle: 0,
-                min_z: 0,
-                max_z: 0
-            };
-            total as usize
-        ];
+        let entry = Entry {
+            particle: 0,
+            min_z: 0,
+            max_z: 0,
+        };
+        let mut entries = budget::try_filled(total as usize, entry, || {
+            format!("the lookup cache's {total} particle entries")
+        })?;
         for_each_entry(particles, cubes, &reach, |column, entry| {
             entries[fill[column] as usize] = entry;
             fill[column] += 1;
@@ -70,14 +85,14 @@ impl LookupCache {
             }
             slab_start.push(i as u32);
         }
-        LookupCache {
+        Ok(LookupCache {
             side,
             reach_slabs: max_reach.ceil() as i32,
             cursor: start.clone(),
             start,
             entries,
             slab_start,
-        }
+        })
     }
 
     /// The particles near corner `c`'s height in its column, in z order, each with whether it
@@ -188,7 +203,7 @@ mod tests {
             .collect();
         ps.sort_by(|a, b| a.z.total_cmp(&b.z));
         let reach = 3.3;
-        let mut cache = LookupCache::build(&ps, cubes, |_| reach);
+        let mut cache = LookupCache::build(&ps, cubes, |_| reach).unwrap();
         let mut found = Vec::new();
         // Up and down each column, as the marching does, to move the cursors both ways.
         for pass in [false, true] {

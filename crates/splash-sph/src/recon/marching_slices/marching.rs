@@ -11,6 +11,7 @@ use serde::Serialize;
 use super::blocks::Block;
 use super::lookup_cache::LookupCache;
 use super::slice_cache::{Corner, DONE_ABOVE, DONE_BELOW, NO_VERTEX, SliceCache};
+use crate::error::Result;
 use crate::field::ScalarField;
 use crate::mesh::marching_cubes::{
     case_index, cases, corner_offset, crossing_normal, edge_axis, edge_corners, edge_crossing,
@@ -49,6 +50,14 @@ pub struct BlockMesh {
     /// Interpolated corner gradients, with `corner_gradients`; else empty.
     pub normals: Vec<Vec3>,
     pub triangles: Vec<[u32; 3]>,
+}
+
+impl BlockMesh {
+    pub fn heap_bytes(&self) -> usize {
+        self.edges.capacity() * size_of::<(IVec3, u8)>()
+            + (self.positions.capacity() + self.normals.capacity()) * size_of::<Vec3>()
+            + self.triangles.capacity() * size_of::<[u32; 3]>()
+    }
 }
 
 /// The figures of one block (Fig. 7 of the paper: render and cache memory).
@@ -94,7 +103,10 @@ struct Marcher<'a, F: ScalarField + ?Sized> {
 }
 
 /// Marches one block; the block's memory is freed when this returns.
-pub fn march<F: ScalarField + ?Sized>(set: &Setting<F>, block: &Block) -> (BlockMesh, BlockStats) {
+pub fn march<F: ScalarField + ?Sized>(
+    set: &Setting<F>,
+    block: &Block,
+) -> Result<(BlockMesh, BlockStats)> {
     let n = block.size + 2 * block.margin;
     let origin = block.lo - block.margin;
     let handlers = set.handlers;
@@ -117,7 +129,7 @@ pub fn march<F: ScalarField + ?Sized>(set: &Setting<F>, block: &Block) -> (Block
     let support = set.field.support();
     let cache = {
         let particle_reach = reach(&channels, support, set.field.reach_channel());
-        LookupCache::build(&local, n, |i| f64::from(particle_reach(i)) / cell)
+        LookupCache::build(&local, n, |i| f64::from(particle_reach(i)) / cell)?
     };
     let mut m = Marcher {
         set,
@@ -154,7 +166,7 @@ pub fn march<F: ScalarField + ?Sized>(set: &Setting<F>, block: &Block) -> (Block
     m.run();
     m.account();
     set.in_flight.now.fetch_sub(m.counted, Ordering::Relaxed);
-    (m.mesh, m.stats)
+    Ok((m.mesh, m.stats))
 }
 
 impl<F: ScalarField + ?Sized> Marcher<'_, F> {

@@ -18,7 +18,9 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use super::Reconstruction;
+use super::budget::{self, mul};
 use super::prepared::{prepare, triangles_and_normals};
+use crate::bytes::human;
 use crate::config::{Normals, Params};
 use crate::report::{SlicesFigures, Stage, Stages};
 use marching::{BlockStats, InFlight, Setting, march};
@@ -44,6 +46,12 @@ pub struct Checks {
     pub visits: bool,
 }
 
+/// Heap bytes per mesh vertex of the blocks' meshes and their weld: per block its edge (16),
+/// position (12) and two triangles (24), then the weld's order (16) and remap (4), the mesh
+/// (24 + 24 for two triangles) and the field normals' gradients (12); vertices on block
+/// faces count twice, a few percent.
+const PER_SLICES_MESH_VERTEX: u64 = 16 + 12 + 24 + 16 + 4 + 48 + 12;
+
 pub fn reconstruct(
     particles: &[Vec3],
     params: &Params,
@@ -53,6 +61,22 @@ pub fn reconstruct(
     let prepared = prepare(particles, params, &mut stages)?;
     let (field, samples) = prepared.sampling();
     let cell = params.cell;
+    let held = prepared.heap_bytes() as u64;
+    let n = particles.len();
+    let (reach, channels) = (field.support() / cell, samples.channels.len());
+    let size = params.block as i32;
+    // The fullest block, guessed before the blocks are built: a cell far smaller than the
+    // reach gives blocks of millions of lookup entries per particle.
+    let fullest = blocks::fullest_block_guess(samples, field.support(), cell, size);
+    let cubes = size + 2 * blocks::margin(field.support(), cell);
+    let block = blocks::block_bytes(fullest, cubes, channels, reach);
+    budget::check(params, held.saturating_add(block), || {
+        format!(
+            "a block of {cubes}³ cubes with its margins holding about {fullest} particles, \
+             each reaching {:.0} cubes",
+            reach.ceil()
+        )
+    })?;
     let blocks = stages.run(Stage::Band, || {
         blocks::subdivide(
             samples,
@@ -60,8 +84,47 @@ pub fn reconstruct(
             field.reach_channel(),
             cell,
             params.block as i32,
+            |pairs| {
+                // Key sets and the blocks' particle lists: about 24 bytes a pair.
+                let need = held.saturating_add(mul(pairs, 24));
+                budget::check(params, need, || {
+                    format!(
+                        "the blocks of {n} particles ({pairs} pairs of a block of {}³ cubes and \
+                         a particle reaching it)",
+                        params.block
+                    )
+                })
+                .map(drop)
+            },
         )
-    });
+    })?;
+    // The blocks in flight at once (the largest, one per thread), their particle lists, and
+    // the mesh: the blocks' parts, then the welded mesh and its sort.
+    let mut per_block: Vec<u64> = blocks
+        .iter()
+        .map(|b| b.planned_bytes(channels, reach))
+        .collect();
+    per_block.sort_unstable_by(|a, b| b.cmp(a));
+    let in_flight: u64 = per_block
+        .iter()
+        .take(rayon::current_num_threads())
+        .fold(0, |a, &b| a.saturating_add(b));
+    let lists: u64 = blocks.iter().map(|b| b.heap_bytes() as u64).sum();
+    let vertices = budget::mesh_vertices(params, budget::surface_guess(n));
+    let need = held
+        .saturating_add(lists)
+        .saturating_add(in_flight)
+        .saturating_add(mul(vertices, PER_SLICES_MESH_VERTEX));
+    stages.stats.planned_bytes = budget::check(params, need, || {
+        format!(
+            "{} blocks of {}³ cubes (the largest holds {} particles: {} in flight per thread) \
+             and a mesh of about {vertices} vertices",
+            blocks.len(),
+            params.block,
+            blocks.iter().map(|b| b.particles.len()).max().unwrap_or(0),
+            human(per_block.first().copied().unwrap_or(0))
+        )
+    })?;
     let in_flight = InFlight::default();
     let setting = Setting {
         handlers: samples,
@@ -72,9 +135,13 @@ pub fn reconstruct(
         in_flight: &in_flight,
     };
     // Each block samples the field and triangulates its cubes at once: all of it is t_sf.
-    let (meshes, stats): (Vec<_>, Vec<_>) = stages.run(Stage::ScalarField, || {
-        blocks.par_iter().map(|b| march(&setting, b)).unzip()
-    });
+    let marched: Vec<_> = stages.run(Stage::ScalarField, || {
+        blocks
+            .par_iter()
+            .map(|b| march(&setting, b))
+            .collect::<Result<_>>()
+    })?;
+    let (meshes, stats): (Vec<_>, Vec<_>) = marched.into_iter().unzip();
     let blocks_bytes: usize = blocks.iter().map(|b| b.heap_bytes()).sum();
     drop(blocks);
     let surface_cells = stats.iter().map(|b| b.cubes_visited).sum();
@@ -82,7 +149,20 @@ pub fn reconstruct(
         &mut stages,
         params,
         field,
-        || weld::weld(meshes, surface_cells),
+        || {
+            let held = held.saturating_add(
+                meshes
+                    .iter()
+                    .map(|m| m.heap_bytes() as u64)
+                    .fold(0, u64::saturating_add),
+            );
+            weld::weld(meshes, surface_cells, |mesh| {
+                budget::check(params, held.saturating_add(mesh), || {
+                    "the welded mesh of the blocks".into()
+                })
+                .map(drop)
+            })
+        },
         || Ok(samples),
     )?;
     let report = SlicesReport {

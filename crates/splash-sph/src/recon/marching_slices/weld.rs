@@ -10,8 +10,10 @@ use glam::IVec3;
 use rayon::prelude::*;
 
 use super::marching::BlockMesh;
+use crate::error::{Error, Result};
 use crate::mesh::TriMesh;
 use crate::recon::band::{BRICK, brick_of, local_index};
+use crate::recon::budget;
 use crate::recon::triangulation::Triangulation;
 
 /// Sort key of an edge: its brick in (z, y, x) order, then its lower corner in the brick,
@@ -25,19 +27,37 @@ fn key((corner, axis): (IVec3, u8)) -> EdgeKey {
 }
 
 /// The blocks' meshes as one, with the `surface_cells` the blocks visited.
-pub fn weld(blocks: Vec<BlockMesh>, surface_cells: usize) -> Triangulation {
+/// `budget` is given the bytes of the weld and the mesh before they are allocated.
+pub fn weld(
+    blocks: Vec<BlockMesh>,
+    surface_cells: usize,
+    budget: impl FnOnce(u64) -> Result<()>,
+) -> Result<Triangulation> {
+    let vertices: usize = blocks.iter().map(|m| m.positions.len()).sum();
+    let triangles: usize = blocks.iter().map(|m| m.triangles.len()).sum();
+    // Order (16) and remap (4) per block vertex; the mesh's positions and normals (24) and
+    // triangles (12).
+    budget(
+        (vertices as u64)
+            .saturating_mul(44)
+            .saturating_add(triangles as u64 * 12),
+    )?;
+    if u32::try_from(vertices).is_err() {
+        return Err(Error::limit(format!(
+            "the blocks' meshes have {vertices} vertices, more than a mesh's indices can \
+             number; use a larger cell"
+        )));
+    }
     let with_normals = blocks.iter().any(|b| !b.normals.is_empty());
     // (edge key, block, vertex in block), in block order.
-    let mut order: Vec<(EdgeKey, u32, u32)> = blocks
-        .iter()
-        .enumerate()
-        .flat_map(|(b, m)| {
-            m.edges
-                .iter()
-                .enumerate()
-                .map(move |(v, &e)| (key(e), b as u32, v as u32))
-        })
-        .collect();
+    let mut order: Vec<(EdgeKey, u32, u32)> =
+        budget::try_vec(vertices, || format!("welding {vertices} vertices"))?;
+    order.extend(blocks.iter().enumerate().flat_map(|(b, m)| {
+        m.edges
+            .iter()
+            .enumerate()
+            .map(move |(v, &e)| (key(e), b as u32, v as u32))
+    }));
     order.par_sort_unstable();
     let mut first = Vec::with_capacity(blocks.len());
     let mut total = 0usize;
@@ -45,7 +65,7 @@ pub fn weld(blocks: Vec<BlockMesh>, surface_cells: usize) -> Triangulation {
         first.push(total);
         total += b.positions.len();
     }
-    let mut remap = vec![0u32; total];
+    let mut remap = budget::try_filled(total, 0u32, || format!("welding {total} vertices"))?;
     let mut mesh = TriMesh::default();
     let mut brick_vertices: Vec<Range<usize>> = Vec::new();
     let mut last: Option<EdgeKey> = None;
@@ -77,9 +97,9 @@ pub fn weld(blocks: Vec<BlockMesh>, surface_cells: usize) -> Triangulation {
                 .map(move |t| t.map(|v| remap[base + v as usize]))
         })
         .collect();
-    Triangulation {
+    Ok(Triangulation {
         mesh,
         brick_vertices,
         surface_cells,
-    }
+    })
 }
