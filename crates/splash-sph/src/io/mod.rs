@@ -18,7 +18,7 @@
 #[macro_use]
 mod failure;
 
-mod atomic;
+pub(crate) mod atomic;
 mod attribute_columns;
 mod csv;
 mod lines;
