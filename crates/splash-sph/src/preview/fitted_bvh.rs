@@ -163,12 +163,63 @@ struct Ctx<'a> {
     budget: u64,
 }
 
-struct Subtree {
+/// The hierarchy as built, flattened once at the end (merging flat arrays level by level
+/// would copy every list once per level).
+enum Tree {
+    Leaf {
+        bounds: Aabb,
+        /// Own metaballs, then split metaballs (original indices).
+        items: Vec<u32>,
+        own: usize,
+    },
+    Inner {
+        bounds: Aabb,
+        children: Box<(Tree, Tree)>,
+    },
+}
+
+/// Flat arrays of a [`Tree`].
+#[derive(Default)]
+struct Flat {
     nodes: Vec<Node>,
     items: Vec<u32>,
     /// Own metaballs in leaf order (original indices).
     order: Vec<u32>,
-    depth: usize,
+}
+
+impl Flat {
+    fn push(&mut self, tree: Tree) {
+        // Iterative: a degenerate frame may give a deep tree.
+        let mut stack = vec![(tree, None::<usize>)];
+        while let Some((t, parent)) = stack.pop() {
+            let at = self.nodes.len();
+            if let Some(p) = parent {
+                // This is the right child of `p`.
+                self.nodes[p].first = at as u32;
+            }
+            match t {
+                Tree::Leaf { bounds, items, own } => {
+                    self.nodes.push(Node {
+                        bounds,
+                        first: self.items.len() as u32,
+                        count: items.len() as u32,
+                    });
+                    self.order.extend_from_slice(&items[..own]);
+                    self.items.extend_from_slice(&items);
+                }
+                Tree::Inner { bounds, children } => {
+                    self.nodes.push(Node {
+                        bounds,
+                        first: 0,
+                        count: 0,
+                    });
+                    let (l, r) = *children;
+                    stack.push((r, Some(at)));
+                    stack.push((l, None));
+                }
+            }
+        }
+    }
 }
 
 impl FittedBvh {
@@ -221,7 +272,8 @@ impl FittedBvh {
             bounds.grow_sphere(p, reach);
         }
         ctx.charge(own.len())?;
-        let tree = build_node(&ctx, own, Vec::new(), bounds, 0)?;
+        let mut tree = Flat::default();
+        tree.push(build_node(&ctx, own, Vec::new(), bounds)?);
         // Renumber the metaballs in leaf order, so that a leaf's list reads nearby memory.
         let mut new_index = vec![0u32; points.len()];
         for (k, &i) in tree.order.iter().enumerate() {
@@ -344,13 +396,7 @@ impl Split {
     }
 }
 
-fn build_node(
-    ctx: &Ctx,
-    own: Vec<u32>,
-    split: Vec<u32>,
-    bounds: Aabb,
-    depth: usize,
-) -> Result<Subtree> {
+fn build_node(ctx: &Ctx, own: Vec<u32>, split: Vec<u32>, bounds: Aabb) -> Result<Tree> {
     let n = own.len() + split.len();
     let choice = if own.len() <= 1 {
         None
@@ -358,13 +404,13 @@ fn build_node(
         choose_split(ctx, &own, &split, &bounds)
     };
     let Some(s) = choice else {
-        return Ok(leaf(ctx, own, split, &bounds, depth));
+        return Ok(leaf(ctx, own, split, &bounds));
     };
     let (own_l, own_r): (Vec<u32>, Vec<u32>) =
         own.iter().partition(|&&i| s.goes_left(ctx.p(i)[s.axis]));
     if own_l.is_empty() || own_r.is_empty() {
         let own = own_l.into_iter().chain(own_r).collect();
-        return Ok(leaf(ctx, own, split, &bounds, depth));
+        return Ok(leaf(ctx, own, split, &bounds));
     }
     let (left, right) = match ctx.kind {
         BvhKind::Fitted => {
@@ -395,17 +441,19 @@ fn build_node(
     drop(split);
     let (l, r) = if n > PARALLEL {
         join(
-            || build_node(ctx, own_l, lsplit, lbox, depth + 1),
-            || build_node(ctx, own_r, rsplit, rbox, depth + 1),
+            || build_node(ctx, own_l, lsplit, lbox),
+            || build_node(ctx, own_r, rsplit, rbox),
         )
     } else {
         (
-            build_node(ctx, own_l, lsplit, lbox, depth + 1),
-            build_node(ctx, own_r, rsplit, rbox, depth + 1),
+            build_node(ctx, own_l, lsplit, lbox),
+            build_node(ctx, own_r, rsplit, rbox),
         )
     };
-    let (l, r) = (l?, r?);
-    Ok(merge(bounds, l, r))
+    Ok(Tree::Inner {
+        bounds,
+        children: Box::new((l?, r?)),
+    })
 }
 
 /// The split metaballs of a child with box `b`: those of `split` and of the sibling's own
@@ -540,7 +588,7 @@ fn choose_split(ctx: &Ctx, own: &[u32], split: &[u32], bounds: &Aabb) -> Option<
     (cost < leaf_cost || n > MAX_LEAF).then_some(s)
 }
 
-fn leaf(ctx: &Ctx, own: Vec<u32>, mut split: Vec<u32>, bounds: &Aabb, depth: usize) -> Subtree {
+fn leaf(ctx: &Ctx, own: Vec<u32>, mut split: Vec<u32>, bounds: &Aabb) -> Tree {
     let n = own.len() + split.len();
     if ctx.kind == BvhKind::Fitted && n <= DISCARD_MAX && !split.is_empty() {
         // Sec. 5.3.2: a split metaball whose r_max ball misses the box and whose sphere stays
@@ -557,46 +605,14 @@ fn leaf(ctx: &Ctx, own: Vec<u32>, mut split: Vec<u32>, bounds: &Aabb, depth: usi
                     .any(|&q| q != p && (q - p).length_squared() < far)
         });
     }
-    let mut items = own.clone();
+    let own_count = own.len();
+    let mut items = own;
     items.extend_from_slice(&split);
     // The lists stay: only the discarded entries are given back.
     ctx.release(n - items.len());
-    Subtree {
-        nodes: vec![Node {
-            bounds: *bounds,
-            first: 0,
-            count: items.len() as u32,
-        }],
+    Tree::Leaf {
+        bounds: *bounds,
         items,
-        order: own,
-        depth,
-    }
-}
-
-fn merge(bounds: Aabb, l: Subtree, r: Subtree) -> Subtree {
-    let mut nodes = Vec::with_capacity(1 + l.nodes.len() + r.nodes.len());
-    let right_at = 1 + l.nodes.len() as u32;
-    nodes.push(Node {
-        bounds,
-        first: right_at,
-        count: 0,
-    });
-    let shift = |n: &Node, nodes_by: u32, items_by: u32| {
-        let mut n = *n;
-        n.first += if n.count > 0 { items_by } else { nodes_by };
-        n
-    };
-    nodes.extend(l.nodes.iter().map(|n| shift(n, 1, 0)));
-    let items_by = l.items.len() as u32;
-    nodes.extend(r.nodes.iter().map(|n| shift(n, right_at, items_by)));
-    let mut items = l.items;
-    items.extend_from_slice(&r.items);
-    let mut order = l.order;
-    order.extend_from_slice(&r.order);
-    Subtree {
-        nodes,
-        items,
-        order,
-        depth: l.depth.max(r.depth),
+        own: own_count,
     }
 }
