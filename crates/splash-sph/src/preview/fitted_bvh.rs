@@ -526,7 +526,7 @@ fn choose_split(ctx: &Ctx, own: &[u32], split: &[u32], bounds: &Aabb) -> Option<
     let area = bounds.area().max(f32::MIN_POSITIVE);
     let mut best: Option<(f32, Split)> = None;
     for axis in 0..3 {
-        if !(extent[axis] > 0.0) {
+        if extent[axis].is_nan() || extent[axis] <= 0.0 {
             continue;
         }
         let scale = BINS as f32 / extent[axis];
