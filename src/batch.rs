@@ -64,11 +64,16 @@ impl Output {
     }
 
     fn path_for(&self, input: &Path, format: MeshFormat) -> Result<PathBuf> {
+        self.path_with(input, "_surface", format.extension())
+    }
+
+    /// The output of `input` for files of extension `ext`; beside the input its name is
+    /// `{stem}{suffix}.{ext}`.
+    pub fn path_with(&self, input: &Path, suffix: &str, ext: &str) -> Result<PathBuf> {
         let stem = crate::sequence::input_stem(input)
             .ok_or_else(|| anyhow!("{}: no file name", input.display()))?;
-        let ext = format.extension();
         Ok(match self {
-            Output::BesideInput => input.with_file_name(format!("{stem}_surface.{ext}")),
+            Output::BesideInput => input.with_file_name(format!("{stem}{suffix}.{ext}")),
             Output::Directory(dir) => {
                 dir.join(format!("{}.{ext}", padded_stem(&stem, FRAME_DIGITS)))
             }

@@ -13,6 +13,7 @@ mod bench;
 mod bench_cli;
 mod log;
 mod memory;
+mod preview;
 mod report;
 mod sequence;
 
@@ -40,6 +41,8 @@ struct Cli {
 enum Command {
     /// Reconstruct one surface mesh per particle file.
     Recon(Box<Recon>),
+    /// Ray-trace a PNG of each frame's metaball surface, straight from the particles.
+    Preview(Box<preview::PreviewArgs>),
     /// Inspect configurations.
     #[command(subcommand)]
     Config(ConfigCommand),
@@ -277,6 +280,7 @@ fn main() -> ExitCode {
     };
     let result = match cli.command {
         Command::Recon(args) => recon(*args),
+        Command::Preview(args) => preview::preview(*args),
         Command::Bench(args) => bench_cli::bench(args),
         Command::Config(ConfigCommand::Show(args)) => show_config(&args),
     };

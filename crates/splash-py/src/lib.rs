@@ -7,6 +7,7 @@ mod errors;
 mod mesh;
 mod particles;
 mod pools;
+mod preview;
 mod recon;
 mod settings;
 
@@ -76,6 +77,7 @@ fn config_toml<'py>(
 #[pyo3(name = "_native")]
 fn native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(recon::reconstruct, m)?)?;
+    m.add_function(wrap_pyfunction!(preview::preview, m)?)?;
     m.add_function(wrap_pyfunction!(particles::read_particles, m)?)?;
     m.add_function(wrap_pyfunction!(estimate_spacing, m)?)?;
     m.add_function(wrap_pyfunction!(default_config, m)?)?;

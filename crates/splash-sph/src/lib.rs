@@ -40,6 +40,7 @@ pub mod bytes;
 pub mod field;
 pub mod io;
 pub mod mesh;
+pub mod preview;
 mod recon;
 pub mod report;
 

@@ -20,6 +20,7 @@ from ._native import (
     config_toml,
     default_config,
     estimate_spacing,
+    preview,
     read_particles,
     reconstruct,
 )
@@ -30,6 +31,7 @@ __all__ = [
     "config_toml",
     "default_config",
     "estimate_spacing",
+    "preview",
     "read_particles",
     "reconstruct",
 ]

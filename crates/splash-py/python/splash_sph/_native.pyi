@@ -147,6 +147,31 @@ def reconstruct(
     when the config file cannot be read.
     """
 
+def preview(
+    positions: _Array,
+    spacing: Optional[float] = None,
+    *,
+    size: "tuple[int, int]" = (1280, 720),
+    camera: Optional["tuple[float, float, float]"] = None,
+    look_at: Optional["tuple[float, float, float]"] = None,
+    up: Optional["tuple[float, float, float]"] = None,
+    up_axis: str = "y",
+    view: Optional["tuple[float, float, float]"] = None,
+    fov: float = 40.0,
+    background: str = "#eceef2",
+    colour: str = "#3a7bd5",
+    shadows: bool = True,
+    bvh: str = "fitted",
+    threads: Optional[int] = None,
+    config: Union[None, _Path, Mapping[str, Any]] = None,
+) -> "npt.NDArray[np.uint8]":
+    """A ray-traced picture of the metaball surface of ``positions`` (the surface
+    ``reconstruct(..., field="metaball")`` meshes) as an (H, W, 3) uint8 RGB array, as
+    ``splash preview`` renders it: Fitted BVH, Phong shading, a hard shadow. Without
+    ``camera`` the particles' 0.5-99.5 % percentile box is framed automatically. The image
+    does not depend on ``threads``. Raises ValueError for bad settings, cameras or sizes.
+    """
+
 def estimate_spacing(positions: _Array) -> float:
     """The particle spacing r estimated from the particles' number density.
 

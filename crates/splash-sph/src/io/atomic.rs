@@ -15,7 +15,7 @@ static NEXT_TEMPORARY: AtomicU64 = AtomicU64::new(0);
 
 /// Writes `path` through `write` into `.{name}.tmp-{pid}-{n}` next to it, fsyncs and renames it
 /// onto `path`; on any error removes the temporary. Creates missing parent directories.
-pub(super) fn write_file(
+pub(crate) fn write_file(
     path: &Path,
     write: impl FnOnce(&mut File) -> io::Result<()>,
 ) -> crate::Result<()> {

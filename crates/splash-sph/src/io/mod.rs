@@ -30,7 +30,7 @@
 #[macro_use]
 mod failure;
 
-mod atomic;
+pub(crate) mod atomic;
 mod attribute_columns;
 mod bgeo;
 mod csv;

@@ -1,0 +1,618 @@
+//! The Fitted BVH of Gourmel et al. 2010 (Sec. 4–5), and the plain "modified BVH" of their
+//! Sec. 4 (Algorithm 1) to compare against.
+//!
+//! Every node holds its metaballs (those whose centre lies in it, each in exactly one leaf)
+//! and its split metaballs (others whose bounding sphere reaches into its box), so that a leaf
+//! computes the field anywhere in its box from its own list. The build is top-down:
+//! - binned SAH with the paper's metaball cost C = n² (Sec. 5.1.1), n counting both kinds;
+//!   above [`TOP_LEVEL`] metaballs the longest axis is halved instead (the paper's conclusion);
+//! - FBVH children are the two halves of the parent's box at the split plane, each then
+//!   intersected with the box of its metaballs' spheres of radius min(R, r_max(n)) (Sec. 5.1.2
+//!   and 5.3.1), so siblings never overlap; split metaballs whose sphere misses the fitted box
+//!   are dropped;
+//! - at a leaf, split metaballs that cannot touch its surface are discarded (Sec. 5.3.2);
+//! - a leaf has one metaball, or is cheaper than any split and holds at most [`MAX_LEAF`]
+//!   entries; subtrees with more than [`PARALLEL`] metaballs are built in parallel.
+//!
+//! Why every inside point is found in a leaf with the right sign: a point x with f(x) ≤ 0 lies
+//! in one child's split box; every metaball reaching x reaches that box, so it is in that
+//! child's list, and x lies within r_max(k) ≤ r_max(n) of one of them (k the number reaching
+//! x), hence inside the fitted box. A leaf's list misses only metaballs that are zero in its
+//! box or, discarded, zero wherever the field could be ≤ 0: its field has the true sign in its
+//! box. Outside its box a leaf sums a subset, so it never calls an outside point inside.
+
+use glam::Vec3;
+use rayon::join;
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use super::metaballs::Metaballs;
+use crate::error::Result;
+
+/// Which hierarchy to build.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum BvhKind {
+    /// The Fitted BVH (Sec. 5): disjoint fitted boxes, tight r_max bounds, discarding.
+    #[default]
+    Fitted,
+    /// The modified BVH of Sec. 4: each child's box bounds its metaballs' spheres, siblings
+    /// overlap, same SAH.
+    Plain,
+}
+
+impl BvhKind {
+    /// `fitted` or `plain`.
+    pub fn parse(text: &str) -> Result<BvhKind> {
+        match text.trim().to_ascii_lowercase().as_str() {
+            "fitted" | "fbvh" => Ok(BvhKind::Fitted),
+            "plain" | "bvh" => Ok(BvhKind::Plain),
+            _ => bail_config!("unknown BVH '{text}': expected fitted or plain"),
+        }
+    }
+
+    /// `fitted` or `plain`.
+    pub fn name(self) -> &'static str {
+        match self {
+            BvhKind::Fitted => "fitted",
+            BvhKind::Plain => "plain",
+        }
+    }
+}
+
+/// Axis-aligned box.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Aabb {
+    /// Smallest corner.
+    pub min: Vec3,
+    /// Largest corner.
+    pub max: Vec3,
+}
+
+impl Aabb {
+    pub(crate) const EMPTY: Aabb = Aabb {
+        min: Vec3::splat(f32::INFINITY),
+        max: Vec3::splat(f32::NEG_INFINITY),
+    };
+
+    fn grow_sphere(&mut self, p: Vec3, r: f32) {
+        self.min = self.min.min(p - r);
+        self.max = self.max.max(p + r);
+    }
+
+    fn intersect(&self, o: &Aabb) -> Aabb {
+        Aabb {
+            min: self.min.max(o.min),
+            max: self.max.min(o.max),
+        }
+    }
+
+    fn area(&self) -> f32 {
+        let e = (self.max - self.min).max(Vec3::ZERO);
+        2.0 * (e.x * e.y + e.y * e.z + e.z * e.x)
+    }
+
+    /// Whether the ball of radius `r` around `p` reaches the box (touching counts).
+    pub(crate) fn touches_sphere(&self, p: Vec3, r: f32) -> bool {
+        let q = p.clamp(self.min, self.max);
+        (q - p).length_squared() <= r * r
+    }
+}
+
+/// A node: interior nodes have their left child right after them and the right one at
+/// `first`; leaves list `items[first .. first + count]`.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Node {
+    pub bounds: Aabb,
+    pub first: u32,
+    /// 0 for interior nodes.
+    pub count: u32,
+}
+
+/// The built hierarchy over a frame's metaballs.
+#[derive(Debug)]
+pub struct FittedBvh {
+    pub(crate) nodes: Vec<Node>,
+    /// Leaf lists: indices into `points`, ascending within each leaf.
+    pub(crate) items: Vec<u32>,
+    /// The metaball centres, reordered so that each leaf's own metaballs are contiguous.
+    pub(crate) points: Vec<Vec3>,
+    pub(crate) field: Metaballs,
+    kind: BvhKind,
+}
+
+/// Counts of a built hierarchy.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct BvhStats {
+    /// Nodes, interior and leaves.
+    pub nodes: usize,
+    /// Leaves.
+    pub leaves: usize,
+    /// Entries of all leaf lists (metaballs and split metaballs).
+    pub entries: usize,
+    /// Deepest leaf (the root has depth 0).
+    pub depth: usize,
+    /// Bytes of the nodes, lists and reordered centres.
+    pub bytes: usize,
+}
+
+impl BvhStats {
+    /// Average metaballs (own and split) per leaf.
+    pub fn per_leaf(&self) -> f64 {
+        self.entries as f64 / self.leaves.max(1) as f64
+    }
+}
+
+/// Nodes with more metaballs than this halve their longest axis instead of binning.
+pub const TOP_LEVEL: usize = 1 << 16;
+/// Subtrees with more metaballs than this are built in parallel.
+pub const PARALLEL: usize = 4096;
+/// A leaf holds at most this many entries, unless it has one metaball of its own.
+pub const MAX_LEAF: usize = 96;
+/// Split metaballs are tested for discarding in leaves of at most this many entries (the
+/// test is quadratic; the paper suggests skipping it in crowded leaves).
+const DISCARD_MAX: usize = 64;
+const BINS: usize = 16;
+/// Cost of a traversal step relative to one kernel evaluation.
+const TRAVERSAL_COST: f32 = 4.0;
+
+struct Ctx<'a> {
+    points: &'a [Vec3],
+    field: Metaballs,
+    kind: BvhKind,
+    /// Entries of the node lists alive, checked against `budget`.
+    entries: AtomicU64,
+    budget: u64,
+}
+
+/// The hierarchy as built, flattened once at the end (merging flat arrays level by level
+/// would copy every list once per level).
+enum Tree {
+    Leaf {
+        bounds: Aabb,
+        /// Own metaballs, then split metaballs (original indices).
+        items: Vec<u32>,
+        own: usize,
+    },
+    Inner {
+        bounds: Aabb,
+        children: Box<(Tree, Tree)>,
+    },
+}
+
+/// Flat arrays of a [`Tree`].
+#[derive(Default)]
+struct Flat {
+    nodes: Vec<Node>,
+    items: Vec<u32>,
+    /// Own metaballs in leaf order (original indices).
+    order: Vec<u32>,
+}
+
+impl Flat {
+    fn push(&mut self, tree: Tree) {
+        // Iterative: a degenerate frame may give a deep tree.
+        let mut stack = vec![(tree, None::<usize>)];
+        while let Some((t, parent)) = stack.pop() {
+            let at = self.nodes.len();
+            if let Some(p) = parent {
+                // This is the right child of `p`.
+                self.nodes[p].first = at as u32;
+            }
+            match t {
+                Tree::Leaf { bounds, items, own } => {
+                    self.nodes.push(Node {
+                        bounds,
+                        first: self.items.len() as u32,
+                        count: items.len() as u32,
+                    });
+                    self.order.extend_from_slice(&items[..own]);
+                    self.items.extend_from_slice(&items);
+                }
+                Tree::Inner { bounds, children } => {
+                    self.nodes.push(Node {
+                        bounds,
+                        first: 0,
+                        count: 0,
+                    });
+                    let (l, r) = *children;
+                    stack.push((r, Some(at)));
+                    stack.push((l, None));
+                }
+            }
+        }
+    }
+}
+
+impl FittedBvh {
+    /// Builds the hierarchy of `kind` over `points`; fails with [`Error::Limit`] when its lists
+    /// would take more than `max_bytes`.
+    ///
+    /// [`Error::Limit`]: crate::Error::Limit
+    pub fn build(
+        points: &[Vec3],
+        field: Metaballs,
+        kind: BvhKind,
+        max_bytes: u64,
+    ) -> Result<FittedBvh> {
+        if points.len() >= u32::MAX as usize / 2 {
+            bail_limit!("{} particles are too many for one preview", points.len());
+        }
+        let fixed = points.len() as u64 * (12 + 4 + 2 * 32);
+        if fixed > max_bytes {
+            bail_limit!(
+                "the preview's hierarchy over {} particles needs at least {} MB, more than the \
+                 memory limit of {} MB (max_memory)",
+                points.len(),
+                fixed >> 20,
+                max_bytes >> 20
+            );
+        }
+        let ctx = Ctx {
+            points,
+            field,
+            kind,
+            entries: AtomicU64::new(0),
+            budget: (max_bytes - fixed) / 4,
+        };
+        if points.is_empty() {
+            return Ok(FittedBvh {
+                nodes: Vec::new(),
+                items: Vec::new(),
+                points: Vec::new(),
+                field,
+                kind,
+            });
+        }
+        let own: Vec<u32> = (0..points.len() as u32).collect();
+        let mut bounds = Aabb::EMPTY;
+        let reach = match kind {
+            BvhKind::Fitted => field.max_radius(points.len()),
+            BvhKind::Plain => field.cutoff,
+        };
+        for &p in points {
+            bounds.grow_sphere(p, reach);
+        }
+        ctx.charge(own.len())?;
+        let mut tree = Flat::default();
+        tree.push(build_node(&ctx, own, Vec::new(), bounds)?);
+        // Renumber the metaballs in leaf order, so that a leaf's list reads nearby memory.
+        let mut new_index = vec![0u32; points.len()];
+        for (k, &i) in tree.order.iter().enumerate() {
+            new_index[i as usize] = k as u32;
+        }
+        let reordered: Vec<Vec3> = tree.order.iter().map(|&i| points[i as usize]).collect();
+        let mut items = tree.items;
+        for i in &mut items {
+            *i = new_index[*i as usize];
+        }
+        let mut nodes = tree.nodes;
+        for n in &nodes {
+            if n.count > 0 {
+                let range = n.first as usize..(n.first + n.count) as usize;
+                items[range].sort_unstable();
+            }
+        }
+        nodes.shrink_to_fit();
+        Ok(FittedBvh {
+            nodes,
+            items,
+            points: reordered,
+            field,
+            kind,
+        })
+    }
+
+    /// Which hierarchy this is.
+    pub fn kind(&self) -> BvhKind {
+        self.kind
+    }
+
+    /// Node, leaf and list counts.
+    pub fn stats(&self) -> BvhStats {
+        let mut s = BvhStats {
+            nodes: self.nodes.len(),
+            entries: self.items.len(),
+            bytes: self.nodes.len() * size_of::<Node>()
+                + self.items.len() * 4
+                + self.points.len() * 12,
+            ..BvhStats::default()
+        };
+        let mut stack = vec![(0usize, 0usize)];
+        while let Some((n, depth)) = stack.pop() {
+            let Some(node) = self.nodes.get(n) else {
+                break;
+            };
+            if node.count > 0 {
+                s.leaves += 1;
+                s.depth = s.depth.max(depth);
+            } else {
+                stack.push((n + 1, depth + 1));
+                stack.push((node.first as usize, depth + 1));
+            }
+        }
+        s
+    }
+
+    /// Every leaf as (box, centres of its list).
+    pub fn leaves(&self) -> impl Iterator<Item = (Aabb, Vec<Vec3>)> + '_ {
+        self.nodes.iter().filter(|n| n.count > 0).map(|n| {
+            let list = &self.items[n.first as usize..(n.first + n.count) as usize];
+            (
+                n.bounds,
+                list.iter().map(|&i| self.points[i as usize]).collect(),
+            )
+        })
+    }
+
+    /// The metaball centres (in the hierarchy's order).
+    pub fn centres(&self) -> &[Vec3] {
+        &self.points
+    }
+
+    /// The field.
+    pub fn field(&self) -> Metaballs {
+        self.field
+    }
+}
+
+impl Ctx<'_> {
+    fn charge(&self, n: usize) -> Result<()> {
+        let total = self.entries.fetch_add(n as u64, Ordering::Relaxed) + n as u64;
+        if total > self.budget {
+            bail_limit!(
+                "the preview's hierarchy would hold more than {} metaball entries ({} MB), above \
+                 the memory limit (max_memory); is the spacing right?",
+                self.budget,
+                (self.budget * 4) >> 20
+            );
+        }
+        Ok(())
+    }
+
+    fn release(&self, n: usize) {
+        self.entries.fetch_sub(n as u64, Ordering::Relaxed);
+    }
+
+    fn p(&self, i: u32) -> Vec3 {
+        self.points[i as usize]
+    }
+}
+
+/// A split: axis and plane; own metaballs with centre < plane go left.
+#[derive(Clone, Copy)]
+struct Split {
+    axis: usize,
+    plane: f32,
+    /// Own metaballs of centre bin < `bin` go left (bins of `origin` + k / `scale`), so that
+    /// both sides have some whatever the rounding of `plane`.
+    bin: usize,
+    origin: f32,
+    scale: f32,
+}
+
+impl Split {
+    fn goes_left(&self, x: f32) -> bool {
+        let b = (((x - self.origin) * self.scale) as isize).clamp(0, BINS as isize - 1);
+        (b as usize) < self.bin
+    }
+}
+
+fn build_node(ctx: &Ctx, own: Vec<u32>, split: Vec<u32>, bounds: Aabb) -> Result<Tree> {
+    let n = own.len() + split.len();
+    let choice = if own.len() <= 1 {
+        None
+    } else {
+        choose_split(ctx, &own, &split, &bounds)
+    };
+    let Some(s) = choice else {
+        return Ok(leaf(ctx, own, split, &bounds));
+    };
+    let (own_l, own_r): (Vec<u32>, Vec<u32>) =
+        own.iter().partition(|&&i| s.goes_left(ctx.p(i)[s.axis]));
+    if own_l.is_empty() || own_r.is_empty() {
+        let own = own_l.into_iter().chain(own_r).collect();
+        return Ok(leaf(ctx, own, split, &bounds));
+    }
+    let (left, right) = match ctx.kind {
+        BvhKind::Fitted => {
+            let mut lbox = bounds;
+            lbox.max[s.axis] = s.plane;
+            let mut rbox = bounds;
+            rbox.min[s.axis] = s.plane;
+            (
+                (lbox, gather(ctx, &lbox, &split, &own_r)),
+                (rbox, gather(ctx, &rbox, &split, &own_l)),
+            )
+        }
+        BvhKind::Plain => {
+            let lbox = sphere_box(ctx, &own_l, ctx.field.cutoff);
+            let rbox = sphere_box(ctx, &own_r, ctx.field.cutoff);
+            (
+                (lbox, gather(ctx, &lbox, &split, &own_r)),
+                (rbox, gather(ctx, &rbox, &split, &own_l)),
+            )
+        }
+    };
+    let ((lbox, lsplit), (rbox, rsplit)) = (left, right);
+    let (lbox, lsplit) = fit(ctx, lbox, &own_l, lsplit);
+    let (rbox, rsplit) = fit(ctx, rbox, &own_r, rsplit);
+    ctx.charge(own_l.len() + lsplit.len() + own_r.len() + rsplit.len())?;
+    ctx.release(n);
+    drop(own);
+    drop(split);
+    let (l, r) = if n > PARALLEL {
+        join(
+            || build_node(ctx, own_l, lsplit, lbox),
+            || build_node(ctx, own_r, rsplit, rbox),
+        )
+    } else {
+        (
+            build_node(ctx, own_l, lsplit, lbox),
+            build_node(ctx, own_r, rsplit, rbox),
+        )
+    };
+    Ok(Tree::Inner {
+        bounds,
+        children: Box::new((l?, r?)),
+    })
+}
+
+/// The split metaballs of a child with box `b`: those of `split` and of the sibling's own
+/// whose bounding sphere reaches `b`, in the order given.
+fn gather(ctx: &Ctx, b: &Aabb, split: &[u32], sibling: &[u32]) -> Vec<u32> {
+    let r = ctx.field.cutoff;
+    split
+        .iter()
+        .chain(sibling)
+        .copied()
+        .filter(|&i| b.touches_sphere(ctx.p(i), r))
+        .collect()
+}
+
+fn sphere_box(ctx: &Ctx, list: &[u32], r: f32) -> Aabb {
+    let mut b = Aabb::EMPTY;
+    for &i in list {
+        b.grow_sphere(ctx.p(i), r);
+    }
+    b
+}
+
+/// FBVH: the child's box cut down to the spheres of radius min(R, r_max(n)) of its n
+/// metaballs (Sec. 5.1.2, 5.3.1), then the split metaballs that miss it dropped.
+fn fit(ctx: &Ctx, b: Aabb, own: &[u32], split: Vec<u32>) -> (Aabb, Vec<u32>) {
+    if ctx.kind == BvhKind::Plain {
+        return (b, split);
+    }
+    let reach = ctx
+        .field
+        .max_radius(own.len() + split.len())
+        .min(ctx.field.cutoff);
+    let mut spheres = sphere_box(ctx, own, reach);
+    for &i in &split {
+        spheres.grow_sphere(ctx.p(i), reach);
+    }
+    let fitted = b.intersect(&spheres);
+    let r = ctx.field.cutoff;
+    let split = split
+        .into_iter()
+        .filter(|&i| fitted.touches_sphere(ctx.p(i), r))
+        .collect();
+    (fitted, split)
+}
+
+/// Binned SAH with cost n² (Sec. 5.1.1); None when a leaf is cheaper and small enough.
+fn choose_split(ctx: &Ctx, own: &[u32], split: &[u32], bounds: &Aabb) -> Option<Split> {
+    let mut cmin = Vec3::splat(f32::INFINITY);
+    let mut cmax = Vec3::splat(f32::NEG_INFINITY);
+    for &i in own {
+        cmin = cmin.min(ctx.p(i));
+        cmax = cmax.max(ctx.p(i));
+    }
+    let extent = cmax - cmin;
+    let n = own.len() + split.len();
+    if own.len() > TOP_LEVEL {
+        let axis = extent.max_position();
+        if extent[axis] <= 0.0 {
+            return None;
+        }
+        return Some(Split {
+            axis,
+            plane: cmin[axis] + 0.5 * extent[axis],
+            bin: BINS / 2,
+            origin: cmin[axis],
+            scale: BINS as f32 / extent[axis],
+        });
+    }
+    let r = ctx.field.cutoff;
+    let area = bounds.area().max(f32::MIN_POSITIVE);
+    let mut best: Option<(f32, Split)> = None;
+    for axis in 0..3 {
+        if extent[axis].is_nan() || extent[axis] <= 0.0 {
+            continue;
+        }
+        let scale = BINS as f32 / extent[axis];
+        let bin = |x: f32| (((x - cmin[axis]) * scale) as isize).clamp(0, BINS as isize - 1);
+        // Planes j = 1..BINS at cmin + j·extent/BINS. Own centres of bin < j go left; a
+        // sphere is in the left list when its low end lies below the plane, in the right one
+        // when its high end lies above it.
+        let mut centres = [0usize; BINS];
+        let mut lows = [0usize; BINS + 1];
+        let mut highs = [0usize; BINS + 1];
+        for &i in own {
+            centres[bin(ctx.p(i)[axis]) as usize] += 1;
+        }
+        for &i in own.iter().chain(split) {
+            let x = ctx.p(i)[axis];
+            // Low end below plane j ⇔ j > (x − R − cmin)·scale.
+            let lo = ((x - r - cmin[axis]) * scale).floor();
+            let lo = (lo + 1.0).clamp(0.0, BINS as f32) as usize;
+            lows[lo] += 1;
+            // High end above plane j ⇔ j < (x + R − cmin)·scale.
+            let hi = ((x + r - cmin[axis]) * scale).ceil();
+            let hi = (hi - 1.0).clamp(0.0, BINS as f32) as usize;
+            highs[hi] += 1;
+        }
+        let mut own_left = 0;
+        let mut left = lows[0];
+        let mut right_suffix = [0usize; BINS + 2];
+        for j in (0..=BINS).rev() {
+            right_suffix[j] = right_suffix[j + 1] + highs[j];
+        }
+        for j in 1..BINS {
+            own_left += centres[j - 1];
+            left += lows[j];
+            let right = right_suffix[j];
+            if own_left == 0 || own_left == own.len() {
+                continue;
+            }
+            let plane = cmin[axis] + j as f32 / scale;
+            let mut lb = *bounds;
+            lb.max[axis] = lb.max[axis].min(plane);
+            let mut rb = *bounds;
+            rb.min[axis] = rb.min[axis].max(plane);
+            let (nl, nr) = (left as f32, right as f32);
+            let cost = TRAVERSAL_COST + (lb.area() * nl * nl + rb.area() * nr * nr) / area;
+            if best.is_none_or(|(c, _)| cost < c) {
+                let split = Split {
+                    axis,
+                    plane,
+                    bin: j,
+                    origin: cmin[axis],
+                    scale,
+                };
+                best = Some((cost, split));
+            }
+        }
+    }
+    let (cost, s) = best?;
+    let leaf_cost = (n * n) as f32;
+    (cost < leaf_cost || n > MAX_LEAF).then_some(s)
+}
+
+fn leaf(ctx: &Ctx, own: Vec<u32>, mut split: Vec<u32>, bounds: &Aabb) -> Tree {
+    let n = own.len() + split.len();
+    if ctx.kind == BvhKind::Fitted && n <= DISCARD_MAX && !split.is_empty() {
+        // Sec. 5.3.2: a split metaball whose r_max ball misses the box and whose sphere stays
+        // r_max away from every other centre of the list is zero wherever the field can be ≤ 0.
+        let r = ctx.field.cutoff;
+        let rmax = ctx.field.max_radius(n).min(r);
+        let all: Vec<Vec3> = own.iter().chain(&split).map(|&i| ctx.p(i)).collect();
+        let far = (r + rmax) * (r + rmax);
+        split.retain(|&i| {
+            let p = ctx.p(i);
+            bounds.touches_sphere(p, rmax)
+                || all
+                    .iter()
+                    .any(|&q| q != p && (q - p).length_squared() < far)
+        });
+    }
+    let own_count = own.len();
+    let mut items = own;
+    items.extend_from_slice(&split);
+    // The lists stay: only the discarded entries are given back.
+    ctx.release(n - items.len());
+    Tree::Leaf {
+        bounds: *bounds,
+        items,
+        own: own_count,
+    }
+}

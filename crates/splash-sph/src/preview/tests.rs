@@ -1,0 +1,543 @@
+//! The preview against analytic surfaces, brute force, the mesher's triangles and itself.
+
+use std::path::PathBuf;
+
+use glam::Vec3;
+
+use super::fitted_bvh::{Aabb, Node};
+use super::*;
+use crate::field::FieldConfig;
+use crate::{Config, Reconstructor, read_particles};
+
+const R: f32 = 0.014;
+
+fn config() -> Config {
+    Config {
+        spacing: Some(R),
+        field: FieldConfig::Metaball(MetaballConfig::default()),
+        ..Config::default()
+    }
+}
+
+fn fixture() -> Vec<Vec3> {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/frame_0040.ply");
+    read_particles(&path, None).unwrap().positions
+}
+
+/// The particles of the fixture in a corner box: a small real frame with a free surface.
+fn small_frame() -> Vec<Vec3> {
+    let lo = Vec3::new(0.3, 0.0, 0.27);
+    let hi = Vec3::new(0.6, 1.0, 0.54);
+    fixture()
+        .into_iter()
+        .filter(|p| p.cmpge(lo).all() && p.cmple(hi).all())
+        .collect()
+}
+
+/// A hierarchy with one leaf holding every metaball: the brute-force reference.
+fn brute(points: &[Vec3], field: Metaballs) -> FittedBvh {
+    let mut b = FittedBvh::build(points, field, BvhKind::Plain, u64::MAX / 4).unwrap();
+    let mut bounds = Aabb::EMPTY;
+    for &p in points {
+        bounds.min = bounds.min.min(p - field.cutoff);
+        bounds.max = bounds.max.max(p + field.cutoff);
+    }
+    b.points = points.to_vec();
+    b.items = (0..points.len() as u32).collect();
+    b.nodes = vec![Node {
+        bounds,
+        first: 0,
+        count: points.len() as u32,
+    }];
+    b
+}
+
+fn trace_all(bvh: &FittedBvh, camera: &Camera) -> Vec<Option<Hit>> {
+    let tracer = Tracer::new(bvh);
+    let mut scratch = trace::Scratch::default();
+    let mut counts = RayCounts::default();
+    let mut hits = Vec::new();
+    for y in 0..camera.height {
+        for x in 0..camera.width {
+            let d = camera.direction(x, y);
+            hits.push(tracer.first_hit(
+                camera.position,
+                d,
+                0.0,
+                f32::INFINITY,
+                false,
+                &mut scratch,
+                &mut counts,
+            ));
+        }
+    }
+    hits
+}
+
+/// A tiny deterministic generator (xorshift), for the property tests.
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> f32 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        (self.0 >> 40) as f32 / (1u64 << 24) as f32
+    }
+    fn point(&mut self, lo: Vec3, hi: Vec3) -> Vec3 {
+        lo + (hi - lo) * Vec3::new(self.next(), self.next(), self.next())
+    }
+}
+
+#[test]
+fn one_metaball_is_a_sphere_of_the_lone_radius() {
+    let previewer = Previewer::new(&config()).unwrap();
+    let field = previewer.field();
+    let rho = field.lone_radius();
+    // T/c = 0.8, α = 2, R = 1.5r: ρ = R·√(1 − √0.8).
+    assert!((rho - 1.5 * R * (1.0 - 0.8f32.sqrt()).sqrt()).abs() < 1e-7);
+    let centre = Vec3::new(0.1, 0.2, 0.3);
+    let bvh = previewer.build(&[centre]).unwrap();
+    let eye = centre + Vec3::new(0.0, 0.0, 0.2);
+    let (w, h) = (200, 150);
+    let camera = Camera::look_at(eye, centre, Vec3::Y, 8.0, w, h).unwrap();
+    let hits = trace_all(&bvh, &camera);
+    let mut count = 0usize;
+    for (k, hit) in hits.iter().enumerate() {
+        let d = camera.direction(k as u32 % w, k as u32 / w);
+        // The analytic ray-sphere distance.
+        // In f64: the test's own rounding must not count against the tracer.
+        let (v, d64) = ((centre - eye).as_dvec3(), d.as_dvec3());
+        let tc = v.dot(d64);
+        let disc = ((rho as f64).powi(2) - v.cross(d64).length_squared()) as f32;
+        let tc = tc as f32;
+        match hit {
+            Some(hit) => {
+                count += 1;
+                assert!(disc >= -1e-6 * R, "hit outside the sphere's silhouette");
+                let exact = tc - disc.max(0.0).sqrt();
+                // Grazing rays: the distance is ill-conditioned near the silhouette.
+                if disc > 0.05 * rho * rho {
+                    assert!(
+                        (hit.t - exact).abs() < 1e-5 * R + 1e-6,
+                        "{} vs {exact}",
+                        hit.t
+                    );
+                    let p = eye + hit.t * d;
+                    let n = (p - centre).normalize();
+                    assert!(
+                        hit.normal.dot(n) > 0.9999,
+                        "normal {:?} vs {n:?}",
+                        hit.normal
+                    );
+                }
+            }
+            None => assert!(disc <= 1e-3 * rho * rho, "missed a ray through the sphere"),
+        }
+    }
+    // The disc's image: the silhouette's angular radius asin(ρ/D) on an image plane at unit
+    // distance with pixel size 2·tan(fov/2)/h. Pixels are counted by their centres, so the
+    // count differs from the area by at most the pixels the circle's outline crosses, about
+    // its perimeter in pixels; we allow a quarter of that (the errors of a circle cancel).
+    let pixel = 2.0 * (4.0f32).to_radians().tan() / h as f32;
+    let radius = (rho / 0.2).asin().tan() / pixel;
+    let area = std::f32::consts::PI * radius * radius;
+    let perimeter = 2.0 * std::f32::consts::PI * radius;
+    assert!(radius > 30.0, "the disc is {radius} pixels");
+    assert!(
+        (count as f32 - area).abs() < 0.25 * perimeter,
+        "{count} pixels vs {area} ± {}",
+        0.25 * perimeter
+    );
+}
+
+#[test]
+fn the_image_of_one_metaball_is_brighter_towards_the_light() {
+    let previewer = Previewer::new(&config()).unwrap();
+    let camera =
+        Camera::look_at(Vec3::new(0.0, 0.0, 0.2), Vec3::ZERO, Vec3::Y, 8.0, 64, 64).unwrap();
+    let p = previewer
+        .render(&[Vec3::ZERO], &camera, &Style::default())
+        .unwrap();
+    let luma = |x, y| p.image.pixel(x, y).iter().map(|&c| c as u32).sum::<u32>();
+    // The light is up and to the left.
+    assert!(
+        luma(26, 26) > luma(38, 38) + 30,
+        "{} {}",
+        luma(26, 26),
+        luma(38, 38)
+    );
+    assert_eq!(p.image.pixel(0, 0), Style::default().background);
+    assert!(p.stats.hits > 500);
+}
+
+#[test]
+fn two_metaballs_blend_where_brute_force_sampling_finds_the_surface() {
+    let previewer = Previewer::new(&config()).unwrap();
+    let field = previewer.field();
+    // Closer than twice the lone radius apart: one blended surface with a waist.
+    let balls = [
+        Vec3::new(-0.35 * R, 0.0, 0.0),
+        Vec3::new(0.4 * R, 0.05 * R, 0.0),
+    ];
+    let bvh = previewer.build(&balls).unwrap();
+    let eye = Vec3::new(0.01, 0.02, 0.12);
+    let camera = Camera::look_at(eye, Vec3::ZERO, Vec3::Y, 12.0, 60, 40).unwrap();
+    let hits = trace_all(&bvh, &camera);
+    let mut compared = 0;
+    for (k, hit) in hits.iter().enumerate() {
+        let d = camera.direction(k as u32 % 60, k as u32 / 60);
+        // Brute force: march the whole ray in tiny steps, bisect the first sign change.
+        let step = 1e-3 * R;
+        let mut t = 0.08;
+        let mut found = None;
+        while t < 0.16 {
+            if field.inside(balls, eye + (t + step) * d) {
+                let (mut a, mut b) = (t, t + step);
+                for _ in 0..40 {
+                    let m = 0.5 * (a + b);
+                    if field.inside(balls, eye + m * d) {
+                        b = m
+                    } else {
+                        a = m
+                    }
+                }
+                found = Some(b);
+                break;
+            }
+            t += step;
+        }
+        match (hit, found) {
+            (Some(h), Some(t)) => {
+                compared += 1;
+                assert!((h.t - t).abs() < 5e-5 * R, "{} vs {t}", h.t);
+            }
+            (None, None) => {}
+            // A ray that only grazes the surface within a step either way.
+            (h, f) => {
+                let t = h.map(|h| h.t).or(f).unwrap();
+                let p = eye + t * d;
+                let g = (
+                    field.sum_at(balls, p + 2e-3 * R * d),
+                    field.sum_at(balls, p),
+                );
+                assert!(
+                    (g.0 - field.level).abs() < 0.02,
+                    "pixel {k}: traced {h:?}, sampled {f:?} ({g:?})"
+                );
+            }
+        }
+    }
+    assert!(compared > 300, "{compared}");
+}
+
+#[test]
+fn leaves_keep_every_contributing_metaball() {
+    // Property: at random points of every leaf box, the leaf's list and all the metaballs
+    // agree on inside/outside, and where the full field is inside, on its value.
+    let previewer = Previewer::new(&config()).unwrap();
+    let field = previewer.field();
+    let mut rng = Rng(0x9e37_79b9_7f4a_7c15);
+    let frame = small_frame();
+    // Real particles, random clouds of several densities, and a lattice.
+    let mut sets = vec![frame];
+    for (n, size) in [(300, 4.0), (2000, 10.0), (500, 30.0)] {
+        let lo = Vec3::ZERO;
+        let hi = Vec3::splat(size * R);
+        sets.push((0..n).map(|_| rng.point(lo, hi)).collect());
+    }
+    sets.push(
+        (0..1000)
+            .map(|i| Vec3::new((i % 10) as f32, (i / 10 % 10) as f32, (i / 100) as f32) * R)
+            .collect(),
+    );
+    for (s, points) in sets.iter().enumerate() {
+        let bvh = previewer.build(points).unwrap();
+        let mut checked = 0;
+        for (b, list) in bvh.leaves() {
+            for _ in 0..40 {
+                let x = rng.point(b.min, b.max);
+                let all = field.sum_at(points.iter().copied(), x);
+                let leaf = field.sum_at(list.iter().copied(), x);
+                assert_eq!(
+                    all >= field.level,
+                    leaf >= field.level,
+                    "set {s}: leaf {b:?} disagrees at {x:?}: {leaf} vs {all}"
+                );
+                if all >= 0.5 * field.level {
+                    assert!((all - leaf).abs() <= 1e-5 * all, "set {s}: {leaf} vs {all}");
+                }
+                checked += 1;
+            }
+        }
+        // Every inside point lies in some leaf box.
+        let (lo, hi) = camera::robust_bounds(points);
+        for _ in 0..3000 {
+            let x = rng.point(lo, hi);
+            if field.inside(points.iter().copied(), x) {
+                assert!(
+                    bvh.leaves()
+                        .any(|(b, _)| x.cmpge(b.min).all() && x.cmple(b.max).all()),
+                    "set {s}: inside point {x:?} in no leaf"
+                );
+            }
+        }
+        assert!(checked > 0);
+    }
+}
+
+fn small_camera(points: &[Vec3], w: u32, h: u32) -> Camera {
+    Camera::auto(points, R, Vec3::Y, None, 40.0, w, h).unwrap()
+}
+
+#[test]
+fn fitted_and_plain_hierarchies_find_the_brute_force_hits() {
+    let previewer = Previewer::new(&config()).unwrap();
+    let points = small_frame();
+    assert!(points.len() > 1000, "{}", points.len());
+    let camera = small_camera(&points, 120, 90);
+    let reference = trace_all(&brute(&points, previewer.field()), &camera);
+    let fitted = previewer.build(&points).unwrap();
+    let plain = previewer
+        .clone()
+        .with_bvh(BvhKind::Plain)
+        .build(&points)
+        .unwrap();
+    let hits = reference.iter().filter(|h| h.is_some()).count();
+    assert!(hits > 600, "{hits}");
+    for (name, bvh) in [("fitted", &fitted), ("plain", &plain)] {
+        let traced = trace_all(bvh, &camera);
+        let mut differ = 0;
+        for (a, b) in traced.iter().zip(&reference) {
+            match (a, b) {
+                (Some(a), Some(b)) => {
+                    if (a.t - b.t).abs() > 1e-3 * R {
+                        differ += 1;
+                    }
+                }
+                (None, None) => {}
+                _ => differ += 1,
+            }
+        }
+        // Sampling points differ with the leaves' segments, so a ray that only grazes a
+        // surface can be caught by one and not the other: at most 0.2 % of the pixels.
+        assert!(
+            differ * 500 <= traced.len(),
+            "{name}: {differ} of {} pixels differ from brute force",
+            traced.len()
+        );
+    }
+    // The paper's Table 3: the fitted hierarchy considers fewer metaballs per ray.
+    let count = |bvh: &FittedBvh| {
+        let tracer = Tracer::new(bvh);
+        let mut counts = RayCounts::default();
+        let mut scratch = trace::Scratch::default();
+        for y in 0..camera.height {
+            for x in 0..camera.width {
+                let d = camera.direction(x, y);
+                tracer.first_hit(
+                    camera.position,
+                    d,
+                    0.0,
+                    f32::INFINITY,
+                    false,
+                    &mut scratch,
+                    &mut counts,
+                );
+            }
+        }
+        counts
+    };
+    let (f, p) = (count(&fitted), count(&plain));
+    assert!(f.metaballs < p.metaballs, "fitted {f:?} vs plain {p:?}");
+    assert!(f.leaves < p.leaves, "fitted {f:?} vs plain {p:?}");
+}
+
+/// Möller–Trumbore: the distance to the nearest triangle along the ray, brute force.
+fn mesh_hit(mesh: &crate::TriMesh, o: Vec3, d: Vec3) -> Option<f32> {
+    let mut best: Option<f32> = None;
+    for t in &mesh.triangles {
+        let [a, b, c] = t.map(|i| mesh.vertices[i as usize]);
+        let (e1, e2) = (b - a, c - a);
+        let p = d.cross(e2);
+        let det = e1.dot(p);
+        if det.abs() < 1e-12 {
+            continue;
+        }
+        let inv = 1.0 / det;
+        let s = o - a;
+        let u = s.dot(p) * inv;
+        if !(0.0..=1.0).contains(&u) {
+            continue;
+        }
+        let q = s.cross(e1);
+        let v = d.dot(q) * inv;
+        if v < 0.0 || u + v > 1.0 {
+            continue;
+        }
+        let t = e2.dot(q) * inv;
+        if t > 0.0 && best.is_none_or(|b| t < b) {
+            best = Some(t);
+        }
+    }
+    best
+}
+
+#[test]
+fn the_preview_agrees_with_the_metaball_mesh() {
+    let config = config();
+    let points = small_frame();
+    let mesh = Reconstructor::new(config.clone())
+        .unwrap()
+        .reconstruct(&points)
+        .unwrap()
+        .mesh;
+    assert!(mesh.triangles.len() > 1000);
+    let previewer = Previewer::new(&config).unwrap();
+    let bvh = previewer.build(&points).unwrap();
+    let (w, h) = (120, 90);
+    let camera = small_camera(&points, w, h);
+    let traced = trace_all(&bvh, &camera);
+    let cell = config.cell.resolve(R);
+    let (mut both, mut close, mut silhouette) = (0, 0, 0);
+    for (k, hit) in traced.iter().enumerate() {
+        let d = camera.direction(k as u32 % w, k as u32 / w);
+        match (hit, mesh_hit(&mesh, camera.position, d)) {
+            (Some(a), Some(b)) => {
+                both += 1;
+                if (a.t - b).abs() <= cell {
+                    close += 1;
+                }
+            }
+            (None, None) => {}
+            _ => silhouette += 1,
+        }
+    }
+    assert!(both > 600, "{both}");
+    assert!(close * 100 >= both * 99, "{close} of {both} within a cell");
+    // Silhouettes: the mesh's outline is the field sampled every cell, so pixels along it
+    // may differ; at 80×60 the outline crosses about 2 % of the image.
+    assert!(
+        silhouette * 100 <= traced.len() * 2,
+        "{silhouette} pixels differ"
+    );
+}
+
+#[test]
+fn the_image_does_not_depend_on_the_thread_count() {
+    let points = small_frame();
+    let camera = small_camera(&points, 96, 64);
+    let pngs: Vec<Vec<u8>> = [1, 2, 3]
+        .into_iter()
+        .map(|n| {
+            let config = Config {
+                threads: Some(n),
+                ..config()
+            };
+            let p = Previewer::new(&config)
+                .unwrap()
+                .render(&points, &camera, &Style::default())
+                .unwrap();
+            let mut png = Vec::new();
+            encode_png(&p.image, &mut png).unwrap();
+            png
+        })
+        .collect();
+    assert_eq!(pngs[0], pngs[1]);
+    assert_eq!(pngs[0], pngs[2]);
+    // It decodes to the right size.
+    let decoder = png::Decoder::new(std::io::Cursor::new(&pngs[0]));
+    let mut reader = decoder.read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+    let info = reader.next_frame(&mut buf).unwrap();
+    assert_eq!((info.width, info.height), (96, 64));
+    assert_eq!(info.color_type, png::ColorType::Rgb);
+}
+
+#[test]
+fn png_files_are_written_whole() {
+    let dir = std::env::temp_dir().join(format!("splash-preview-{}", std::process::id()));
+    let path = dir.join("a/b.png");
+    let image = Image {
+        width: 3,
+        height: 2,
+        rgb: (0..18).collect(),
+    };
+    write_png(&path, &image).unwrap();
+    let decoder = png::Decoder::new(std::io::BufReader::new(std::fs::File::open(&path).unwrap()));
+    let mut reader = decoder.read_info().unwrap();
+    let mut buf = vec![0; reader.output_buffer_size().unwrap()];
+    reader.next_frame(&mut buf).unwrap();
+    assert_eq!(buf, image.rgb);
+    let left: Vec<_> = std::fs::read_dir(dir.join("a")).unwrap().collect();
+    assert_eq!(left.len(), 1);
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn bad_cameras_and_sizes_are_clear_errors() {
+    let e = |r: crate::Result<Camera>| r.unwrap_err().to_string();
+    let (o, z, y) = (Vec3::new(0.0, 0.0, 1.0), Vec3::ZERO, Vec3::Y);
+    assert!(e(Camera::look_at(o, z, y, 0.0, 10, 10)).contains("field of view"));
+    assert!(e(Camera::look_at(o, z, y, 180.0, 10, 10)).contains("field of view"));
+    assert!(e(Camera::look_at(o, z, y, f32::NAN, 10, 10)).contains("field of view"));
+    assert!(e(Camera::look_at(Vec3::NAN, z, y, 40.0, 10, 10)).contains("not finite"));
+    assert!(e(Camera::look_at(o, o, y, 40.0, 10, 10)).contains("coincide"));
+    assert!(e(Camera::look_at(o, z, Vec3::Z, 40.0, 10, 10)).contains("parallel"));
+    assert!(e(Camera::look_at(o, z, y, 40.0, 0, 10)).contains("at least 1"));
+    assert!(e(Camera::look_at(o, z, y, 40.0, 100000, 100000)).contains("too large"));
+    assert!(e(Camera::auto(&[], R, y, None, 40.0, 10, 10)).contains("empty"));
+    for bad in [
+        "",
+        "1280",
+        "1280x",
+        "x720",
+        "0x720",
+        "-5x5",
+        "100000x100000",
+        "1e3x5",
+    ] {
+        assert!(parse_size(bad).is_err(), "{bad}");
+    }
+    assert_eq!(parse_size("1280x720").unwrap(), (1280, 720));
+    assert_eq!(parse_colour("#3a7bd5").unwrap(), [0x3a, 0x7b, 0xd5]);
+    assert_eq!(parse_colour("1, 2,3").unwrap(), [1, 2, 3]);
+    assert!(parse_colour("#12345").is_err() && parse_colour("1,2,256").is_err());
+    // Non-finite particles, and a memory limit too small for the hierarchy.
+    let previewer = Previewer::new(&config()).unwrap();
+    let err = previewer
+        .build(&[Vec3::new(0.0, f32::NAN, 0.0)])
+        .unwrap_err();
+    assert!(matches!(err, crate::Error::Input(_)), "{err}");
+    let points = small_frame();
+    let tight = Config {
+        max_memory: Some(crate::Bytes(points.len() as u64 * 100)),
+        ..config()
+    };
+    let err = Previewer::new(&tight).unwrap().build(&points).unwrap_err();
+    assert!(matches!(err, crate::Error::Limit(_)), "{err}");
+    assert!(Previewer::new(&Config::default()).is_err());
+}
+
+#[test]
+fn an_empty_frame_is_all_background() {
+    let previewer = Previewer::new(&config()).unwrap();
+    let camera = Camera::look_at(Vec3::Z, Vec3::ZERO, Vec3::Y, 40.0, 8, 8).unwrap();
+    let p = previewer.render(&[], &camera, &Style::default()).unwrap();
+    assert!(
+        p.image
+            .rgb
+            .chunks(3)
+            .all(|c| c == Style::default().background)
+    );
+}
+
+#[test]
+fn a_camera_inside_the_fluid_renders() {
+    let points = small_frame();
+    let previewer = Previewer::new(&config()).unwrap();
+    let inside = points[points.len() / 2];
+    let camera = Camera::look_at(inside, inside + Vec3::X, Vec3::Y, 60.0, 32, 24).unwrap();
+    previewer
+        .render(&points, &camera, &Style::default())
+        .unwrap();
+}

@@ -1,0 +1,533 @@
+//! `splash preview`: one ray-traced PNG of the metaball surface per particle frame, without a
+//! mesh. The frames, `--frames`, `--shard`, `--skip-existing` and the output names are the
+//! recon batch's (sequence.rs, batch::Output); the loop is this small one of its own, since a
+//! frame here is an image and its figures are a renderer's, not a mesh's.
+
+use std::collections::BTreeSet;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::Instant;
+
+use anyhow::{Context, Result, anyhow, bail};
+use clap::Args;
+use serde_json::json;
+
+use splash_sph::preview::{
+    BvhKind, Camera, PreviewStats, Previewer, Style, camera, parse_colour, parse_size, write_png,
+};
+use splash_sph::{Bytes, Config, InputFormat, Vec3, estimate_spacing, read_particles};
+
+use crate::batch::Output;
+use crate::log::utc_now;
+use crate::sequence::{self, FrameSet, Shard, path_frame_number};
+
+#[derive(Args)]
+#[command(after_help = "\
+The surface is the metaball field's, the one `splash recon --field metaball` meshes (its
+kernel, cut-off and iso level from the config's [field] table when that is a metaball field,
+else the defaults), ray-traced through a Fitted BVH (Gourmel et al. 2010) with Phong shading,
+one light above-left behind the camera and hard shadows. The image does not depend on
+--threads.
+
+Camera: without --camera, it frames the 0.5–99.5 % percentile box of the first frame of the
+selected sequence (whatever the shard), seen from the front, right and above: direction
+(0.45, 0.55, 1) from the box's centre for Y-up data, (0.45, -1, 0.55) with --up-axis z; --view
+sets another direction. --camera without --look-at looks at that box's centre.
+
+Examples:
+  splash preview frames/*.ply --spacing 0.014 -o preview/ --size 1280x720
+  splash preview frame_0040.ply --camera 0.6,0.5,2.2 --look-at 0.6,0.3,0.4 --fov 40 -o f40.png
+  splash preview sim/ --frames 1-400x10 --shard auto/8 -o preview/")]
+pub struct PreviewArgs {
+    /// Particle files, directories of them, or quoted glob patterns ('sim/frame_*.ply').
+    #[arg(required = true)]
+    inputs: Vec<PathBuf>,
+
+    /// Output: a directory (ending in /), a .png file for a single input, or a pattern with
+    /// {stem} or {frame} / {frame:04}. Default: {stem}_preview.png beside each input.
+    #[arg(short, long)]
+    output: Option<String>,
+
+    /// Image size WIDTHxHEIGHT in pixels (at most 16384 a side).
+    #[arg(long, default_value = "1280x720")]
+    size: String,
+
+    /// Camera position X,Y,Z (default: framed automatically).
+    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
+    camera: Option<String>,
+
+    /// The point the camera looks at, X,Y,Z (default: the centre of the fluid's box).
+    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
+    look_at: Option<String>,
+
+    /// The image's up direction X,Y,Z (default: the data's up axis).
+    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
+    up: Option<String>,
+
+    /// The data's up axis, y (SPlisHSPlasH, default) or z (Blender): the image's up
+    /// direction and the auto camera's view.
+    #[arg(long, value_name = "AXIS")]
+    up_axis: Option<String>,
+
+    /// Auto camera: direction from the fluid's centre towards the camera, X,Y,Z.
+    #[arg(long, value_name = "X,Y,Z", allow_hyphen_values = true)]
+    view: Option<String>,
+
+    /// Vertical field of view in degrees.
+    #[arg(long, default_value_t = 40.0)]
+    fov: f32,
+
+    /// Background colour, #rrggbb or R,G,B.
+    #[arg(long, default_value = "#eceef2")]
+    background: String,
+
+    /// Fluid colour, #rrggbb or R,G,B.
+    #[arg(long, default_value = "#3a7bd5")]
+    colour: String,
+
+    /// No shadow rays.
+    #[arg(long)]
+    no_shadows: bool,
+
+    /// Acceleration structure: fitted (the paper's FBVH, default) or plain (its Sec. 4 BVH,
+    /// to compare).
+    #[arg(long, default_value = "fitted")]
+    bvh: String,
+
+    /// TOML file with the parameters (spacing, [field], threads, max_memory).
+    #[arg(long)]
+    config: Option<PathBuf>,
+
+    /// Particle spacing r. Estimated from the first frame when neither this nor
+    /// --particle-radius is given.
+    #[arg(long, conflicts_with = "particle_radius")]
+    spacing: Option<f32>,
+
+    /// Particle radius as SPlisHSPlasH gives it: r = 2 × radius.
+    #[arg(long)]
+    particle_radius: Option<f32>,
+
+    /// Worker threads (default: all cores). The image does not depend on it.
+    #[arg(long)]
+    threads: Option<usize>,
+
+    /// Memory the hierarchy and image may take, e.g. 8G (default: half the machine's).
+    #[arg(long)]
+    max_memory: Option<String>,
+
+    /// Only these frame numbers: A-B ranges, A-BxS every S-th, lists (1-10,20,30-40x5).
+    #[arg(long, value_name = "LIST")]
+    frames: Option<String>,
+
+    /// Job K of N takes every N-th selected frame from the K-th; auto/N reads
+    /// SLURM_ARRAY_TASK_ID (as for recon).
+    #[arg(long, value_name = "K/N")]
+    shard: Option<String>,
+
+    /// Leave frames whose PNG exists alone.
+    #[arg(long)]
+    skip_existing: bool,
+
+    /// Stop at the first failing frame.
+    #[arg(long)]
+    fail_fast: bool,
+
+    /// Input format for every file: ply, csv or raw.
+    #[arg(long)]
+    input_format: Option<String>,
+
+    /// Print build and render figures per frame: nodes, leaves, metaballs per leaf, and the
+    /// paper's Table 3 counts per ray.
+    #[arg(short, long)]
+    verbose: bool,
+
+    /// Print only errors.
+    #[arg(short, long, conflicts_with = "verbose")]
+    quiet: bool,
+
+    /// Write the per-frame figures to this JSON file.
+    #[arg(long)]
+    report: Option<PathBuf>,
+}
+
+fn vector(text: &str, flag: &str) -> Result<Vec3> {
+    let parts: Vec<f32> = text
+        .split(',')
+        .map(|p| p.trim().parse::<f32>())
+        .collect::<Result<_, _>>()
+        .map_err(|_| anyhow!("--{flag} {text}: expected three numbers X,Y,Z"))?;
+    match parts[..] {
+        [x, y, z] if x.is_finite() && y.is_finite() && z.is_finite() => Ok(Vec3::new(x, y, z)),
+        [_, _, _] => bail!("--{flag} {text}: the coordinates must be finite"),
+        _ => bail!("--{flag} {text}: expected three numbers X,Y,Z"),
+    }
+}
+
+impl PreviewArgs {
+    fn config(&self) -> Result<Config> {
+        let mut config = match &self.config {
+            Some(path) => Config::from_file(path)?,
+            None => Config::default(),
+        };
+        if let Some(r) = self.spacing {
+            config.spacing = Some(r);
+        }
+        if let Some(p) = self.particle_radius {
+            config.spacing = Some(2.0 * p);
+        }
+        if let Some(n) = self.threads {
+            if n == 0 {
+                bail!("--threads must be at least 1");
+            }
+            config.threads = Some(n);
+        }
+        if let Some(m) = &self.max_memory {
+            config.max_memory = Some(Bytes::parse(m).context("--max-memory")?);
+        }
+        config.validate()?;
+        Ok(config)
+    }
+}
+
+/// How the camera is chosen.
+struct CameraPlan {
+    width: u32,
+    height: u32,
+    fov: f32,
+    up: Vec3,
+    position: Option<Vec3>,
+    look_at: Option<Vec3>,
+    view: Option<Vec3>,
+}
+
+impl CameraPlan {
+    fn needs_frame(&self) -> bool {
+        self.position.is_none() || self.look_at.is_none()
+    }
+
+    fn camera(&self, reference: Option<&[Vec3]>, margin: f32) -> Result<Camera> {
+        let (w, h, fov, up) = (self.width, self.height, self.fov, self.up);
+        Ok(match (self.position, self.look_at, reference) {
+            (Some(p), Some(t), _) => Camera::look_at(p, t, up, fov, w, h)?,
+            (Some(p), None, Some(points)) => {
+                let (lo, hi) = camera::robust_bounds(points);
+                Camera::look_at(p, 0.5 * (lo + hi), up, fov, w, h)?
+            }
+            (None, _, Some(points)) => Camera::auto(points, margin, up, self.view, fov, w, h)?,
+            (_, _, None) => bail!(
+                "no frame of the sequence has particles to frame the camera on: give --camera \
+                 and --look-at"
+            ),
+        })
+    }
+}
+
+pub fn preview(args: PreviewArgs) -> Result<ExitCode> {
+    let mut config = args.config()?;
+    if let Some(n) = config.threads {
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build_global()
+            .context("cannot start the worker threads")?;
+        // The global pool is sized; the previewer runs in it.
+        config.threads = None;
+    }
+    let (width, height) = parse_size(&args.size).context("--size")?;
+    let z_up = match args
+        .up_axis
+        .as_deref()
+        .map(|a| a.trim().to_ascii_lowercase())
+    {
+        None => false,
+        Some(a) if a == "y" => false,
+        Some(a) if a == "z" => true,
+        Some(a) => bail!("--up-axis {a}: expected y or z"),
+    };
+    let plan = CameraPlan {
+        width,
+        height,
+        fov: args.fov,
+        up: match &args.up {
+            Some(u) => vector(u, "up")?,
+            None => camera::up_vector(z_up),
+        },
+        position: args
+            .camera
+            .as_deref()
+            .map(|c| vector(c, "camera"))
+            .transpose()?,
+        look_at: args
+            .look_at
+            .as_deref()
+            .map(|c| vector(c, "look-at"))
+            .transpose()?,
+        view: args
+            .view
+            .as_deref()
+            .map(|c| vector(c, "view"))
+            .transpose()?,
+    };
+    if plan.look_at.is_some() && plan.position.is_none() {
+        bail!("--look-at needs --camera (without both, the camera is framed automatically)");
+    }
+    if !(args.fov > 0.0 && args.fov < 180.0) {
+        bail!(
+            "--fov {}: the field of view must lie strictly between 0 and 180 degrees",
+            args.fov
+        );
+    }
+    let style = Style {
+        background: parse_colour(&args.background).context("--background")?,
+        colour: parse_colour(&args.colour).context("--colour")?,
+        shadows: !args.no_shadows,
+    };
+    let bvh = BvhKind::parse(&args.bvh).context("--bvh")?;
+    let input_format = args
+        .input_format
+        .as_deref()
+        .map(InputFormat::parse)
+        .transpose()?;
+    let shard = args
+        .shard
+        .as_deref()
+        .map(|s| Shard::parse(s, |name| std::env::var(name).ok()))
+        .transpose()?;
+    let output = args
+        .output
+        .as_deref()
+        .map_or(Output::BesideInput, Output::parse);
+    if let Some(ext) = output
+        .extension()
+        .filter(|e| !e.eq_ignore_ascii_case("png"))
+    {
+        bail!("preview writes PNG images: the output name's .{ext} extension should be .png");
+    }
+    if let Some(path) = &args.report
+        && path.extension().is_none_or(|e| e != "json")
+    {
+        bail!(
+            "--report {}: the preview report is a .json file",
+            path.display()
+        );
+    }
+
+    let discovered = sequence::discover(&args.inputs)?;
+    let mut inputs = discovered.files;
+    if let Some(text) = &args.frames {
+        let frames = FrameSet::parse(text)?;
+        inputs = frames.select(inputs)?;
+        let present: BTreeSet<u64> = inputs.iter().filter_map(|p| path_frame_number(p)).collect();
+        if let Some((count, _)) = frames.missing(&present, 5)
+            && count > 0
+            && !args.quiet
+        {
+            eprintln!("warning: {count} frames of --frames {text} have no input");
+        }
+        if inputs.is_empty() {
+            bail!("--frames {text}: no input has one of these frame numbers");
+        }
+    }
+    let outputs: Vec<PathBuf> = inputs
+        .iter()
+        .map(|i| output.path_with(i, "_preview", "png"))
+        .collect::<Result<_>>()?;
+    if let Output::Pattern(p) = &output
+        && inputs.len() > 1
+        && !p.contains("{stem}")
+        && !p.contains("{frame")
+    {
+        bail!(
+            "-o {p} names one file for {} inputs: give a directory (ending in /) or a pattern \
+             with {{stem}} or {{frame:04}}",
+            inputs.len()
+        );
+    }
+    let mut seen = BTreeSet::new();
+    for (i, o) in inputs.iter().zip(&outputs) {
+        if !seen.insert(o) {
+            bail!("two inputs would both be written to {}", o.display());
+        }
+        if inputs.iter().any(|x| x == o) {
+            bail!("the preview of {} would overwrite an input", i.display());
+        }
+    }
+
+    // The spacing and the auto camera come from the first readable frame of the whole
+    // selection, so that every shard and restart draws the same surface from the same view.
+    let needs_reference = config.spacing.is_none() || plan.needs_frame();
+    let reference = if needs_reference {
+        inputs.iter().find_map(|input| {
+            let p = read_particles(input, input_format).ok()?;
+            (!p.is_empty()).then_some((input.clone(), p.positions))
+        })
+    } else {
+        None
+    };
+    if config.spacing.is_none() {
+        let (input, points) = reference.as_ref().ok_or_else(|| {
+            anyhow!("no frame has particles to estimate the spacing from: give --spacing")
+        })?;
+        let r = estimate_spacing(points).ok_or_else(|| {
+            anyhow!(
+                "cannot estimate the particle spacing from {}: give --spacing",
+                input.display()
+            )
+        })?;
+        if !args.quiet {
+            eprintln!("spacing r = {r} estimated from {}", input.display());
+        }
+        config.spacing = Some(r);
+    }
+    let previewer = Previewer::new(&config)?.with_bvh(bvh);
+    let camera = plan.camera(
+        reference.as_ref().map(|(_, p)| p.as_slice()),
+        previewer.margin(),
+    )?;
+    drop(reference);
+
+    let assigned: Vec<usize> = (0..inputs.len())
+        .filter(|&i| shard.is_none_or(|s| s.takes(i)))
+        .collect();
+    let to_do: Vec<usize> = assigned
+        .iter()
+        .copied()
+        .filter(|&i| !(args.skip_existing && outputs[i].is_file()))
+        .collect();
+    let skipped = assigned.len() - to_do.len();
+    let mut failed = Vec::new();
+    let mut records = Vec::new();
+    let mut written = 0;
+    for (k, &i) in to_do.iter().enumerate() {
+        let (input, output) = (&inputs[i], &outputs[i]);
+        let start = Instant::now();
+        let result = frame(&previewer, input, input_format, output, &camera, &style);
+        let seconds = start.elapsed().as_secs_f64();
+        match result {
+            Ok(stats) => {
+                written += 1;
+                if !args.quiet {
+                    eprintln!(
+                        "{} [{}/{}] {} -> {}: {} particles, build {:.0} ms, render {:.0} ms, {:.2} Mrays/s, {:.2} s",
+                        utc_now(),
+                        k + 1,
+                        to_do.len(),
+                        input.display(),
+                        output.display(),
+                        stats.particles,
+                        stats.build.as_secs_f64() * 1e3,
+                        stats.render.as_secs_f64() * 1e3,
+                        stats.rays_per_second() / 1e6,
+                        seconds
+                    );
+                }
+                if args.verbose {
+                    eprintln!("  {}", figures(&stats, bvh));
+                }
+                records.push(record(input, output, &stats, seconds));
+            }
+            Err(e) => {
+                eprintln!("error: {}: {e:#}", input.display());
+                failed.push((input.clone(), format!("{e:#}")));
+                if args.fail_fast {
+                    break;
+                }
+            }
+        }
+    }
+    if let Some(path) = &args.report {
+        let report = json!({
+            "bvh": bvh.name(),
+            "size": [width, height],
+            "spacing": config.spacing,
+            "threads": rayon::current_num_threads(),
+            "frames": records,
+        });
+        let mut file = std::fs::File::create(path)
+            .with_context(|| format!("cannot write the report '{}'", path.display()))?;
+        writeln!(file, "{}", serde_json::to_string_pretty(&report)?)?;
+    }
+    let not_attempted = to_do.len() - written - failed.len();
+    if failed.is_empty() && not_attempted == 0 {
+        if !args.quiet {
+            let skipped = match skipped {
+                0 => String::new(),
+                n => format!(", {n} found complete and skipped"),
+            };
+            eprintln!("done: {written} images written{skipped}");
+        }
+        return Ok(ExitCode::SUCCESS);
+    }
+    eprintln!(
+        "{} of {} frames failed:",
+        failed.len(),
+        written + failed.len()
+    );
+    for (input, e) in &failed {
+        eprintln!("  {}: {e}", input.display());
+    }
+    if not_attempted > 0 {
+        eprintln!(
+            "stopped at the first failure (--fail-fast): {not_attempted} frames not attempted"
+        );
+    }
+    Ok(ExitCode::FAILURE)
+}
+
+fn frame(
+    previewer: &Previewer,
+    input: &Path,
+    format: Option<InputFormat>,
+    output: &Path,
+    camera: &Camera,
+    style: &Style,
+) -> Result<PreviewStats> {
+    let particles = read_particles(input, format)?;
+    let preview = previewer.render(&particles.positions, camera, style)?;
+    write_png(output, &preview.image)?;
+    Ok(preview.stats)
+}
+
+fn figures(s: &PreviewStats, kind: BvhKind) -> String {
+    let rays = s.rays.rays.max(1) as f64;
+    format!(
+        "{} BVH: {} nodes, {} leaves, {:.1} metaballs per leaf, depth {}, {:.1} MB; {} rays ({} camera, {} hits); per ray: {:.2} node traversals, {:.2} intersection tests, {:.1} metaballs considered ({:.1} within R of the ray)",
+        kind.name(),
+        s.bvh.nodes,
+        s.bvh.leaves,
+        s.bvh.per_leaf(),
+        s.bvh.depth,
+        s.bvh.bytes as f64 / 1e6,
+        s.rays.rays,
+        s.camera_rays,
+        s.hits,
+        s.rays.nodes as f64 / rays,
+        s.rays.leaves as f64 / rays,
+        s.rays.metaballs as f64 / rays,
+        s.rays.along_ray as f64 / rays,
+    )
+}
+
+fn record(input: &Path, output: &Path, s: &PreviewStats, seconds: f64) -> serde_json::Value {
+    let rays = s.rays.rays.max(1) as f64;
+    json!({
+        "frame": path_frame_number(input),
+        "input": input.display().to_string(),
+        "output": output.display().to_string(),
+        "particles": s.particles,
+        "build_ms": s.build.as_secs_f64() * 1e3,
+        "render_ms": s.render.as_secs_f64() * 1e3,
+        "rays": s.rays.rays,
+        "rays_per_second": s.rays_per_second(),
+        "camera_rays": s.camera_rays,
+        "hits": s.hits,
+        "nodes": s.bvh.nodes,
+        "leaves": s.bvh.leaves,
+        "metaballs_per_leaf": s.bvh.per_leaf(),
+        "bvh_bytes": s.bvh.bytes,
+        "traversals_per_ray": s.rays.nodes as f64 / rays,
+        "intersection_tests_per_ray": s.rays.leaves as f64 / rays,
+        "metaballs_per_ray": s.rays.metaballs as f64 / rays,
+        "seconds": seconds,
+    })
+}

@@ -1,0 +1,131 @@
+//! `splash preview` end to end: a sequence of PNGs with the farm options, and clear errors.
+
+mod common;
+
+use std::process::{Command, Output};
+
+use common::{TempDir, lattice_ball};
+use glam::Vec3;
+
+fn splash(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_splash"))
+        .arg("preview")
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn ply(points: &[Vec3]) -> Vec<u8> {
+    let mut out = format!(
+        "ply\nformat binary_little_endian 1.0\nelement vertex {}\n\
+         property float x\nproperty float y\nproperty float z\nend_header\n",
+        points.len()
+    )
+    .into_bytes();
+    for p in points {
+        for c in p.to_array() {
+            out.extend(c.to_le_bytes());
+        }
+    }
+    out
+}
+
+fn png_size(path: &std::path::Path) -> (u32, u32) {
+    let bytes = std::fs::read(path).unwrap();
+    assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n");
+    let be = |i: usize| u32::from_be_bytes(bytes[i..i + 4].try_into().unwrap());
+    (be(16), be(20))
+}
+
+#[test]
+fn a_sharded_sequence_gives_one_png_per_frame() {
+    let dir = TempDir::new("preview-seq");
+    for (k, x) in [(1, 0.0), (2, 0.02), (3, 0.04)] {
+        let points = lattice_ball(Vec3::new(x, 0.0, 0.0), 0.05, 0.01);
+        dir.file(&format!("sim/f_{k}.ply"), ply(&points));
+    }
+    let sim = dir.path("sim").display().to_string();
+    let out = dir.out_dir("png");
+    for shard in ["1/2", "2/2"] {
+        let run = splash(&[
+            &sim,
+            "--spacing",
+            "0.01",
+            "--size",
+            "48x32",
+            "--shard",
+            shard,
+            "-o",
+            &out,
+        ]);
+        assert!(
+            run.status.success(),
+            "{}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+    }
+    assert_eq!(
+        common::entries(&dir.path("png")),
+        ["f_0001.png", "f_0002.png", "f_0003.png"]
+    );
+    assert_eq!(png_size(&dir.path("png/f_0002.png")), (48, 32));
+    // Resumed: nothing left to do.
+    let run = splash(&[
+        &sim,
+        "--spacing",
+        "0.01",
+        "--size",
+        "48x32",
+        "--skip-existing",
+        "-o",
+        &out,
+    ]);
+    let log = String::from_utf8_lossy(&run.stderr);
+    assert!(
+        run.status.success() && log.contains("0 images written, 3 found complete"),
+        "{log}"
+    );
+}
+
+#[test]
+fn bad_arguments_are_clear_errors() {
+    let dir = TempDir::new("preview-bad");
+    let frame = dir.file("f_1.ply", ply(&lattice_ball(Vec3::ZERO, 0.04, 0.01)));
+    let frame = frame.display().to_string();
+    for (args, expected) in [
+        (vec!["--size", "100000x100000"], "too large"),
+        (vec!["--size", "0x10"], "at least 1"),
+        (vec!["--size", "big"], "WIDTHxHEIGHT"),
+        (vec!["--fov", "0"], "between 0 and 180"),
+        (vec!["--camera", "0,0,nan"], "finite"),
+        (vec!["--camera", "1,1,1", "--look-at", "1,1,1"], "coincide"),
+        (vec!["--look-at", "1,1,1"], "needs --camera"),
+        (vec!["--colour", "#12"], "colour"),
+        (vec!["--bvh", "octree"], "unknown BVH"),
+        (vec!["-o", "x.jpg"], ".png"),
+    ] {
+        let mut all = vec![frame.as_str(), "--spacing", "0.01"];
+        all.extend(&args);
+        let run = splash(&all);
+        let err = String::from_utf8_lossy(&run.stderr);
+        assert!(!run.status.success(), "{args:?} succeeded");
+        assert!(err.contains(expected), "{args:?}: {err}");
+        assert!(!err.contains("panicked"), "{err}");
+    }
+    let missing = dir.path("f_2.ply").display().to_string();
+    let out = dir.path("m.png").display().to_string();
+    let run = splash(&[
+        &missing,
+        "--spacing",
+        "0.01",
+        "--camera",
+        "0,0,1",
+        "--look-at",
+        "0,0,0",
+        "-o",
+        &out,
+    ]);
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert!(!run.status.success() && err.contains("f_2.ply"), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+}
