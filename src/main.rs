@@ -104,8 +104,9 @@ struct ConfigArgs {
     #[arg(long)]
     threads: Option<usize>,
 
-    /// Memory a full-grid engine may use, e.g. 8G or 512M; it refuses larger grids before
-    /// allocating. Default: half the machine's memory.
+    /// Heap a frame may plan to use, e.g. 8G or 512M: every engine estimates its need before
+    /// its big allocations and refuses a larger frame (the others go on). Default: 80 % of
+    /// the smallest of the cgroup limit, SLURM's memory and the available memory.
     #[arg(long)]
     max_memory: Option<String>,
 

@@ -212,7 +212,8 @@ mod tests {
             band < gather && gather < scatter,
             "{band} {gather} {scatter}"
         );
-        // The estimate that --max-memory checks covers the grid; the mesh comes on top.
+        // The estimate that --max-memory checks covers the grid and a guess of the mesh: it
+        // is an upper bound, and not a loose one.
         for (engine, measured) in [(Engine::FullGather, gather), (Engine::Scatter, scatter)] {
             let need = reconstructor("r/2", engine)
                 .planned_memory(&ps)
@@ -220,7 +221,7 @@ mod tests {
                 .unwrap() as f64;
             let ratio = measured as f64 / need;
             assert!(
-                (0.9..1.6).contains(&ratio),
+                (0.5..1.05).contains(&ratio),
                 "{engine:?}: measured/estimate {ratio}"
             );
         }

@@ -97,7 +97,7 @@ fn a_frame_above_the_memory_limit_fails_alone_for_every_engine() {
 }
 
 /// Two balls 10⁴ units apart: the full grid between them is refused before it is allocated,
-/// the engines whose memory follows the surface mesh both balls; under a limit of 1 MiB
+/// the engines whose memory follows the surface mesh both balls; under a limit of 32 KiB
 /// every engine refuses.
 #[test]
 fn particles_spread_over_a_huge_box_are_refused_or_meshed_never_aborted() {
@@ -118,10 +118,7 @@ fn particles_spread_over_a_huge_box_are_refused_or_meshed_never_aborted() {
         ]);
         if engine.starts_with("full") || engine == "scatter" {
             assert_eq!(code, 1, "{engine}: {err}");
-            assert!(
-                err.contains("its full grid of "),
-                "{engine}: {err}"
-            );
+            assert!(err.contains("its full grid of "), "{engine}: {err}");
             assert!(entries(&out).is_empty(), "{engine}");
         } else {
             assert_eq!(code, 0, "{engine}: {err}");
@@ -134,13 +131,13 @@ fn particles_spread_over_a_huge_box_are_refused_or_meshed_never_aborted() {
             &"--engine",
             &engine,
             &"--max-memory",
-            &"1M",
+            &"32K",
             &"-o",
             &dir.out_dir("tight"),
         ]);
         assert_eq!(code, 1, "{engine}: {err}");
         assert!(
-            err.contains("above the memory limit of 1.0 MB (--max-memory)"),
+            err.contains("above the memory limit of 33 kB (--max-memory)"),
             "{engine}: {err}"
         );
     }

@@ -5,7 +5,9 @@ use std::time::{Duration, Instant};
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use splash_sph::{Attribute, Clock, Config, FrameStats, Reconstruction, Reconstructor, Vec3};
+use splash_sph::{
+    Attribute as ParticleAttribute, Clock, Config, FrameStats, Reconstruction, Reconstructor, Vec3,
+};
 
 use crate::arrays::{self, Points};
 use crate::errors::to_py;
@@ -48,8 +50,8 @@ struct Output {
 /// ``"slices"``; all give the same mesh. ``normals``: ``"field"`` (default, the field's
 /// gradient), ``"grid"`` (central differences) or ``"none"``. ``threads``: worker threads, all
 /// cores by default; the mesh does not depend on it (each calling thread keeps its workers for
-/// its next calls). ``max_memory``: the heap a full-grid engine may plan to use, in bytes or as
-/// ``"8G"``.
+/// its next calls). ``max_memory``: the heap a frame may plan to use (every engine checks
+/// it), in bytes or as ``"8G"``.
 ///
 /// ``config``: a TOML file's path (as ``splash recon --config`` reads) or a dict shaped like
 /// it (see ``default_config``). Its ``output.format`` and ``output.up_axis`` become the
@@ -148,17 +150,17 @@ fn run(
         let rec = reconstructor.reconstruct_observed(positions, &mut Clock::default())?;
         let interpolation = Instant::now();
         // One neighbour search for all of them.
-        let columns: Vec<Attribute> = attributes
+        let columns: Vec<ParticleAttribute> = attributes
             .iter()
-            .map(|values| Attribute::Vector(values.to_vec()))
+            .map(|values| ParticleAttribute::Vector(values.to_vec()))
             .collect();
-        let columns: Vec<&Attribute> = columns.iter().collect();
+        let columns: Vec<&ParticleAttribute> = columns.iter().collect();
         let attributes = reconstructor
             .interpolate_all(&rec.mesh, positions, &columns)?
             .into_iter()
             .map(|a| match a {
-                Attribute::Vector(v) => v,
-                Attribute::Scalar(_) => unreachable!("vectors in, vectors out"),
+                ParticleAttribute::Vector(v) => v,
+                ParticleAttribute::Scalar(_) => unreachable!("vectors in, vectors out"),
             })
             .collect();
         Ok(Output {

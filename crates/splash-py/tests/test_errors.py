@@ -42,8 +42,8 @@ def test_format_argument(tmp_path):
         splash_sph.read_particles(path)
     p = splash_sph.read_particles(path, format="raw")
     np.testing.assert_array_equal(p.positions, np.arange(12, dtype=np.float32).reshape(4, 3))
-    with pytest.raises(ValueError, match="unknown input format 'xyz'"):
-        splash_sph.read_particles(path, format="xyz")
+    with pytest.raises(ValueError, match="unknown input format 'pts'"):
+        splash_sph.read_particles(path, format="pts")
 
 
 def test_particles_object(frame):

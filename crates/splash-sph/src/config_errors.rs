@@ -289,7 +289,7 @@ mod tests {
             format!("spacing = 0.014 {long}\n"),
             format!("{long} = 1\n"),
             format!("cell = \"{long}\"\n"),
-            format!("[output]\nattributes = [\"{long}\"]\n"),
+            format!("[output]\nformat = \"{long}\"\n"),
             format!("threads = 0 # {long}\nspacing = 1\n\n"),
         ] {
             let e = Config::from_toml(&text).unwrap_err().to_string();

@@ -51,6 +51,11 @@ const READERS: &[Reader] = &[
     Reader { name: "ply-be", extension: "ply", read: by_extension, seeds: ply_be_seeds },
     Reader { name: "csv", extension: "csv", read: by_extension, seeds: csv_seeds },
     Reader { name: "raw", extension: "bin", read: by_extension, seeds: raw_seeds },
+    Reader { name: "vtk", extension: "vtk", read: by_extension, seeds: vtk_seeds },
+    Reader { name: "vtu", extension: "vtu", read: by_extension, seeds: vtu_seeds },
+    Reader { name: "vtp", extension: "vtp", read: by_extension, seeds: vtp_seeds },
+    Reader { name: "bgeo", extension: "bgeo", read: by_extension, seeds: bgeo_seeds },
+    Reader { name: "xyz", extension: "xyz", read: by_extension, seeds: xyz_seeds },
 ];
 
 /// Cases per reader in the default (CI) mode.
@@ -999,6 +1004,42 @@ fn csv_seeds() -> Vec<Vec<u8>> {
     .map(|s| s.as_bytes().to_vec())
     .chain([b"x,y,z\n1,2,\xe9\n".to_vec()])
     .collect()
+}
+
+/// The interchange fixtures (written by VTK, numpy and a partio-layout script) whose names
+/// end in `suffix`.
+fn format_fixtures(suffix: &str) -> Vec<Vec<u8>> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/formats");
+    let mut names: Vec<PathBuf> = fs::read_dir(dir)
+        .unwrap()
+        .filter_map(|e| Some(e.ok()?.path()))
+        .filter(|p| p.to_string_lossy().ends_with(suffix))
+        .collect();
+    names.sort();
+    assert!(!names.is_empty(), "no fixtures/formats/*{suffix}");
+    names.iter().map(|p| fs::read(p).unwrap()).collect()
+}
+
+fn vtk_seeds() -> Vec<Vec<u8>> {
+    format_fixtures(".vtk")
+}
+
+fn vtu_seeds() -> Vec<Vec<u8>> {
+    format_fixtures(".vtu")
+}
+
+fn vtp_seeds() -> Vec<Vec<u8>> {
+    format_fixtures(".vtp")
+}
+
+fn bgeo_seeds() -> Vec<Vec<u8>> {
+    let mut seeds = format_fixtures(".bgeo");
+    seeds.extend(format_fixtures(".bgeo.gz"));
+    seeds
+}
+
+fn xyz_seeds() -> Vec<Vec<u8>> {
+    format_fixtures(".xyz")
 }
 
 fn raw_seeds() -> Vec<Vec<u8>> {

@@ -124,7 +124,7 @@ def reconstruct(
     (default, the field's gradient), ``"grid"`` (central differences) or ``"none"``.
     ``threads``: worker threads, all cores by default; the mesh does not depend on it (each
     calling thread keeps its workers for its next calls). ``max_memory``: the heap a
-    full-grid engine may plan to use, in bytes or as ``"8G"``.
+    frame may plan to use (every engine checks it), in bytes or as ``"8G"``.
 
     ``config``: a TOML file's path (as ``splash recon --config`` reads) or a dict shaped like
     it (see ``default_config``). Its ``output.format`` and ``output.up_axis`` become the

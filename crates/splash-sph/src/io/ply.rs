@@ -192,10 +192,9 @@ fn check_header_lines(header: &[u8]) -> Result<()> {
                 if !fine {
                     bail_format!(
                         "malformed PLY header: line {n} is '{}', expected 'property TYPE NAME' \
-                         ('property float x') or 'property list COUNT_TYPE TYPE NAME', TYPE one \
-                         of {}",
-                        got(),
-                        SCALAR_TYPES.join(" ")
+                         ('property float x') or 'property list COUNT_TYPE TYPE NAME', TYPE a \
+                         PLY scalar type (char, uchar, short, int, float, double, int8 … float64)",
+                        got()
                     );
                 }
                 if !element {

@@ -123,7 +123,10 @@ pub(super) fn parse(data: &[u8]) -> Result<Particles> {
             Ok(e) => e,
             // Without the appended data the XML is cut before its closing tags.
             Err(_) if file.appended.is_some() && at + 64 >= xml.len() => break,
-            Err(e) => bail_format!("malformed XML near byte offset {at}: {e}"),
+            Err(e) => bail_format!(
+                "malformed XML near byte offset {at}: {}",
+                super::short_message(&e.to_string())
+            ),
         };
         let empty = matches!(event, Event::Empty(_));
         match event {
