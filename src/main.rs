@@ -24,7 +24,7 @@ use splash_sph::{
 
 use batch::{Batch, Output};
 use log::{Console, LogFormat, Verbosity};
-use sequence::{FrameSet, Shard};
+use sequence::{FarmArgs, FrameSet};
 
 #[derive(Parser)]
 #[command(
@@ -222,24 +222,8 @@ struct Recon {
     #[command(flatten)]
     params: ConfigArgs,
 
-    /// Only these frame numbers: A-B ranges, A-BxS every S-th, lists (1-10,20,30-40x5).
-    #[arg(long, value_name = "LIST")]
-    frames: Option<String>,
-
-    /// Job K of N (1 ≤ K ≤ N) takes every N-th selected frame, from the K-th; auto/N takes
-    /// K = SLURM_ARRAY_TASK_ID mod N + 1 (arrays 0-(N-1) or 1-N; a task resubmitted alone
-    /// keeps its frames).
-    #[arg(long, value_name = "K/N")]
-    shard: Option<String>,
-
-    /// Leave frames whose output exists alone (outputs are renamed into place whole, so an
-    /// existing one is complete): a killed run restarted with this flag finishes the rest.
-    #[arg(long)]
-    skip_existing: bool,
-
-    /// Stop at the first failing frame (default: report it and go on).
-    #[arg(long)]
-    fail_fast: bool,
+    #[command(flatten)]
+    farm: FarmArgs,
 
     /// Log lines: plain, or json (one object per line).
     #[arg(long, value_name = "FORMAT", default_value = "plain")]
@@ -336,12 +320,13 @@ fn recon(args: Recon) -> Result<ExitCode> {
         .map(InputFormat::parse)
         .transpose()?;
     let log_format = LogFormat::parse(&args.log_format)?;
-    let shard = args
-        .shard
+    let shard = args.farm.shard()?;
+    let frames = args
+        .farm
+        .frames
         .as_deref()
-        .map(|s| Shard::parse(s, |name| std::env::var(name).ok()))
+        .map(FrameSet::parse)
         .transpose()?;
-    let frames = args.frames.as_deref().map(FrameSet::parse).transpose()?;
     let verbosity = match (args.quiet, args.verbose) {
         (true, _) => Verbosity::Quiet,
         (_, true) => Verbosity::Verbose,
@@ -395,7 +380,7 @@ fn recon(args: Recon) -> Result<ExitCode> {
         if inputs.is_empty() {
             bail!(
                 "--frames {}: no input has one of these frame numbers",
-                args.frames.unwrap_or_default()
+                args.farm.frames.unwrap_or_default()
             );
         }
     }
@@ -410,8 +395,8 @@ fn recon(args: Recon) -> Result<ExitCode> {
         format,
         config,
         shard,
-        skip_existing: args.skip_existing,
-        fail_fast: args.fail_fast,
+        skip_existing: args.farm.skip_existing,
+        fail_fast: args.farm.fail_fast,
     };
     let report = batch.run(&mut console)?;
     if let Some(path) = &args.report {

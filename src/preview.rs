@@ -20,7 +20,7 @@ use splash_sph::{Bytes, Config, InputFormat, Vec3, estimate_spacing, read_partic
 
 use crate::batch::Output;
 use crate::log::utc_now;
-use crate::sequence::{self, FrameSet, Shard, path_frame_number};
+use crate::sequence::{self, FarmArgs, FrameSet, path_frame_number};
 
 #[derive(Args)]
 #[command(after_help = "\
@@ -112,26 +112,12 @@ pub struct PreviewArgs {
     #[arg(long)]
     threads: Option<usize>,
 
-    /// Memory the hierarchy and image may take, e.g. 8G (default: half the machine's).
+    /// Memory the hierarchy and image may take, e.g. 8G (default: 80 % of what is available).
     #[arg(long)]
     max_memory: Option<String>,
 
-    /// Only these frame numbers: A-B ranges, A-BxS every S-th, lists (1-10,20,30-40x5).
-    #[arg(long, value_name = "LIST")]
-    frames: Option<String>,
-
-    /// Job K of N takes every N-th selected frame from the K-th; auto/N reads
-    /// SLURM_ARRAY_TASK_ID (as for recon).
-    #[arg(long, value_name = "K/N")]
-    shard: Option<String>,
-
-    /// Leave frames whose PNG exists alone.
-    #[arg(long)]
-    skip_existing: bool,
-
-    /// Stop at the first failing frame.
-    #[arg(long)]
-    fail_fast: bool,
+    #[command(flatten)]
+    farm: FarmArgs,
 
     /// Input format for every file: ply, csv or raw.
     #[arg(long)]
@@ -288,11 +274,7 @@ pub fn preview(args: PreviewArgs) -> Result<ExitCode> {
         .as_deref()
         .map(InputFormat::parse)
         .transpose()?;
-    let shard = args
-        .shard
-        .as_deref()
-        .map(|s| Shard::parse(s, |name| std::env::var(name).ok()))
-        .transpose()?;
+    let shard = args.farm.shard()?;
     let output = args
         .output
         .as_deref()
@@ -314,7 +296,7 @@ pub fn preview(args: PreviewArgs) -> Result<ExitCode> {
 
     let discovered = sequence::discover(&args.inputs)?;
     let mut inputs = discovered.files;
-    if let Some(text) = &args.frames {
+    if let Some(text) = &args.farm.frames {
         let frames = FrameSet::parse(text)?;
         inputs = frames.select(inputs)?;
         let present: BTreeSet<u64> = inputs.iter().filter_map(|p| path_frame_number(p)).collect();
@@ -392,7 +374,7 @@ pub fn preview(args: PreviewArgs) -> Result<ExitCode> {
     let to_do: Vec<usize> = assigned
         .iter()
         .copied()
-        .filter(|&i| !(args.skip_existing && outputs[i].is_file()))
+        .filter(|&i| !(args.farm.skip_existing && outputs[i].is_file()))
         .collect();
     let skipped = assigned.len() - to_do.len();
     let mut failed = Vec::new();
@@ -429,7 +411,7 @@ pub fn preview(args: PreviewArgs) -> Result<ExitCode> {
             Err(e) => {
                 eprintln!("error: {}: {e:#}", input.display());
                 failed.push((input.clone(), format!("{e:#}")));
-                if args.fail_fast {
+                if args.farm.fail_fast {
                     break;
                 }
             }

@@ -14,6 +14,7 @@ use std::fmt;
 use std::path::{Path, PathBuf};
 
 use anyhow::{Context, Result, anyhow, bail};
+use clap::Args;
 
 use splash_sph::InputFormat;
 
@@ -178,6 +179,39 @@ pub fn sort_frames(paths: &mut [PathBuf]) {
 /// A set of frame numbers: `1-10,20,30-40x5` (ranges are inclusive; `xS` takes every S-th
 /// number from the range's start).
 #[derive(Debug, Clone, PartialEq, Eq)]
+/// The options that pick a job's frames, shared by `recon` and `preview`.
+#[derive(Args)]
+pub struct FarmArgs {
+    /// Only these frame numbers: A-B ranges, A-BxS every S-th, lists (1-10,20,30-40x5).
+    #[arg(long, value_name = "LIST")]
+    pub frames: Option<String>,
+
+    /// Job K of N (1 ≤ K ≤ N) takes every N-th selected frame, from the K-th; auto/N takes
+    /// K = SLURM_ARRAY_TASK_ID mod N + 1 (arrays 0-(N-1) or 1-N; a task resubmitted alone
+    /// keeps its frames).
+    #[arg(long, value_name = "K/N")]
+    pub shard: Option<String>,
+
+    /// Leave frames whose output exists alone (outputs are renamed into place whole, so an
+    /// existing one is complete): a killed run restarted with this flag finishes the rest.
+    #[arg(long)]
+    pub skip_existing: bool,
+
+    /// Stop at the first failing frame (default: report it and go on).
+    #[arg(long)]
+    pub fail_fast: bool,
+}
+
+impl FarmArgs {
+    /// The `--shard` asked for, `auto/N` read from the environment.
+    pub fn shard(&self) -> Result<Option<Shard>> {
+        self.shard
+            .as_deref()
+            .map(|s| Shard::parse(s, |name| std::env::var(name).ok()))
+            .transpose()
+    }
+}
+
 pub struct FrameSet {
     ranges: Vec<FrameRange>,
 }

@@ -36,15 +36,7 @@ impl Reconstructor {
                  or estimate it once per sequence with estimate_spacing",
             ));
         };
-        let pool = match config.threads {
-            Some(n) => Some(Arc::new(
-                rayon::ThreadPoolBuilder::new()
-                    .num_threads(n)
-                    .build()
-                    .map_err(|e| Error::config(format!("cannot start {n} worker threads: {e}")))?,
-            )),
-            None => None,
-        };
+        let pool = worker_pool(config.threads)?;
         Ok(Reconstructor {
             params: Params::resolve(&config, r),
             config,
@@ -204,5 +196,18 @@ impl Reconstructor {
             Some(pool) => pool.install(f),
             None => f(),
         }
+    }
+}
+
+/// A pool of `threads` workers, or None for rayon's global pool (all cores).
+pub(crate) fn worker_pool(threads: Option<usize>) -> Result<Option<Arc<rayon::ThreadPool>>> {
+    match threads {
+        Some(0) => Err(Error::config("threads must be at least 1")),
+        Some(n) => rayon::ThreadPoolBuilder::new()
+            .num_threads(n)
+            .build()
+            .map(|pool| Some(Arc::new(pool)))
+            .map_err(|e| Error::config(format!("cannot start {n} worker threads: {e}"))),
+        None => Ok(None),
     }
 }

@@ -37,7 +37,7 @@ use rayon::prelude::*;
 
 use crate::bytes::default_limit;
 use crate::config::Config;
-use crate::error::{Error, Result};
+use crate::error::Result;
 use crate::field::{FieldConfig, MetaballConfig};
 
 pub use camera::{Camera, parse_size};
@@ -111,16 +111,7 @@ impl Previewer {
         crate::length::positive("spacing", r)?;
         let metaball = metaball_config(config);
         metaball.validate()?;
-        let pool = match config.threads {
-            Some(0) => bail_config!("threads must be at least 1"),
-            Some(n) => Some(Arc::new(
-                rayon::ThreadPoolBuilder::new()
-                    .num_threads(n)
-                    .build()
-                    .map_err(|e| Error::config(format!("cannot start {n} worker threads: {e}")))?,
-            )),
-            None => None,
-        };
+        let pool = crate::reconstructor::worker_pool(config.threads)?;
         Ok(Previewer {
             field: Metaballs::new(&metaball, r),
             kind: BvhKind::Fitted,
