@@ -194,8 +194,10 @@ impl ConfigArgs {
 #[derive(Args)]
 #[command(after_help = "\
 Inputs: PLY (ascii or binary; the vertex element's x, y, z), CSV (x, y, z columns by header name,
-or the first three columns without a header) and raw binary (.bin/.raw: little-endian f32 x y z
-triples, nothing else). The format comes from the extension unless --input-format is given.
+or the first three columns without a header), raw binary (.bin/.raw: little-endian f32 x y z
+triples, nothing else), legacy VTK (.vtk), VTK XML (.vtu, .vtp), classic BGEO (.bgeo,
+.bgeo.gz) and .xyz (f32 triples, or text). Every other per-particle value is an attribute
+(--attributes). The format comes from the extension unless --input-format is given.
 
 Lengths (--cell, band and support in the config) are multiples of the particle spacing r
 (2r, r, r/2, r/4, 0.5r) or plain numbers in world units. The band of surface vertices spans 2r

@@ -119,7 +119,7 @@ pub struct PreviewArgs {
     #[command(flatten)]
     farm: FarmArgs,
 
-    /// Input format for every file: ply, csv or raw.
+    /// Input format for every file: ply, csv, raw, vtk, vtu (or vtp), bgeo or xyz.
     #[arg(long)]
     input_format: Option<String>,
 
