@@ -415,10 +415,11 @@ fn the_preview_agrees_with_the_metaball_mesh() {
     assert!(both > 600, "{both}");
     assert!(close * 100 >= both * 99, "{close} of {both} within a cell");
     // Silhouettes: the mesh's outline is the field sampled every cell, so pixels along it
-    // may differ; at 80×60 the outline crosses about 2 % of the image.
+    // may differ; the issue allows 0.5 % of the image (measured: 10 of 10 800 pixels).
     assert!(
-        silhouette * 100 <= traced.len() * 2,
-        "{silhouette} pixels differ"
+        silhouette * 200 <= traced.len(),
+        "{silhouette} of {} pixels differ",
+        traced.len()
     );
 }
 
