@@ -140,3 +140,39 @@ def test_particle_box_drops_escaped_particles(splash_bin, tmp_path):
     inside = (m.points[:, 1] <= (lo[1] + hi[1]) / 2).sum()
     assert frame["particles"] == inside
     assert frame["particles_outside_box"] == len(m.points) - inside
+
+
+@pytest.mark.parametrize("ext", ["vtu", "vtk"])
+def test_python_mesh_write_to_vtk_reads_back_with_its_arrays(tmp_path, ext):
+    """Mesh.write to VTK files keeps what the arrays hold: read back by meshio (.vtu) or
+    VTK's legacy reader (.vtk), bit for bit."""
+    import splash_sph
+
+    frame = splash_sph.read_particles(FRAME)
+    mesh = splash_sph.reconstruct(
+        frame.positions, spacing=FRAME_SPACING,
+        attributes={"velocity": frame.attributes["velocity"]},
+    )
+    path = tmp_path / f"m.{ext}"
+    mesh.write(path)
+    if ext == "vtu":
+        m = meshio.read(path)
+        points, triangles = m.points, m.cells_dict["triangle"]
+        normals, velocity = m.point_data["Normals"], m.point_data["velocity"]
+    else:
+        vtk = pytest.importorskip("vtk")
+        from vtk.util.numpy_support import vtk_to_numpy
+
+        reader = vtk.vtkPolyDataReader()
+        reader.SetFileName(str(path))
+        reader.Update()
+        out = reader.GetOutput()
+        points = vtk_to_numpy(out.GetPoints().GetData())
+        triangles = vtk_to_numpy(out.GetPolys().GetConnectivityArray()).reshape(-1, 3)
+        normals = vtk_to_numpy(out.GetPointData().GetArray("Normals"))
+        velocity = vtk_to_numpy(out.GetPointData().GetArray("velocity"))
+    assert len(mesh.faces) > 100_000
+    assert same(points, mesh.vertices)
+    assert np.array_equal(triangles, mesh.faces)
+    assert same(normals, mesh.normals)
+    assert same(velocity, mesh.attributes["velocity"])

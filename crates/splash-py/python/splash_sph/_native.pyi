@@ -64,13 +64,14 @@ class Mesh:
         """Writes the mesh to ``path`` atomically (a reader sees the old file or the new one),
         creating missing directories.
 
-        ``format``: ``"obj"``, ``"ply"`` (binary), ``"ply-ascii"`` or ``"pov"``; by default the
-        configuration's ``output.format``, else the one the extension implies (``.obj``,
-        ``.ply``, ``.inc``), else OBJ. ``up_axis``: ``"z"`` or ``"y"`` turns the written
-        coordinates so that that axis is up (the arrays are left as they are); by default the
-        configuration's ``output.up_axis``. PLY files get the ``velocity`` attribute, when the
-        mesh has one, as the vertex properties ``vx vy vz``. The GIL is released while
-        writing.
+        ``format``: ``"obj"``, ``"ply"`` (binary), ``"ply-ascii"``, ``"pov"``, ``"vtk"``,
+        ``"vtu"`` or ``"vtp"``; by default the configuration's ``output.format``, else the one
+        the extension implies (``.obj``, ``.ply``, ``.inc``, ``.vtk``, ``.vtu``, ``.vtp``),
+        else OBJ. ``up_axis``: ``"z"`` or ``"y"`` turns the written coordinates so that that
+        axis is up (the arrays are left as they are); by default the configuration's
+        ``output.up_axis``. PLY and VTK files get every attribute of the mesh (``velocity`` as
+        the PLY properties ``vx vy vz``); OBJ and POV-Ray files leave them out. The GIL is
+        released while writing.
 
         Raises OSError when the file cannot be written, ValueError for an unknown format or
         one that contradicts the extension.
