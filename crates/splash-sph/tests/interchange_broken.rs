@@ -7,7 +7,6 @@ mod common;
 use std::fs;
 use std::io::Write;
 use std::path::{Path, PathBuf};
-use std::time::{Duration, Instant};
 
 use common::TempDir;
 use splash_sph::read_particles;
@@ -21,22 +20,7 @@ fn text(name: &str) -> String {
 }
 
 fn assert_fails(path: &Path, expected: &[&str]) {
-    let start = Instant::now();
-    let result = read_particles(path, None);
-    let elapsed = start.elapsed();
-    let message = match result {
-        Ok(p) => panic!("{} read {} particles", path.display(), p.len()),
-        Err(e) => e.to_string(),
-    };
-    let name = path.file_name().unwrap().to_string_lossy();
-    assert!(message.contains(&*name), "no file name in: {message}");
-    for want in expected {
-        assert!(message.contains(want), "no '{want}' in: {message}");
-    }
-    assert!(
-        elapsed < Duration::from_secs(1),
-        "{message}: took {elapsed:?}"
-    );
+    common::assert_read_fails(path, None, expected);
 }
 
 fn gzip(bytes: &[u8]) -> Vec<u8> {

@@ -311,23 +311,7 @@ const XYZ_PROPS: &str = "property float x\nproperty float y\nproperty float z\n"
 
 /// Reads `path`, which must fail with a message naming the file and holding every `expected`.
 fn assert_fails(path: &Path, format: Option<InputFormat>, expected: &[&str]) {
-    let start = Instant::now();
-    let result = read_particles(path, format);
-    let elapsed = start.elapsed();
-    let message = match result {
-        Ok(points) => panic!("{} read {} particles", path.display(), points.len()),
-        Err(e) => e.to_string(),
-    };
-    let name = path.file_name().unwrap().to_string_lossy();
-    assert!(message.contains(&*name), "no file name in: {message}");
-    for want in expected {
-        assert!(message.contains(want), "no '{want}' in: {message}");
-    }
-    // A huge allocation or a scan of a declared count would take far longer.
-    assert!(
-        elapsed < Duration::from_secs(1),
-        "{message}: took {elapsed:?}"
-    );
+    common::assert_read_fails(path, format, expected);
 }
 
 #[test]
