@@ -1,5 +1,6 @@
 //! Triangle meshes: the output of every engine.
 
+pub mod correction;
 pub(crate) mod marching_cubes;
 pub mod topology;
 
