@@ -8,6 +8,7 @@ default), as the ``splash`` command line runs it, on numpy arrays::
     p = splash_sph.read_particles("frame_0040.ply")
     mesh = splash_sph.reconstruct(p.positions, spacing=0.014, cell="r/2")
     mesh.write("frame_0040.obj")
+    back = splash_sph.read_mesh("frame_0040.obj")   # numpy arrays of a written mesh
 
 Lengths are multiples of the particle spacing r (``"2r"``, ``"r"``, ``"r/2"``) or plain
 numbers in world units. Library errors raise OSError (files) or ValueError (data, settings)
@@ -24,14 +25,17 @@ from ._native import (
     read_particles,
     reconstruct,
 )
+from .meshes import MeshArrays, read_mesh
 
 __all__ = [
     "Mesh",
+    "MeshArrays",
     "Particles",
     "config_toml",
     "default_config",
     "estimate_spacing",
     "preview",
     "read_particles",
+    "read_mesh",
     "reconstruct",
 ]

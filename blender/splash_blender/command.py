@@ -1,0 +1,113 @@
+# SPDX-License-Identifier: GPL-2.0-or-later
+"""The `splash recon` command line equivalent to the panel's render settings, and back.
+
+Pure Python (no bpy): `to_command` takes the settings as a dict, `from_command` returns one.
+"""
+
+import shlex
+
+FIELDS = ("ssp07", "zb05", "density", "blobby", "metaball", "anisotropic")
+NORMALS = ("field", "grid", "none")
+ENGINES = ("narrow-band", "full-gather", "scatter", "slices")
+
+
+def to_command(s):
+    """`splash recon …` for settings `s`: input, output, spacing, cell, field, normals,
+    engine, velocity (bool), up_axis ("" or "y"/"z")."""
+    words = ["splash", "recon", s.get("input") or "PARTICLES"]
+    if s.get("spacing"):
+        words += ["--spacing", f"{s['spacing']:.9g}"]
+    words += ["--cell", s["cell"], "--field", s["field"], "--normals", s["normals"]]
+    if s.get("engine", "narrow-band") != "narrow-band":
+        words += ["--engine", s["engine"]]
+    if s.get("velocity"):
+        # OBJ has no room for velocities.
+        words += ["--attributes", "velocity", "--format", "ply"]
+    if s.get("up_axis"):
+        words += ["--up-axis", s["up_axis"]]
+    words += ["-o", s.get("output") or "mesh/"]
+    return " ".join(shlex.quote(w) for w in words)
+
+
+class CommandError(ValueError):
+    """A command line the panel cannot take."""
+
+
+def from_command(line):
+    """Settings parsed from a `splash recon` line, and a list of the words ignored (options
+    the panel has no place for). Raises CommandError for a line that is not `splash recon`
+    or has a bad value."""
+    try:
+        words = shlex.split(line)
+    except ValueError as e:
+        raise CommandError(f"cannot split the command line: {e}") from None
+    if words and words[0].endswith("splash"):
+        words = words[1:]
+    if not words or words[0] != "recon":
+        raise CommandError("expected a 'splash recon …' command line")
+    words = words[1:]
+    out, ignored, inputs = {}, [], []
+    takes_value = {
+        "--spacing", "--particle-radius", "--cell", "--field", "--normals", "--engine",
+        "--attributes", "--up-axis", "-o", "--output", "--format", "--config", "--threads",
+        "--frames", "--shard", "--max-memory", "--input-format", "--particle-aabb",
+        "--block", "--log-format", "--report",
+    }  # fmt: skip
+    i = 0
+    while i < len(words):
+        word = words[i]
+        if word.startswith("--") and "=" in word:
+            word, value = word.split("=", 1)
+            i += 1
+        elif word in takes_value:
+            if i + 1 >= len(words):
+                raise CommandError(f"{word} needs a value")
+            value = words[i + 1]
+            i += 2
+        else:
+            if word.startswith("-"):
+                ignored.append(word)
+            else:
+                inputs.append(word)
+            i += 1
+            continue
+        if word == "--spacing":
+            out["spacing"] = _number(word, value)
+        elif word == "--particle-radius":
+            out["spacing"] = 2.0 * _number(word, value)
+        elif word == "--cell":
+            out["cell"] = value
+        elif word == "--field":
+            out["field"] = _choice(word, value, FIELDS)
+        elif word == "--normals":
+            out["normals"] = _choice(word, value, NORMALS)
+        elif word == "--engine":
+            out["engine"] = _choice(word, value, ENGINES)
+        elif word == "--attributes":
+            names = [n.strip().lower() for n in value.split(",")]
+            out["velocity"] = any(n in ("velocity", "velocities", "vel", "v") for n in names)
+        elif word == "--up-axis":
+            out["up_axis"] = _choice(word, value.lower(), ("y", "z"))
+        elif word in ("-o", "--output"):
+            out["output"] = value
+        else:
+            ignored.append(f"{word} {value}")
+    if inputs:
+        out["input"] = " ".join(shlex.quote(w) for w in inputs)
+    return out, ignored
+
+
+def _number(option, value):
+    try:
+        number = float(value)
+    except ValueError:
+        raise CommandError(f"{option} {value}: expected a number") from None
+    if not number > 0:
+        raise CommandError(f"{option} {value}: expected a positive number")
+    return number
+
+
+def _choice(option, value, choices):
+    if value not in choices:
+        raise CommandError(f"{option} {value}: expected one of {', '.join(choices)}")
+    return value

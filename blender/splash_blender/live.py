@@ -1,0 +1,221 @@
+# SPDX-License-Identifier: GPL-2.0-or-later
+"""Live mode: the scene's particle object reconstructed on every frame change.
+
+The viewport settings apply in the viewport, the render settings from `render_init` to
+`render_complete`/`render_cancel` (and for the frame a render starts on, `render_pre`).
+Surfaces are cached by frame, settings and a checksum of the particles, so that scrubbing
+back, or rendering a frame already seen, costs no reconstruction. Errors go to the panel
+(`scene.splash.error`) and to the log, never to a traceback dialog.
+"""
+
+import logging
+import time
+import zlib
+from collections import OrderedDict
+
+import bpy
+from bpy.app.handlers import persistent
+
+from . import meshdata, vendor
+
+log = logging.getLogger("splash_blender")
+
+SURFACE_TAG = "splash_surface_of"
+
+_state = {"rendering": False}
+_cache = OrderedDict()
+
+
+class LiveError(Exception):
+    """A problem to show the user (no particles, bad settings, a failing frame)."""
+
+
+def quality(scene, render):
+    """The settings group in force: render or viewport."""
+    return scene.splash.render if render else scene.splash.viewport
+
+
+def surface_object(scene, source):
+    """The object showing `source`'s surface, created beside it the first time."""
+    for obj in scene.objects:
+        if obj.get(SURFACE_TAG) == source.name:
+            return obj
+    mesh = bpy.data.meshes.new(source.name + "_surface")
+    obj = bpy.data.objects.new(source.name + "_surface", mesh)
+    obj[SURFACE_TAG] = source.name
+    collection = source.users_collection[0] if source.users_collection else scene.collection
+    collection.objects.link(obj)
+    return obj
+
+
+def particles(source, depsgraph):
+    """Positions (N, 3) and velocities (N, 3) or None of the evaluated `source`."""
+    evaluated = source.evaluated_get(depsgraph) if depsgraph is not None else source
+    mesh = evaluated.to_mesh()
+    try:
+        return meshdata.positions(mesh), meshdata.vector_attribute(mesh, "velocity")
+    finally:
+        evaluated.to_mesh_clear()
+
+
+def reconstruct(scene, render, depsgraph=None):
+    """Reconstructs the live source at the current frame into its surface object; returns
+    the surface object. Raises LiveError with a message for the user."""
+    settings = scene.splash
+    source = settings.source
+    frame = scene.frame_current
+    if source is None:
+        raise LiveError("choose the particle object in the splash panel")
+    if depsgraph is None:
+        try:
+            depsgraph = bpy.context.evaluated_depsgraph_get()
+        except (AttributeError, RuntimeError):
+            depsgraph = None
+    positions, velocities = particles(source, depsgraph)
+    if len(positions) == 0:
+        raise LiveError(f"'{source.name}' has no vertices (particles) at frame {frame}")
+    if not settings.velocity:
+        velocities = None
+    splash_sph = vendor.splash_sph()
+    try:
+        if settings.spacing <= 0.0:
+            settings.spacing = splash_sph.estimate_spacing(positions)
+            log.info("splash: estimated spacing r = %g from frame %d", settings.spacing, frame)
+        q = quality(scene, render)
+        key = (
+            source.name,
+            frame,
+            len(positions),
+            zlib.crc32(positions.tobytes()),
+            None if velocities is None else zlib.crc32(velocities.tobytes()),
+            round(settings.spacing, 9),
+            q.cell,
+            q.field,
+            q.normals,
+            q.engine,
+        )
+        started = time.perf_counter()
+        arrays = _cache.get(key)
+        cached = arrays is not None
+        if cached:
+            _cache.move_to_end(key)
+        else:
+            mesh = splash_sph.reconstruct(
+                positions,
+                settings.spacing,
+                cell=_length(q.cell),
+                field=q.field,
+                normals=q.normals,
+                engine=q.engine,
+                attributes=None if velocities is None else {"velocity": velocities},
+            )
+            normals = mesh.normals if len(mesh.normals) else None
+            arrays = (mesh.vertices, mesh.faces, normals, dict(mesh.attributes))
+            if settings.cache_frames > 0:
+                _cache[key] = arrays
+                while len(_cache) > settings.cache_frames:
+                    _cache.popitem(last=False)
+    except ValueError as e:
+        raise LiveError(f"frame {frame}: {e}") from None
+    surface = surface_object(scene, source)
+    meshdata.fill(surface.data, *arrays)
+    surface.matrix_world = source.matrix_world
+    seconds = time.perf_counter() - started
+    settings.status = (
+        f"frame {frame}: {len(positions)} particles, {len(arrays[1])} triangles, "
+        f"{seconds:.2f} s ({'render' if render else 'viewport'}"
+        f"{', cached' if cached else ''})"
+    )
+    settings.error = ""
+    return surface
+
+
+def _length(text):
+    """A cell as the package takes it: "r/2" stays text, "0.01" becomes a number."""
+    text = text.strip()
+    try:
+        return float(text)
+    except ValueError:
+        return text
+
+
+def update(scene, render=None, depsgraph=None):
+    """`reconstruct` for handlers and buttons: errors go to the panel and the log."""
+    if render is None:
+        render = _state["rendering"]
+    try:
+        reconstruct(scene, render, depsgraph)
+        return True
+    except (LiveError, RuntimeError, OSError) as e:
+        scene.splash.error = str(e)
+    except Exception as e:  # a handler must never raise into Blender
+        scene.splash.error = f"unexpected error: {e!r}"
+        log.exception("splash live mode")
+    log.error("splash: %s", scene.splash.error)
+    print(f"splash: error: {scene.splash.error}")
+    return False
+
+
+def clear_cache():
+    _cache.clear()
+
+
+def on_settings_changed(scene):
+    if scene.splash.enabled:
+        # Handlers change the mesh while a render thread may read the scene.
+        scene.render.use_lock_interface = True
+        update(scene, render=False)
+
+
+def _live(scene):
+    return scene.splash.enabled and scene.splash.source is not None
+
+
+@persistent
+def _frame_change_post(scene, depsgraph=None):
+    # Cycles steps to subframes for motion blur: the surface stays the frame's, blurred by
+    # its velocity attribute.
+    if _live(scene) and not (_state["rendering"] and scene.frame_subframe != 0.0):
+        update(scene, depsgraph=depsgraph)
+
+
+@persistent
+def _render_init(scene, *_):
+    _state["rendering"] = True
+
+
+@persistent
+def _render_pre(scene, *_):
+    _state["rendering"] = True
+    if _live(scene):
+        update(scene, render=True)
+
+
+@persistent
+def _render_done(scene, *_):
+    _state["rendering"] = False
+    if _live(scene):
+        update(scene, render=False)
+
+
+_handlers = (
+    (bpy.app.handlers.frame_change_post, _frame_change_post),
+    (bpy.app.handlers.render_init, _render_init),
+    (bpy.app.handlers.render_pre, _render_pre),
+    (bpy.app.handlers.render_complete, _render_done),
+    (bpy.app.handlers.render_cancel, _render_done),
+)
+
+
+def register():
+    for handlers, handler in _handlers:
+        if handler not in handlers:
+            handlers.append(handler)
+
+
+def unregister():
+    for handlers, handler in _handlers:
+        if handler in handlers:
+            handlers.remove(handler)
+    clear_cache()
+

@@ -1,0 +1,155 @@
+# SPDX-License-Identifier: GPL-2.0-or-later
+"""The add-on's settings: the scene's live reconstruction and each sequence object's files."""
+
+import bpy
+from bpy.props import (
+    BoolProperty,
+    EnumProperty,
+    FloatProperty,
+    IntProperty,
+    PointerProperty,
+    StringProperty,
+)
+
+FIELDS = [
+    ("ssp07", "SSP07", "Solenthaler et al. 2007 signed distance (support 4r): the paper's field"),
+    ("zb05", "ZB05", "Zhu & Bridson 2005 signed distance (support 4r)"),
+    ("density", "Density", "SPH colour field (support 2r): the fastest, splashsurf's field"),
+    ("blobby", "Blobby", "Blinn 1982 Gaussian blobbies"),
+    ("metaball", "Metaball", "Metaballs (cut-off 1.5r)"),
+    ("anisotropic", "Anisotropic", "Yu & Turk 2010 stretched kernels: thin sheets; slowest"),
+]
+NORMALS = [
+    ("field", "Field", "The field's analytic gradient"),
+    ("grid", "Grid", "Central differences of the grid: faster, smoothed over a cell"),
+    ("none", "None", "No normals: Blender computes its own from the faces"),
+]
+ENGINES = [
+    ("narrow-band", "Narrow band", "Akinci et al. 2012 (default)"),
+    ("full-gather", "Full gather", "Every grid vertex: the paper's baseline"),
+    ("scatter", "Scatter", "Every grid vertex, particle by particle"),
+    ("slices", "Slices", "Marching Slices in blocks: little memory"),
+]
+
+
+def _quality(cell, field, normals):
+    """A settings group with its own defaults (viewport and render differ)."""
+    return type(
+        f"SPLASH_PG_quality_{field}_{cell.replace('/', '_')}",
+        (bpy.types.PropertyGroup,),
+        {
+            "__annotations__": {
+                "cell": StringProperty(
+                    name="Cell",
+                    default=cell,
+                    description="Marching Cubes cell: r/2, r, 2r … or a length in scene units",
+                ),
+                "field": EnumProperty(name="Field", items=FIELDS, default=field),
+                "normals": EnumProperty(name="Normals", items=NORMALS, default=normals),
+                "engine": EnumProperty(name="Engine", items=ENGINES, default="narrow-band"),
+            }
+        },
+    )
+
+
+ViewportQuality = _quality("r", "density", "grid")
+RenderQuality = _quality("r/2", "ssp07", "field")
+
+
+def _poll_particles(_self, obj):
+    return obj.type == "MESH" and "splash_surface_of" not in obj
+
+
+def _live_changed(self, context):
+    from . import live
+
+    live.on_settings_changed(context.scene)
+
+
+class SPLASH_PG_live(bpy.types.PropertyGroup):
+    enabled: BoolProperty(
+        name="Live",
+        description="Reconstruct the particle object on every frame change",
+        update=_live_changed,
+    )
+    source: PointerProperty(
+        name="Particles",
+        type=bpy.types.Object,
+        poll=_poll_particles,
+        description="The object whose vertices are the particles",
+    )
+    spacing: FloatProperty(
+        name="Spacing r",
+        default=0.0,
+        min=0.0,
+        precision=4,
+        description="Particle spacing r in the object's units; 0: estimated once from the "
+        "current frame and kept, so that every frame shares one grid",
+    )
+    velocity: BoolProperty(
+        name="Velocity",
+        default=True,
+        description="Carry the particles' 'velocity' attribute onto the surface (motion blur)",
+    )
+    cache_frames: IntProperty(
+        name="Cache frames",
+        default=64,
+        min=0,
+        description="Surfaces kept in memory per setting (0: no cache)",
+    )
+    viewport: PointerProperty(type=ViewportQuality)
+    render: PointerProperty(type=RenderQuality)
+    input_path: StringProperty(
+        name="Particle files",
+        default="",
+        description="The particle files on disk (for the command line only): a directory, "
+        "file or pattern",
+    )
+    output_path: StringProperty(
+        name="Mesh output", default="mesh/", description="-o of the command line"
+    )
+    status: StringProperty(name="Status", default="")
+    error: StringProperty(name="Error", default="")
+
+
+def _up_axis_changed(group):
+    from . import sequence
+
+    sequence.orient(group.id_data)
+
+
+class SPLASH_PG_sequence(bpy.types.PropertyGroup):
+    directory: StringProperty(name="Directory", subtype="DIR_PATH")
+    up_axis: EnumProperty(
+        name="Files' up axis",
+        items=[
+            ("Y", "Y", "Y-up data (SPlisHSPlasH, written without --up-axis): turned upright"),
+            ("Z", "Z", "Written with --up-axis z (or a Z-up simulation): used as it is"),
+        ],
+        default="Y",
+        update=lambda self, _context: _up_axis_changed(self),
+    )
+    frame_offset: IntProperty(
+        name="Frame offset",
+        default=0,
+        description="The file numbered F shows at scene frame F + offset",
+    )
+    file: StringProperty(name="Current file", default="")
+    error: StringProperty(name="Error", default="")
+
+
+_classes = (ViewportQuality, RenderQuality, SPLASH_PG_live, SPLASH_PG_sequence)
+
+
+def register():
+    for cls in _classes:
+        bpy.utils.register_class(cls)
+    bpy.types.Scene.splash = PointerProperty(type=SPLASH_PG_live)
+    bpy.types.Object.splash_sequence = PointerProperty(type=SPLASH_PG_sequence)
+
+
+def unregister():
+    del bpy.types.Object.splash_sequence
+    del bpy.types.Scene.splash
+    for cls in reversed(_classes):
+        bpy.utils.unregister_class(cls)
