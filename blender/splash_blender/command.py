@@ -16,7 +16,8 @@ def to_command(s):
     engine, velocity (bool), up_axis ("" or "y"/"z")."""
     words = ["splash", "recon", s.get("input") or "PARTICLES"]
     if s.get("spacing"):
-        words += ["--spacing", f"{s['spacing']:.9g}"]
+        # Blender keeps it as a float32: 7 digits say all it holds.
+        words += ["--spacing", f"{s['spacing']:.7g}"]
     words += ["--cell", s["cell"], "--field", s["field"], "--normals", s["normals"]]
     if s.get("engine", "narrow-band") != "narrow-band":
         words += ["--engine", s["engine"]]

@@ -152,7 +152,6 @@ def update(scene, render=None, depsgraph=None):
         scene.splash.error = f"unexpected error: {e!r}"
         log.exception("splash live mode")
     log.error("splash: %s", scene.splash.error)
-    print(f"splash: error: {scene.splash.error}")
     return False
 
 

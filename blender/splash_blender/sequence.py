@@ -118,7 +118,6 @@ def load(obj, frame):
         group.error = f"frame {frame}: unexpected error: {e!r}"
         log.exception("splash sequence")
     log.error("splash: %s: %s", obj.name, group.error)
-    print(f"splash: error: {obj.name}: {group.error}")
     return False
 
 
@@ -133,7 +132,11 @@ def import_sequence(context, directory, up_axis="Y", name=None):
     group.up_axis = up_axis
     orient(obj)
     if not load(obj, context.scene.frame_current):
-        raise SequenceError(group.error)
+        error = group.error
+        mesh = obj.data
+        bpy.data.objects.remove(obj)
+        bpy.data.meshes.remove(mesh)
+        raise SequenceError(error)
     return obj, files
 
 

@@ -1,0 +1,374 @@
+"""The Blender add-on in headless Blender: tests/blender/run starts it as
+
+    blender -b --factory-startup --python tests/blender/test_addon.py
+
+with SPLASH_ADDON_ZIP (the built add-on), SPLASH_BIN (the splash command), SPLASH_REPO and
+SPLASH_TEST_DIR (a scratch directory) in the environment. It installs and enables the zip,
+imports 3-frame sequences that `splash recon` writes as PLY, VTU and OBJ (two real frames of
+fixtures/ and a ball of particles moving at one known velocity), steps the frames and checks
+counts, normals and velocities against the files, checks live mode against the package,
+errors in the UI, the command line round trip, and renders with Workbench and Cycles
+(motion blur by velocity). Any failure exits Blender with status 1.
+"""
+
+import os
+import shutil
+import subprocess
+import sys
+import traceback
+
+import bpy
+import numpy as np
+from mathutils import Vector
+
+ZIP = os.environ["SPLASH_ADDON_ZIP"]
+SPLASH = os.environ["SPLASH_BIN"]
+REPO = os.environ["SPLASH_REPO"]
+WORK = os.environ["SPLASH_TEST_DIR"]
+SPACING = 0.014
+BALL_VELOCITY = np.array([3.0, 0.0, 0.0], np.float32)
+checks = []
+
+
+def check(condition, what):
+    checks.append(what)
+    if not condition:
+        raise AssertionError(what)
+
+
+def write_particles_ply(path, positions, velocities):
+    header = (
+        "ply\nformat binary_little_endian 1.0\n"
+        f"element vertex {len(positions)}\n"
+        + "".join(f"property float {k}\n" for k in ("x", "y", "z", "vx", "vy", "vz"))
+        + "end_header\n"
+    )
+    table = np.hstack([positions, velocities]).astype("<f4")
+    with open(path, "wb") as f:
+        f.write(header.encode())
+        f.write(table.tobytes())
+
+
+def make_particles():
+    """frame_0001, _0002: the fixtures' real frames; frame_0003: a ball moving at
+    BALL_VELOCITY (every vertex gets exactly that velocity: a kernel-weighted mean of equal
+    values)."""
+    particles = os.path.join(WORK, "particles")
+    os.makedirs(particles, exist_ok=True)
+    shutil.copy(os.path.join(REPO, "fixtures/frame_0010.ply"), f"{particles}/frame_0001.ply")
+    shutil.copy(os.path.join(REPO, "fixtures/frame_0040.ply"), f"{particles}/frame_0002.ply")
+    k = np.arange(-8, 9) * SPACING
+    lattice = np.stack(np.meshgrid(k, k, k, indexing="ij"), -1).reshape(-1, 3)
+    ball = lattice[np.linalg.norm(lattice, axis=1) <= 8 * SPACING] + [0.6, 0.3, 0.4]
+    velocities = np.tile(BALL_VELOCITY, (len(ball), 1))
+    write_particles_ply(f"{particles}/frame_0003.ply", ball, velocities)
+    return particles
+
+
+def recon(particles, fmt):
+    out = os.path.join(WORK, f"seq_{fmt}") + "/"
+    extra = [] if fmt == "obj" else ["--attributes", "velocity"]
+    subprocess.run(
+        [SPLASH, "recon", particles, "--spacing", str(SPACING), "--cell", "r", "--format", fmt,
+         "-q", "-o", out] + extra,
+        check=True,
+    )  # fmt: skip
+    return out
+
+
+def file_counts(path):
+    """Vertex and triangle counts from the file's own header or lines (not read_mesh)."""
+    with open(path, "rb") as f:
+        data = f.read()
+    if path.endswith(".ply"):
+        head = data[: data.index(b"end_header")].decode().split("\n")
+        count = {w[1]: int(w[2]) for w in (line.split() for line in head) if w[:1] == ["element"]}
+        return count["vertex"], count.get("face", 0)
+    if path.endswith(".vtu"):
+        import re
+
+        m = re.search(rb'NumberOfPoints="(\d+)" NumberOfCells="(\d+)"', data)
+        return int(m.group(1)), int(m.group(2))
+    lines = data.split(b"\n")
+    return sum(x.startswith(b"v ") for x in lines), sum(x.startswith(b"f ") for x in lines)
+
+
+def ply_table(path):
+    """The vertex table of a binary PLY mesh, parsed here from its header."""
+    with open(path, "rb") as f:
+        data = f.read()
+    end = data.index(b"end_header\n") + len(b"end_header\n")
+    head = data[:end].decode().split("\n")
+    n = next(int(w[2]) for w in (x.split() for x in head) if w[:2] == ["element", "vertex"])
+    names = []
+    for line in head:
+        w = line.split()
+        if w[:1] == ["element"] and w[1] != "vertex":
+            break
+        if w[:2] == ["property", "float"]:
+            names.append(w[2])
+    return np.frombuffer(data, np.dtype([(k, "<f4") for k in names]), n, end)
+
+
+def mesh_arrays(obj):
+    me = obj.data
+    v = np.empty(3 * len(me.vertices), np.float32)
+    me.vertices.foreach_get("co", v)
+    f = np.empty(3 * len(me.polygons), np.int32)
+    me.polygons.foreach_get("vertices", f)
+    return v.reshape(-1, 3), f.reshape(-1, 3)
+
+
+def velocity_of(obj):
+    a = obj.data.attributes.get("velocity")
+    if a is None:
+        return None
+    out = np.empty(3 * len(obj.data.vertices), np.float32)
+    a.data.foreach_get("vector", out)
+    return out.reshape(-1, 3)
+
+
+def split_normals(obj):
+    """Per-loop normals (what shading uses) and each loop's vertex."""
+    me = obj.data
+    if hasattr(me, "calc_normals_split"):
+        me.calc_normals_split()
+    n = np.empty(3 * len(me.loops), np.float32)
+    me.loops.foreach_get("normal", n)
+    idx = np.empty(len(me.loops), np.int32)
+    me.loops.foreach_get("vertex_index", idx)
+    return n.reshape(-1, 3), idx
+
+
+def test_sequences(sequence, particles):
+    scene = bpy.context.scene
+    seqs = {}
+    for fmt in ("ply", "vtu", "obj"):
+        directory = recon(particles, fmt)
+        scene.frame_set(1)
+        obj, files = sequence.import_sequence(bpy.context, directory, "Y", name=f"fluid_{fmt}")
+        check([n for n, _ in files] == [1, 2, 3], f"{fmt}: three frames listed")
+        seqs[fmt] = obj
+        for frame in (1, 2, 3):
+            scene.frame_set(frame)
+            path = obj.splash_sequence.file
+            check(path.endswith(f"frame_{frame:04d}.{fmt}"), f"{fmt} frame {frame}: its file")
+            check(obj.splash_sequence.error == "", f"{fmt} frame {frame}: no error")
+            nv, nf = file_counts(path)
+            v, f = mesh_arrays(obj)
+            check((len(v), len(f)) == (nv, nf), f"{fmt} frame {frame}: {nv} vertices, {nf} faces")
+            check(obj.data.has_custom_normals, f"{fmt} frame {frame}: custom split normals")
+            check(all(p.use_smooth for p in obj.data.polygons[:50]), f"{fmt}: smooth shaded")
+            vel = velocity_of(obj)
+            check((vel is None) == (fmt == "obj"), f"{fmt} frame {frame}: velocity iff PLY/VTU")
+            if fmt == "ply":
+                table = ply_table(path)
+                xyz = np.stack([table[k] for k in "xyz"], 1)
+                check(np.array_equal(v, xyz), f"ply frame {frame}: vertices as in the file")
+                normals = np.stack([table[k] for k in ("nx", "ny", "nz")], 1)
+                loop_n, loop_v = split_normals(obj)
+                cos = np.sum(loop_n * normals[loop_v], axis=1)
+                check(cos.min() > 0.9999, f"ply frame {frame}: split normals are the file's")
+                expect = np.stack([table[k] for k in ("vx", "vy", "vz")], 1)
+                pick = np.linspace(0, len(v) - 1, 7).astype(int)
+                check(np.array_equal(vel[pick], expect[pick]), f"ply frame {frame}: velocities")
+                if frame == 3:
+                    check(np.allclose(vel, BALL_VELOCITY, atol=1e-6), "ball: the known velocity")
+            if fmt == "vtu":
+                pv, pf = mesh_arrays(seqs["ply"])  # not stepped since: still at frame 3
+                if frame == 3:
+                    check(np.array_equal(v, pv) and np.array_equal(f, pf), "vtu mesh = ply mesh")
+                    check(np.array_equal(vel, velocity_of(seqs["ply"])), "vtu velocity = ply")
+        # Upright: the object turns Y-up data so that y becomes Blender's z.
+        world = np.array(obj.matrix_world)[:3, :3]
+        check(np.allclose(world @ [0, 1, 0], [0, 0, 1], atol=1e-6), f"{fmt}: Y-up turned upright")
+    return seqs
+
+
+def test_live(live, splash_sph):
+    scene = bpy.context.scene
+    p = splash_sph.read_particles(os.path.join(REPO, "fixtures/frame_0040.ply"))
+    me = bpy.data.meshes.new("particles")
+    me.vertices.add(len(p))
+    me.vertices.foreach_set("co", p.positions.ravel())
+    vel = me.attributes.new("velocity", "FLOAT_VECTOR", "POINT")
+    vel.data.foreach_set("vector", p["velocity"].ravel())
+    source = bpy.data.objects.new("particles", me)
+    scene.collection.objects.link(source)
+    s = scene.splash
+    s.source, s.spacing = source, SPACING
+    s.viewport.cell, s.viewport.field, s.viewport.normals = "r", "density", "grid"
+    s.render.cell, s.render.field, s.render.normals = "r/2", "ssp07", "field"
+    s.enabled = True  # reconstructs at once with the viewport settings
+    check(s.error == "", f"live: no error ({s.error})")
+    surface = live.surface_object(scene, source)
+    for render, q in ((False, s.viewport), (True, s.render)):
+        check(live.update(scene, render=render), f"live ({'render' if render else 'viewport'})")
+        want = splash_sph.reconstruct(
+            p.positions, SPACING, cell=q.cell, field=q.field, normals=q.normals,
+            attributes={"velocity": p["velocity"]},
+        )  # fmt: skip
+        v, f = mesh_arrays(surface)
+        same = np.array_equal(v, want.vertices) and np.array_equal(f, want.faces)
+        check(same, f"live {q.cell} {q.field}: the package's mesh ({len(f)} triangles)")
+        check(np.array_equal(velocity_of(surface), want.attributes["velocity"]), "live velocity")
+        check(surface.data.has_custom_normals, "live: custom normals")
+    live.update(scene, render=True)
+    check("cached" in s.status, f"live: second run from the cache ({s.status})")
+    # Errors land in the panel, not in an exception.
+    s.viewport.cell = "banana"
+    check(not live.update(scene, render=False), "live: a bad cell fails")
+    check("banana" in s.error, f"live: the error names the bad cell ({s.error})")
+    s.viewport.cell = "r"
+    empty = bpy.data.objects.new("empty", bpy.data.meshes.new("empty"))
+    scene.collection.objects.link(empty)
+    s.source = empty
+    check(not live.update(scene, render=False), "live: no particles fails")
+    check("no vertices" in s.error, f"live: says there are no particles ({s.error})")
+    s.source = None
+    check(not live.update(scene, render=False), "live: no object fails")
+    s.enabled = False
+
+
+def test_errors(sequence):
+    bad = os.path.join(WORK, "bad")
+    os.makedirs(bad, exist_ok=True)
+    with open(os.path.join(bad, "frame_0001.ply"), "wb") as f:
+        f.write(b"ply\nformat binary_little_endian 1.0\nelement vertex 100\nproperty float x\n")
+    try:
+        sequence.import_sequence(bpy.context, bad, "Y", name="bad")
+        check(False, "a broken file fails the import")
+    except sequence.SequenceError as e:
+        check("frame_0001.ply" in str(e), f"the import error names the file ({e})")
+    check("bad" not in bpy.data.objects, "a failed import leaves no object behind")
+    # Called from a script, an operator's error report arrives as a RuntimeError.
+    try:
+        bpy.ops.splash.import_sequence(directory=os.path.join(WORK, "nowhere"))
+        check(False, "the import operator fails on a missing directory")
+    except RuntimeError as e:
+        check("cannot list" in str(e) and "nowhere" in str(e), f"the operator's report: {e}")
+
+
+def test_command(command, ui):
+    scene = bpy.context.scene
+    s = scene.splash
+    s.spacing, s.velocity, s.input_path, s.output_path = 0.014, True, "sim/", "mesh/"
+    s.render.cell, s.render.field = "r/2", "ssp07"
+    check(bpy.ops.splash.copy_command() == {"FINISHED"}, "copy as CLI command")
+    # Headless Blender has no clipboard: the operator copies what this gives.
+    line = command.to_command(ui._settings(scene))
+    check(
+        line == "splash recon sim/ --spacing 0.014 --cell r/2 --field ssp07 --normals field "
+        "--attributes velocity --format ply -o mesh/",
+        f"copy as CLI command: {line}",
+    )
+    other = "splash recon 'my sim/' --particle-radius 0.01 --cell 2r --field zb05 -o out/ -v"
+    check(bpy.ops.splash.paste_command(line=other) == {"FINISHED"}, "paste a command line")
+    check(
+        (s.input_path, abs(s.spacing - 0.02) < 1e-7, s.render.cell, s.render.field, s.output_path)
+        == ("'my sim/'", True, "2r", "zb05", "out/"),
+        "the pasted line sets the panel",
+    )
+    try:
+        bpy.ops.splash.paste_command(line="ls -l")
+        check(False, "a line that is not splash recon is refused")
+    except RuntimeError as e:
+        check("splash recon" in str(e), f"the paste operator's report: {e}")
+    parsed, _ = command.from_command(command.to_command(
+        {"input": "a b/", "spacing": 0.5, "cell": "r", "field": "density", "normals": "grid",
+         "engine": "slices", "velocity": False, "output": "o/"}))  # fmt: skip
+    check(parsed["input"] == "'a b/'" and parsed["engine"] == "slices", "command round trip")
+
+
+def camera_on(obj, scale_margin=1.3):
+    scene = bpy.context.scene
+    corners = np.array([obj.matrix_world @ Vector(c) for c in obj.bound_box])
+    lo, hi = corners.min(0), corners.max(0)
+    centre = (lo + hi) / 2
+    cam = bpy.data.objects.new("cam", bpy.data.cameras.new("cam"))
+    scene.collection.objects.link(cam)
+    cam.data.type = "ORTHO"
+    cam.data.ortho_scale = float(max(hi[0] - lo[0], hi[2] - lo[2])) * scale_margin
+    cam.location = (centre[0], lo[1] - 2.0, centre[2])
+    cam.rotation_euler = (np.pi / 2, 0.0, 0.0)  # looks along +y
+    scene.camera = cam
+    return cam
+
+
+def render(path, engine, size):
+    scene = bpy.context.scene
+    scene.render.engine = engine
+    scene.render.resolution_x, scene.render.resolution_y = size
+    scene.render.resolution_percentage = 100
+    scene.render.filepath = path
+    scene.render.image_settings.file_format = "PNG"
+    bpy.ops.render.render(write_still=True)
+    image = bpy.data.images.load(path)
+    pixels = np.array(image.pixels[:], np.float32).reshape(size[1], size[0], -1)
+    bpy.data.images.remove(image)
+    return pixels
+
+
+def test_renders(seqs):
+    scene = bpy.context.scene
+    for obj in scene.objects:
+        obj.hide_render = obj.type == "MESH" and obj != seqs["ply"]
+    scene.frame_set(2)
+    camera_on(seqs["ply"])
+    img = render(os.path.join(WORK, "workbench.png"), "BLENDER_WORKBENCH", (96, 64))
+    rgb = img[..., :3]
+    background = np.median(np.concatenate([rgb[0], rgb[-1]]), axis=0)
+    covered = np.mean(np.abs(rgb - background).sum(-1) > 0.05)
+    check(covered > 0.1, f"workbench: the fluid covers {covered:.0%} of the image")
+    # Cycles, frame 3: the ball moves along +x at 3 m/s; its velocity attribute blurs it.
+    scene.frame_set(3)
+    scene.camera.location.x = 0.6
+    scene.camera.location.z = 0.3  # the ball's centre: (0.6, 0.3, 0.4) Y-up
+    scene.camera.data.ortho_scale = 0.6
+    scene.render.fps = 24
+    scene.render.use_motion_blur = True
+    scene.render.motion_blur_shutter = 1.0
+    scene.cycles.samples = 8
+    scene.cycles.use_denoising = False
+    scene.cycles.device = "CPU"
+    blurred = render(os.path.join(WORK, "cycles_blur.png"), "CYCLES", (64, 48))
+    vel = seqs["ply"].data.attributes["velocity"]
+    vel.data.foreach_set("vector", np.zeros(3 * len(vel.data), np.float32))
+    still = render(os.path.join(WORK, "cycles_still.png"), "CYCLES", (64, 48))
+
+    def extent(img):
+        # Columns where the ball covers any pixel at all: blur widens it along x.
+        bg = np.median(img[0, :, :3], axis=0)
+        return int((np.abs(img[..., :3] - bg).sum(-1) > 0.02).any(0).sum())
+
+    check(extent(still) > 5, f"cycles: the ball is in the picture ({extent(still)} columns)")
+    check(
+        extent(blurred) >= extent(still) + 3,
+        f"cycles: velocity blurs the ball along x ({extent(still)} -> {extent(blurred)} columns)",
+    )
+
+
+def main():
+    bpy.ops.preferences.addon_install(filepath=ZIP)
+    bpy.ops.preferences.addon_enable(module="splash_blender")
+    from splash_blender import command, live, sequence, ui, vendor
+
+    splash_sph = vendor.splash_sph()
+    check(splash_sph.__file__.startswith(os.path.dirname(live.__file__)), "the bundled package")
+    particles = make_particles()
+    seqs = test_sequences(sequence, particles)
+    test_errors(sequence)
+    test_live(live, splash_sph)
+    test_command(command, ui)
+    test_renders(seqs)
+
+
+try:
+    main()
+    print(f"blender add-on tests: {len(checks)} checks passed")
+except Exception:
+    traceback.print_exc()
+    print(f"blender add-on tests: FAILED at: {checks[-1] if checks else 'setup'}")
+    sys.stdout.flush()
+    os._exit(1)
+sys.stdout.flush()
