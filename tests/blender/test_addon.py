@@ -197,7 +197,10 @@ def test_live(live, splash_sph):
     scene.collection.objects.link(source)
     s = scene.splash
     s.source, s.spacing = source, SPACING
-    s.viewport.cell, s.viewport.field, s.viewport.normals = "r", "density", "grid"
+    check(
+        (s.viewport.cell, s.viewport.field, s.viewport.normals) == ("r", "density", "none"),
+        "viewport defaults: coarse cell, fast field, Blender's normals",
+    )
     s.render.cell, s.render.field, s.render.normals = "r/2", "ssp07", "field"
     s.enabled = True  # reconstructs at once with the viewport settings
     check(s.error == "", f"live: no error ({s.error})")
@@ -212,7 +215,7 @@ def test_live(live, splash_sph):
         same = np.array_equal(v, want.vertices) and np.array_equal(f, want.faces)
         check(same, f"live {q.cell} {q.field}: the package's mesh ({len(f)} triangles)")
         check(np.array_equal(velocity_of(surface), want.attributes["velocity"]), "live velocity")
-        check(surface.data.has_custom_normals, "live: custom normals")
+        check(surface.data.has_custom_normals == render, "live: custom normals at render")
     live.update(scene, render=True)
     check("cached" in s.status, f"live: second run from the cache ({s.status})")
     # Errors land in the panel, not in an exception.
