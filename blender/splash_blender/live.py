@@ -217,4 +217,3 @@ def unregister():
         if handler in handlers:
             handlers.remove(handler)
     clear_cache()
-

@@ -39,9 +39,7 @@ def fill(mesh, vertices, faces, normals=None, attributes=None):
         mesh.use_auto_smooth = custom
     if custom:
         # Blender's own cost, about 4 s per million triangles (lnor spaces), not the call's.
-        mesh.normals_split_custom_set_from_vertices(
-            np.ascontiguousarray(normals, dtype=np.float32)
-        )
+        mesh.normals_split_custom_set_from_vertices(np.ascontiguousarray(normals, dtype=np.float32))
     for name, values in (attributes or {}).items():
         values = np.ascontiguousarray(values, dtype=np.float32)
         if values.ndim == 2 and values.shape[1] == 3:

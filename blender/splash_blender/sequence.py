@@ -52,9 +52,7 @@ def frame_files(directory):
         if ext.lower() in EXTENSIONS and match and not name.startswith("."):
             found.append((int(match.group(1)), ext.lower(), os.path.join(directory, name)))
     if not found:
-        raise SequenceError(
-            f"'{directory}' has no numbered mesh files ({', '.join(EXTENSIONS)})"
-        )
+        raise SequenceError(f"'{directory}' has no numbered mesh files ({', '.join(EXTENSIONS)})")
     ext = Counter(e for _, e, _ in found).most_common(1)[0][0]
     files = sorted((n, p) for n, e, p in found if e == ext)
     _files_cache[directory] = (stamp, files)
@@ -92,11 +90,8 @@ def read(path):
 def orient(obj):
     """Turns Y-up files upright in Blender's Z-up world: +90 degrees about X, which maps
     (x, y, z) to (x, -z, y) as `--up-axis z` does."""
-    obj.rotation_euler = (math.pi / 2, 0.0, 0.0) if obj.splash_sequence.up_axis == "Y" else (
-        0.0,
-        0.0,
-        0.0,
-    )
+    turn = math.pi / 2 if obj.splash_sequence.up_axis == "Y" else 0.0
+    obj.rotation_euler = (turn, 0.0, 0.0)
 
 
 def load(obj, frame):

@@ -15,13 +15,13 @@ import base64
 import os
 import re
 import warnings
-import xml.etree.ElementTree as ElementTree
 import zlib
-from typing import Dict, NamedTuple
+from typing import NamedTuple
+from xml.etree import ElementTree
 
 import numpy as np
 
-__all__ = ["MeshArrays", "read_mesh", "MESH_EXTENSIONS"]
+__all__ = ["MESH_EXTENSIONS", "MeshArrays", "read_mesh"]
 
 #: The extensions ``read_mesh`` reads.
 MESH_EXTENSIONS = (".obj", ".ply", ".vtu", ".vtp")
@@ -38,7 +38,7 @@ class MeshArrays(NamedTuple):
     normals: np.ndarray
     #: Per-vertex attributes by name (``velocity``: shape (V, 3); scalars: shape (V,)),
     #: float32.
-    attributes: Dict[str, np.ndarray]
+    attributes: dict[str, np.ndarray]
 
 
 def read_mesh(path) -> MeshArrays:
@@ -106,10 +106,10 @@ def _mesh(vertices, faces, normals, attributes) -> MeshArrays:
 # --- OBJ -------------------------------------------------------------------------------------
 
 
-_OBJ_V = re.compile(rb"^v[ \t]+(\S+)[ \t]+(\S+)[ \t]+(\S+)[ \t]*\r?$", re.M)
-_OBJ_VN = re.compile(rb"^vn[ \t]+(\S+)[ \t]+(\S+)[ \t]+(\S+)[ \t]*\r?$", re.M)
+_OBJ_V = re.compile(rb"^v[ \t]+(\S+)[ \t]+(\S+)[ \t]+(\S+)[ \t]*\r?$", re.MULTILINE)
+_OBJ_VN = re.compile(rb"^vn[ \t]+(\S+)[ \t]+(\S+)[ \t]+(\S+)[ \t]*\r?$", re.MULTILINE)
 # A corner is `a`, `a//n` or `a/t/n`: its vertex index is the first number.
-_OBJ_F = re.compile(rb"^f[ \t]+(\d+)\S*[ \t]+(\d+)\S*[ \t]+(\d+)\S*[ \t]*\r?$", re.M)
+_OBJ_F = re.compile(rb"^f[ \t]+(\d+)\S*[ \t]+(\d+)\S*[ \t]+(\d+)\S*[ \t]*\r?$", re.MULTILINE)
 
 
 def _obj_lines(data: bytes, pattern, keyword: bytes, what: str, dtype) -> np.ndarray:
@@ -266,7 +266,7 @@ _VTK_TYPES = {
 
 def _read_vtk_xml(data: bytes) -> MeshArrays:
     if b'format="appended"' in data:
-        raise _Bad("appended VTK XML data is not read here: splash writes format=\"binary\"")
+        raise _Bad('appended VTK XML data is not read here: splash writes format="binary"')
     try:
         root = ElementTree.fromstring(data)
     except ElementTree.ParseError as e:
@@ -288,7 +288,7 @@ def _read_vtk_xml(data: bytes) -> MeshArrays:
         if node is None:
             raise _Bad(f"no {what} array")
         if node.get("format") != "binary":
-            raise _Bad(f"the {what} array is not format=\"binary\"")
+            raise _Bad(f'the {what} array is not format="binary"')
         ty = _VTK_TYPES.get(node.get("type", ""))
         if ty is None:
             raise _Bad(f"the {what} array has an unknown type {node.get('type')}")
