@@ -94,6 +94,11 @@ def reconstruct(scene, render, depsgraph=None):
             q.normals,
             q.engine,
         )
+        surface = surface_object(scene, source)
+        if _state.get("shown") == (surface.name, key) and len(surface.data.vertices):
+            # Already showing it (a render's frame_change_post, then its render_pre).
+            surface.matrix_world = source.matrix_world
+            return surface
         started = time.perf_counter()
         arrays = _cache.get(key)
         cached = arrays is not None
@@ -117,8 +122,8 @@ def reconstruct(scene, render, depsgraph=None):
                     _cache.popitem(last=False)
     except ValueError as e:
         raise LiveError(f"frame {frame}: {e}") from None
-    surface = surface_object(scene, source)
     meshdata.fill(surface.data, *arrays)
+    _state["shown"] = (surface.name, key)
     surface.matrix_world = source.matrix_world
     seconds = time.perf_counter() - started
     settings.status = (
@@ -157,6 +162,7 @@ def update(scene, render=None, depsgraph=None):
 
 def clear_cache():
     _cache.clear()
+    _state.pop("shown", None)
 
 
 def on_settings_changed(scene):

@@ -12,6 +12,7 @@ errors in the UI, the command line round trip, and renders with Workbench and Cy
 """
 
 import os
+import shlex
 import shutil
 import subprocess
 import sys
@@ -185,7 +186,7 @@ def test_sequences(sequence, particles):
     return seqs
 
 
-def test_live(live, splash_sph):
+def test_live(live, splash_sph, command, ui):
     scene = bpy.context.scene
     p = splash_sph.read_particles(os.path.join(REPO, "fixtures/frame_0040.ply"))
     me = bpy.data.meshes.new("particles")
@@ -205,8 +206,10 @@ def test_live(live, splash_sph):
     s.enabled = True  # reconstructs at once with the viewport settings
     check(s.error == "", f"live: no error ({s.error})")
     surface = live.surface_object(scene, source)
-    for render, q in ((False, s.viewport), (True, s.render)):
-        check(live.update(scene, render=render), f"live ({'render' if render else 'viewport'})")
+    for rendering, q in ((False, s.viewport), (True, s.render)):
+        check(
+            live.update(scene, render=rendering), f"live ({'render' if rendering else 'viewport'})"
+        )
         want = splash_sph.reconstruct(
             p.positions, SPACING, cell=q.cell, field=q.field, normals=q.normals,
             attributes={"velocity": p["velocity"]},
@@ -215,9 +218,24 @@ def test_live(live, splash_sph):
         same = np.array_equal(v, want.vertices) and np.array_equal(f, want.faces)
         check(same, f"live {q.cell} {q.field}: the package's mesh ({len(f)} triangles)")
         check(np.array_equal(velocity_of(surface), want.attributes["velocity"]), "live velocity")
-        check(surface.data.has_custom_normals == render, "live: custom normals at render")
-    live.update(scene, render=True)
-    check("cached" in s.status, f"live: second run from the cache ({s.status})")
+        check(surface.data.has_custom_normals == rendering, "live: custom normals at render")
+    for rendering in (False, True):
+        live.update(scene, render=rendering)
+        check("cached" in s.status, f"live: back to a setting seen, from the cache ({s.status})")
+    # The panel's command line, run by the CLI, writes the surface live mode renders.
+    s.input_path = os.path.join(REPO, "fixtures/frame_0040.ply")
+    s.output_path = os.path.join(WORK, "cli", "frame_0040.ply")
+    line = command.to_command(ui._settings(scene))
+    subprocess.run([SPLASH, *shlex.split(line)[1:], "-q"], check=True)
+    table = ply_table(s.output_path)
+    v, f = mesh_arrays(surface)
+    check(
+        np.array_equal(v, np.stack([table[k] for k in "xyz"], 1))
+        and np.array_equal(
+            velocity_of(surface), np.stack([table[k] for k in ("vx", "vy", "vz")], 1)
+        ),
+        f"the copied command line writes the live render surface: {line}",
+    )
     # Errors land in the panel, not in an exception.
     s.viewport.cell = "banana"
     check(not live.update(scene, render=False), "live: a bad cell fails")
@@ -230,6 +248,27 @@ def test_live(live, splash_sph):
     check("no vertices" in s.error, f"live: says there are no particles ({s.error})")
     s.source = None
     check(not live.update(scene, render=False), "live: no object fails")
+    # Frame changes reconstruct with the viewport settings, a render with the render ones.
+    counts = {}
+    for rendering, q in ((False, s.viewport), (True, s.render)):
+        mesh = splash_sph.reconstruct(
+            p.positions, SPACING, cell=q.cell, field=q.field, normals=q.normals
+        )
+        counts[rendering] = len(mesh.faces)
+    s.source = source
+    scene.frame_set(scene.frame_current + 1)
+    check(s.error == "", f"live frame change: no error ({s.error})")
+    check(len(surface.data.polygons) == counts[False], "live frame change: viewport settings")
+    seen = []
+
+    def during(scene, *_):
+        seen.append(len(surface.data.polygons))
+
+    bpy.app.handlers.render_post.append(during)
+    render(os.path.join(WORK, "live.png"), "BLENDER_WORKBENCH", (32, 32))
+    bpy.app.handlers.render_post.remove(during)
+    check(seen == [counts[True]], f"live render: render settings ({seen} vs {counts[True]})")
+    check(len(surface.data.polygons) == counts[False], "live after the render: viewport again")
     s.enabled = False
 
 
@@ -361,7 +400,7 @@ def main():
     particles = make_particles()
     seqs = test_sequences(sequence, particles)
     test_errors(sequence)
-    test_live(live, splash_sph)
+    test_live(live, splash_sph, command, ui)
     test_command(command, ui)
     test_renders(seqs)
 
