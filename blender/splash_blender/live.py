@@ -116,10 +116,7 @@ def reconstruct(scene, render, depsgraph=None):
             )
             normals = mesh.normals if len(mesh.normals) else None
             arrays = (mesh.vertices, mesh.faces, normals, dict(mesh.attributes))
-            if settings.cache_frames > 0:
-                _cache[key] = arrays
-                while len(_cache) > settings.cache_frames:
-                    _cache.popitem(last=False)
+            _remember(key, arrays, settings.cache_mb * 1e6)
     except ValueError as e:
         raise LiveError(f"frame {frame}: {e}") from None
     meshdata.fill(surface.data, *arrays)
@@ -133,6 +130,21 @@ def reconstruct(scene, render, depsgraph=None):
     )
     settings.error = ""
     return surface
+
+
+def _remember(key, arrays, limit):
+    """Caches `arrays`, dropping the least recently used surfaces above `limit` bytes."""
+    _cache[key] = arrays
+    total = sum(_nbytes(a) for a in _cache.values())
+    while _cache and total > limit:
+        _, dropped = _cache.popitem(last=False)
+        total -= _nbytes(dropped)
+
+
+def _nbytes(arrays):
+    vertices, faces, normals, attributes = arrays
+    extra = sum(a.nbytes for a in attributes.values())
+    return vertices.nbytes + faces.nbytes + (0 if normals is None else normals.nbytes) + extra
 
 
 def _length(text):

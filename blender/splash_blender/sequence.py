@@ -1,6 +1,7 @@
 # SPDX-License-Identifier: GPL-2.0-or-later
 """Farm sequences: a directory of `splash recon` outputs as one object whose mesh follows
-the frame.
+the frame; likewise a directory of particle frames as an object of vertices only (with
+every particle attribute, `velocity` included), the source of live mode.
 
 Files are numbered as `splash recon` numbers them (the last run of digits in the name);
 scene frame F shows the file of the largest number <= F - offset (the first file before
@@ -17,6 +18,7 @@ import re
 from collections import Counter, OrderedDict
 
 import bpy
+import numpy as np
 from bpy.app.handlers import persistent
 
 from . import meshdata, vendor
@@ -24,6 +26,9 @@ from . import meshdata, vendor
 log = logging.getLogger("splash_blender")
 
 EXTENSIONS = (".obj", ".ply", ".vtu", ".vtp")
+# What splash_sph.read_particles reads.
+PARTICLE_EXTENSIONS = (".ply", ".csv", ".txt", ".bin", ".raw", ".vtk", ".vtu", ".vtp", ".bgeo",
+                       ".bgeo.gz", ".xyz")  # fmt: skip
 _NUMBER = re.compile(r"(\d+)(?!.*\d)")
 _files_cache = {}
 _mesh_cache = OrderedDict()
@@ -34,28 +39,39 @@ class SequenceError(Exception):
     """A problem to show the user."""
 
 
-def frame_files(directory):
-    """[(frame number, path)] of the mesh files in `directory`, in number order."""
+def _split(name):
+    """(stem, extension), `.bgeo.gz` counting as one extension."""
+    if name.lower().endswith(".bgeo.gz"):
+        return name[: -len(".bgeo.gz")], ".bgeo.gz"
+    stem, ext = os.path.splitext(name)
+    return stem, ext.lower()
+
+
+def frame_files(directory, particles=False):
+    """[(frame number, path)] of the mesh (or particle) files in `directory`, in number
+    order."""
     directory = bpy.path.abspath(directory)
+    extensions = PARTICLE_EXTENSIONS if particles else EXTENSIONS
     try:
         stamp = os.stat(directory).st_mtime_ns
         names = os.listdir(directory)
     except OSError as e:
         raise SequenceError(f"cannot list '{directory}': {e.strerror}") from None
-    cached = _files_cache.get(directory)
+    cached = _files_cache.get((directory, particles))
     if cached and cached[0] == stamp:
         return cached[1]
     found = []
     for name in names:
-        stem, ext = os.path.splitext(name)
+        stem, ext = _split(name)
         match = _NUMBER.search(stem)
-        if ext.lower() in EXTENSIONS and match and not name.startswith("."):
-            found.append((int(match.group(1)), ext.lower(), os.path.join(directory, name)))
+        if ext in extensions and match and not name.startswith("."):
+            found.append((int(match.group(1)), ext, os.path.join(directory, name)))
     if not found:
-        raise SequenceError(f"'{directory}' has no numbered mesh files ({', '.join(EXTENSIONS)})")
+        what = "particle" if particles else "mesh"
+        raise SequenceError(f"'{directory}' has no numbered {what} files ({', '.join(extensions)})")
     ext = Counter(e for _, e, _ in found).most_common(1)[0][0]
     files = sorted((n, p) for n, e, p in found if e == ext)
-    _files_cache[directory] = (stamp, files)
+    _files_cache[(directory, particles)] = (stamp, files)
     return files
 
 
@@ -69,14 +85,22 @@ def file_for_frame(files, frame):
     return chosen
 
 
-def read(path):
-    """The mesh arrays of `path`, through a small cache keyed by size and time."""
+def read(path, particles=False):
+    """(vertices, faces, normals or None, attributes) of the mesh or particle file `path`,
+    through a small cache keyed by size and time."""
     stat = os.stat(path)
-    key = (path, stat.st_size, stat.st_mtime_ns)
+    key = (path, particles, stat.st_size, stat.st_mtime_ns)
     mesh = _mesh_cache.get(key)
     if mesh is None:
+        splash_sph = vendor.splash_sph()
         try:
-            mesh = vendor.splash_sph().read_mesh(path)
+            if particles:
+                p = splash_sph.read_particles(path)
+                mesh = (p.positions, np.zeros((0, 3), np.uint32), None, p.attributes)
+            else:
+                m = splash_sph.read_mesh(path)
+                normals = m.normals if len(m.normals) else None
+                mesh = (m.vertices, m.faces, normals, m.attributes)
         except ValueError as e:
             raise SequenceError(str(e)) from None
         _mesh_cache[key] = mesh
@@ -98,12 +122,11 @@ def load(obj, frame):
     """Shows the file of `frame` in `obj`; errors go to its panel and the log."""
     group = obj.splash_sequence
     try:
-        path = file_for_frame(frame_files(group.directory), frame - group.frame_offset)
+        files = frame_files(group.directory, group.particles)
+        path = file_for_frame(files, frame - group.frame_offset)
         if path == group.file and len(obj.data.vertices):
             return True
-        mesh = read(path)
-        normals = mesh.normals if len(mesh.normals) else None
-        meshdata.fill(obj.data, mesh.vertices, mesh.faces, normals, mesh.attributes)
+        meshdata.fill(obj.data, *read(path, group.particles))
         group.file = path
         group.error = ""
         return True
@@ -116,14 +139,16 @@ def load(obj, frame):
     return False
 
 
-def import_sequence(context, directory, up_axis="Y", name=None):
-    """A new object showing the sequence in `directory`; raises SequenceError."""
-    files = frame_files(directory)
+def import_sequence(context, directory, up_axis="Y", name=None, particles=False):
+    """A new object showing the sequence of meshes (or of particles: vertices only) in
+    `directory`; raises SequenceError."""
+    files = frame_files(directory, particles)
     name = name or os.path.basename(os.path.normpath(bpy.path.abspath(directory))) or "fluid"
     obj = bpy.data.objects.new(name, bpy.data.meshes.new(name))
     context.collection.objects.link(obj)
     group = obj.splash_sequence
     group.directory = directory
+    group.particles = particles
     group.up_axis = up_axis
     orient(obj)
     if not load(obj, context.scene.frame_current):
@@ -140,7 +165,9 @@ def sequences(scene):
 
 
 @persistent
-def _frame_change_post(scene, *_):
+def _frame_change_pre(scene, *_):
+    # Before the depsgraph evaluates the frame, and before live mode (frame_change_post)
+    # reads a particle sequence's new frame.
     # Subframes (Cycles' motion steps) keep the frame's mesh: its velocity blurs it.
     if scene.frame_subframe != 0.0:
         return
@@ -149,12 +176,12 @@ def _frame_change_post(scene, *_):
 
 
 def register():
-    if _frame_change_post not in bpy.app.handlers.frame_change_post:
-        bpy.app.handlers.frame_change_post.append(_frame_change_post)
+    if _frame_change_pre not in bpy.app.handlers.frame_change_pre:
+        bpy.app.handlers.frame_change_pre.append(_frame_change_pre)
 
 
 def unregister():
-    if _frame_change_post in bpy.app.handlers.frame_change_post:
-        bpy.app.handlers.frame_change_post.remove(_frame_change_post)
+    if _frame_change_pre in bpy.app.handlers.frame_change_pre:
+        bpy.app.handlers.frame_change_pre.remove(_frame_change_pre)
     _mesh_cache.clear()
     _files_cache.clear()

@@ -93,11 +93,12 @@ class SPLASH_PG_live(bpy.types.PropertyGroup):
         default=True,
         description="Carry the particles' 'velocity' attribute onto the surface (motion blur)",
     )
-    cache_frames: IntProperty(
-        name="Cache frames",
-        default=64,
+    cache_mb: IntProperty(
+        name="Cache (MB)",
+        default=1024,
         min=0,
-        description="Surfaces kept in memory per setting (0: no cache)",
+        description="Memory for surfaces already reconstructed, by frame and settings; the "
+        "least recently used go first (0: no cache)",
     )
     viewport: PointerProperty(type=ViewportQuality)
     render: PointerProperty(type=RenderQuality)
@@ -122,6 +123,7 @@ def _up_axis_changed(group):
 
 class SPLASH_PG_sequence(bpy.types.PropertyGroup):
     directory: StringProperty(name="Directory", subtype="DIR_PATH")
+    particles: BoolProperty(name="Particles", description="Particle files, not meshes")
     up_axis: EnumProperty(
         name="Files' up axis",
         items=[

@@ -100,12 +100,9 @@ class SPLASH_OT_paste_command(bpy.types.Operator):
         return {"FINISHED"}
 
 
-class SPLASH_OT_import_sequence(bpy.types.Operator, ImportHelper):
-    """Import a directory of splash recon meshes (OBJ, PLY, VTU, VTP) as one object whose
-    mesh follows the frame"""
+class _ImportDirectory(ImportHelper):
+    """A directory of numbered files as one object that follows the frame."""
 
-    bl_idname = "splash.import_sequence"
-    bl_label = "Import splash sequence"
     bl_options = {"REGISTER", "UNDO"}
 
     filename_ext = ""
@@ -120,14 +117,39 @@ class SPLASH_OT_import_sequence(bpy.types.Operator, ImportHelper):
         default="Y",
     )
 
+    particles = False
+
     def execute(self, context):
         try:
-            obj, files = sequence.import_sequence(context, self.directory, self.up_axis)
+            obj, files = sequence.import_sequence(
+                context, self.directory, self.up_axis, particles=self.particles
+            )
         except sequence.SequenceError as e:
             self.report({"ERROR"}, f"splash: {e}")
             return {"CANCELLED"}
+        if self.particles and context.scene.splash.source is None:
+            context.scene.splash.source = obj
         self.report({"INFO"}, f"splash: {obj.name}: {len(files)} frames")
         return {"FINISHED"}
+
+
+class SPLASH_OT_import_sequence(_ImportDirectory, bpy.types.Operator):
+    """Import a directory of splash recon meshes (OBJ, PLY, VTU, VTP) as one object whose
+    mesh follows the frame"""
+
+    bl_idname = "splash.import_sequence"
+    bl_label = "Import splash sequence"
+    particles = False
+
+
+class SPLASH_OT_import_particles(_ImportDirectory, bpy.types.Operator):
+    """Import a directory of particle frames (PLY, CSV, VTK, VTU, BGEO, …) as one object of
+    vertices that follows the frame, with the particles' attributes (velocity): a source
+    for live mode"""
+
+    bl_idname = "splash.import_particles"
+    bl_label = "Import particle sequence"
+    particles = True
 
 
 class VIEW3D_PT_splash(bpy.types.Panel):
@@ -153,7 +175,7 @@ class VIEW3D_PT_splash(bpy.types.Panel):
         row.operator("splash.reconstruct").render = False
         row.operator("splash.reconstruct", text="Render settings").render = True
         row = box.row(align=True)
-        row.prop(s, "cache_frames")
+        row.prop(s, "cache_mb")
         row.operator("splash.clear_cache", text="", icon="TRASH")
         if s.status:
             box.label(text=s.status, icon="INFO")
@@ -168,6 +190,7 @@ class VIEW3D_PT_splash(bpy.types.Panel):
         row.operator("splash.copy_command", icon="COPYDOWN")
         row.operator("splash.paste_command", icon="PASTEDOWN")
         box = layout.box()
+        box.operator("splash.import_particles", icon="IMPORT")
         box.operator("splash.import_sequence", icon="IMPORT")
         obj = context.active_object
         if obj is not None and obj.type == "MESH" and obj.splash_sequence.directory:
@@ -182,7 +205,8 @@ class VIEW3D_PT_splash(bpy.types.Panel):
 
 
 def _menu_import(self, _context):
-    self.layout.operator(SPLASH_OT_import_sequence.bl_idname, text="splash sequence (directory)")
+    self.layout.operator(SPLASH_OT_import_sequence.bl_idname, text="splash mesh sequence")
+    self.layout.operator(SPLASH_OT_import_particles.bl_idname, text="splash particle sequence")
 
 
 _classes = (
@@ -191,6 +215,7 @@ _classes = (
     SPLASH_OT_copy_command,
     SPLASH_OT_paste_command,
     SPLASH_OT_import_sequence,
+    SPLASH_OT_import_particles,
     VIEW3D_PT_splash,
 )
 

@@ -45,7 +45,7 @@ scene = bpy.context.scene
 source = bpy.data.objects.new("particles", bpy.data.meshes.new("particles"))
 scene.collection.objects.link(source)
 s = scene.splash
-s.source, s.spacing, s.cache_frames = source, args.spacing, 0
+s.source, s.spacing, s.cache_mb = source, args.spacing, 0
 files = sorted(f for f in os.listdir(args.particles) if f.endswith(".ply"))
 times = {"viewport": [], "render": []}
 triangles = {"viewport": [], "render": []}

@@ -270,6 +270,27 @@ def test_live(live, splash_sph, command, ui):
     check(seen == [counts[True]], f"live render: render settings ({seen} vs {counts[True]})")
     check(len(surface.data.polygons) == counts[False], "live after the render: viewport again")
     s.enabled = False
+    # A particle sequence imported by the add-on (velocity kept) as live mode's source.
+    scene.frame_set(1)
+    result = bpy.ops.splash.import_particles(directory=os.path.join(WORK, "particles"))
+    check(result == {"FINISHED"}, "import a particle sequence")
+    points = next(o for o in scene.objects if o.splash_sequence.particles)
+    s.source, s.enabled = points, True
+    scene.frame_set(2)
+    check(len(points.data.vertices) == len(p), "the particle object follows the frame")
+    want = splash_sph.reconstruct(
+        p.positions, SPACING, cell=s.viewport.cell, field=s.viewport.field, normals="none",
+        attributes={"velocity": p["velocity"]},
+    )  # fmt: skip
+    v, f = mesh_arrays(live.surface_object(scene, points))
+    check(np.array_equal(f, want.faces), "live on the imported particles: the package's mesh")
+    check(
+        np.array_equal(
+            velocity_of(live.surface_object(scene, points)), want.attributes["velocity"]
+        ),
+        "live on the imported particles: their velocity",
+    )
+    s.enabled = False
 
 
 def test_errors(sequence):
