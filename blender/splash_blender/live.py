@@ -98,6 +98,7 @@ def reconstruct(scene, render, depsgraph=None):
         if _state.get("shown") == (surface.name, key) and len(surface.data.vertices):
             # Already showing it (a render's frame_change_post, then its render_pre).
             surface.matrix_world = source.matrix_world
+            settings.error = ""
             return surface
         started = time.perf_counter()
         arrays = _cache.get(key)

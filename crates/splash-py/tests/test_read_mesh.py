@@ -2,6 +2,7 @@
 writers produce reads back as the Mesh that wrote it, bit for bit, and meshio agrees on VTU;
 broken files raise ValueError naming the file."""
 
+import random
 import subprocess
 
 import numpy as np
@@ -81,6 +82,18 @@ def test_read_mesh_of_the_cli_output(splash_bin, tmp_path):
             b"property list uchar int vertex_indices\nend_header\n" + bytes(12),
             "too short",
         ),
+        (
+            "g.ply",
+            b"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float x\n"
+            b"property float z\nelement face 0\nproperty int vertex_indices\nend_header\n",
+            "same name",
+        ),
+        (
+            "h.ply",
+            b"ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\n"
+            b"property float z\nelement face 1\nproperty int vertex_indices\nend_header\n3\n",
+            "list property 'vertex_indices'",
+        ),
         ("c.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3 4\n", "do not hold 3 numbers"),
         ("d.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n", "refers to vertex 8"),
         ("e.vtu", b"<VTKFile><Unstructured", "not a VTK XML"),
@@ -98,3 +111,32 @@ def test_read_mesh_refuses_broken_files(tmp_path, name, content, message):
 def test_read_mesh_missing_file(tmp_path):
     with pytest.raises(FileNotFoundError):
         splash_sph.read_mesh(tmp_path / "none.ply")
+
+
+@pytest.mark.parametrize("fmt", ["obj", "ply", "ply-ascii", "vtu"])
+def test_read_mesh_mutated_files_raise_value_errors_only(mesh, tmp_path, fmt):
+    """Bytes changed, cut, inserted or truncated (seeded): read_mesh returns a mesh or raises
+    ValueError naming the file, nothing else."""
+    ext = "ply" if fmt.startswith("ply") else fmt
+    small = splash_sph.reconstruct(mesh.vertices[::50], 0.05, cell="2r")
+    small.write(tmp_path / f"seed.{ext}", format=fmt)
+    data = (tmp_path / f"seed.{ext}").read_bytes()
+    rng = random.Random(0x5EED)
+    path = tmp_path / f"case.{ext}"
+    for _ in range(200):
+        d = bytearray(data)
+        for _ in range(rng.randint(1, 6)):
+            i, op = rng.randrange(len(d)), rng.random()
+            if op < 0.5:
+                d[i] = rng.randrange(256)
+            elif op < 0.7:
+                del d[i : i + rng.randint(1, 50)]
+            elif op < 0.85:
+                d[i:i] = bytes(rng.randrange(256) for _ in range(rng.randint(1, 8)))
+            else:
+                del d[i:]
+        path.write_bytes(bytes(d))
+        try:
+            splash_sph.read_mesh(path)
+        except ValueError as e:
+            assert "case." in str(e)

@@ -196,8 +196,10 @@ def _read_ply(data: bytes) -> MeshArrays:
     (_, n, vprops), (_, t, fprops) = elements[0], (elements + [("face", 0, [])])[1]
     if any(p[2] for p in vprops):
         raise _Bad("a vertex has a list property: not a splash mesh")
-    if t and [p[1:] for p in fprops if p[0] == "vertex_indices"] == [] or len(fprops) > 1:
+    if t and (len(fprops) != 1 or fprops[0][0] != "vertex_indices" or fprops[0][2] is None):
         raise _Bad("faces must have the single list property 'vertex_indices'")
+    if len({p[0] for p in vprops}) != len(vprops):
+        raise _Bad("two vertex properties have the same name")
     if encoding == "ascii":
         vertex_table, faces = _ply_ascii(data[body:], n, len(vprops), t)
         columns = {p[0]: vertex_table[:, i] for i, p in enumerate(vprops)}
