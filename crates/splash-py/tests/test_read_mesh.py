@@ -126,6 +126,8 @@ def test_read_mesh_mutated_files_raise_value_errors_only(mesh, tmp_path, fmt):
     for _ in range(200):
         d = bytearray(data)
         for _ in range(rng.randint(1, 6)):
+            if not d:
+                break
             i, op = rng.randrange(len(d)), rng.random()
             if op < 0.5:
                 d[i] = rng.randrange(256)

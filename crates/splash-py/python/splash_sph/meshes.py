@@ -122,14 +122,9 @@ def _obj_lines(data: bytes, pattern, keyword: bytes, what: str, dtype) -> np.nda
     first, last = data.find(tag), data.rfind(tag)
     block = data[first + 1 : data.find(b"\n", last + 1) % (len(data) + 1)]
     if first >= 0 and block.count(b"\n") + 1 == lines:
-        # The lines form one block, as splash writes them: one numpy parse of its numbers.
-        block = block.replace(tag, b"\n ")[len(keyword) :].replace(b"/", b" ")
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", DeprecationWarning)
-            numbers = np.fromstring(block, dtype=dtype, sep=" ")
-        per_line, extra = divmod(numbers.size, lines)
-        if extra == 0 and per_line in (3, 6, 9):
-            return numbers.reshape(lines, per_line)[:, :: per_line // 3]
+        numbers = _block_numbers(block.replace(tag, b"\n ")[len(keyword) :], lines, dtype)
+        if numbers is not None:
+            return numbers
     rows = pattern.findall(data)
     if len(rows) != lines:
         raise _Bad(f"{lines - len(rows)} of the {lines} '{what}' lines do not hold 3 numbers")
@@ -137,6 +132,33 @@ def _obj_lines(data: bytes, pattern, keyword: bytes, what: str, dtype) -> np.nda
         return np.array(rows, dtype=np.bytes_).astype(dtype)
     except ValueError:
         raise _Bad(f"a '{what}' line holds something other than numbers") from None
+
+
+def _block_numbers(block: bytes, lines: int, dtype):
+    """The (lines, 3) numbers of a block of `lines` lines of three words each, `a` or `a//n`
+    (splash's `f` lines) parsed by numpy at once; None when the block is not that regular,
+    for the line-by-line parse to judge."""
+    b = np.frombuffer(block, np.uint8)
+    newline = b == ord("\n")
+    gap = newline | (b == ord(" ")) | (b == ord("\t")) | (b == ord("\r"))
+    starts = ~gap & np.concatenate(([True], gap[:-1]))
+    words = np.bincount(np.cumsum(newline)[starts], minlength=lines)
+    if len(words) != lines or (words != 3).any():
+        return None
+    pairs = block.count(b"//")
+    if pairs not in (0, 3 * lines) or block.count(b"/") != 2 * pairs:
+        return None
+    with warnings.catch_warnings():
+        # numpy 1.x warns, 2.x raises, when the text does not parse to its end.
+        warnings.simplefilter("error", DeprecationWarning)
+        try:
+            numbers = np.fromstring(block.replace(b"//", b" "), dtype=dtype, sep=" ")
+        except (ValueError, DeprecationWarning):
+            return None
+    per_line = 6 if pairs else 3
+    if numbers.size != per_line * lines:
+        return None
+    return numbers.reshape(lines, per_line)[:, :: per_line // 3]
 
 
 def _read_obj(data: bytes) -> MeshArrays:
