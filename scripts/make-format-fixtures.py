@@ -2,7 +2,7 @@
 """Regenerates fixtures/formats/: one small particle set in every input format splash reads,
 each file written by an independent tool (never by splash), for the reader tests.
 
-The particles are every 100th vertex of fixtures/frame_0010.ply (a SPlisHSPlasH frame; 441
+The particles are every 23rd vertex of fixtures/frame_0010.ply (a SPlisHSPlasH frame; 1 916
 particles) with its velocity (vx vy vz), density, and id = the vertex's index in the frame.
 
 Tools (pip install into a throwaway venv): vtk (9.7.2: legacy VTK and XML VTU/VTP writers,
@@ -26,7 +26,7 @@ from vtk.util.numpy_support import numpy_to_vtk
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 OUT = os.path.join(ROOT, "fixtures", "formats")
-STEP = 100
+STEP = 23
 
 src = meshio.read(os.path.join(ROOT, "fixtures", "frame_0010.ply"))
 idx = np.arange(0, len(src.points), STEP)

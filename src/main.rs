@@ -17,9 +17,9 @@ mod preview;
 mod report;
 mod sequence;
 
-use splash_sph::field::FieldConfig;
 use splash_sph::{
-    Bytes, Config, Engine, InputFormat, Length, MeshFormat, Normals, OutputConfig, UpAxis,
+    Bytes, Config, Engine, InputFormat, Length, MeshFormat, Normals, OutputConfig, Overrides,
+    UpAxis,
 };
 
 use batch::{Batch, Output};
@@ -138,56 +138,43 @@ struct ConfigArgs {
 
 impl ConfigArgs {
     fn resolve(&self) -> Result<Config> {
-        let mut config = match &self.config {
+        let config = match &self.config {
             Some(path) => Config::from_file(path)?,
             None => Config::default(),
         };
-        if let Some(kind) = &self.field
-            && config.field.kind() != kind
-        {
-            config.field = FieldConfig::named(kind)?;
+        if self.threads == Some(0) {
+            bail!("--threads must be at least 1");
         }
-        if let Some(r) = self.spacing {
-            config.spacing = Some(r);
+        fn parsed<T>(
+            text: &Option<String>,
+            flag: &'static str,
+            parse: impl Fn(&str) -> splash_sph::Result<T>,
+        ) -> Result<Option<T>> {
+            text.as_deref().map(parse).transpose().context(flag)
         }
-        if let Some(p) = self.particle_radius {
-            config.spacing = Some(2.0 * p);
-        }
-        if let Some(c) = &self.cell {
-            config.cell = Length::parse(c).context("--cell")?;
-        }
-        if let Some(n) = &self.normals {
-            config.normals = Normals::parse(n).context("--normals")?;
-        }
-        if let Some(b) = self.block {
-            config.slices.block = b;
-        }
-        if let Some(e) = &self.engine {
-            config.engine = Engine::parse(e).context("--engine")?;
-        }
-        if let Some(n) = self.threads {
-            if n == 0 {
-                bail!("--threads must be at least 1");
-            }
-            config.threads = Some(n);
-        }
-        if let Some(m) = &self.max_memory {
-            config.max_memory = Some(Bytes::parse(m).context("--max-memory")?);
-        }
-        if let Some(f) = &self.format {
-            config.output.format = Some(MeshFormat::parse(f)?);
-        }
-        if let Some(a) = &self.up_axis {
-            config.output.up_axis = Some(UpAxis::parse(a)?);
-        }
-        if let Some(a) = &self.attributes {
-            config.output.attributes = OutputConfig::parse_attributes(a).context("--attributes")?;
-        }
-        if let Some(b) = &self.particle_aabb {
-            config.particle_aabb = Some(splash_sph::parse_aabb(b).context("--particle-aabb")?);
-        }
-        config.validate()?;
-        Ok(config)
+        let overrides = Overrides {
+            field: self.field.clone(),
+            spacing: self.particle_radius.map(|p| 2.0 * p).or(self.spacing),
+            cell: parsed(&self.cell, "--cell", Length::parse)?,
+            normals: parsed(&self.normals, "--normals", Normals::parse)?,
+            block: self.block,
+            engine: parsed(&self.engine, "--engine", Engine::parse)?,
+            threads: self.threads,
+            max_memory: parsed(&self.max_memory, "--max-memory", Bytes::parse)?,
+            format: self.format.as_deref().map(MeshFormat::parse).transpose()?,
+            up_axis: self.up_axis.as_deref().map(UpAxis::parse).transpose()?,
+            attributes: parsed(
+                &self.attributes,
+                "--attributes",
+                OutputConfig::parse_attributes,
+            )?,
+            particle_aabb: parsed(
+                &self.particle_aabb,
+                "--particle-aabb",
+                splash_sph::parse_aabb,
+            )?,
+        };
+        Ok(config.apply(&overrides)?)
     }
 }
 

@@ -42,7 +42,7 @@ fn recon(input: &Path, extra: &[&str], output: &Path) -> String {
 #[test]
 fn every_interchange_format_gives_the_ply_mesh() {
     let dir = TempDir::new("interchange-mesh");
-    // The PLY of the fixtures' particles (every 100th of frame_0010), from the raw .xyz.
+    // The PLY of the fixtures' particles (every 23rd of frame_0010), from the raw .xyz.
     let raw = fs::read(formats("raw.xyz")).unwrap();
     let mut ply = format!(
         "ply\nformat binary_little_endian 1.0\nelement vertex {}\nproperty float x\n\

@@ -233,3 +233,32 @@ fn json_logs_are_json_lines_only() {
         "{stderr}"
     );
 }
+
+/// A missing input names the operating system's reason once per report of it, in text and
+/// JSON logs alike (it used to come twice: in the library's message and again as its source).
+#[test]
+fn a_missing_file_gives_its_reason_once() {
+    let dir = TempDir::new("missing");
+    let missing = dir.path("nothing.ply");
+    let reason = fs::File::open(&missing).unwrap_err().to_string();
+    let out = dir.path("out.obj");
+    for log in ["plain", "json"] {
+        let (code, stderr) = recon(&[
+            missing.to_str().unwrap(),
+            "--spacing",
+            "0.05",
+            "--log-format",
+            log,
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert_ne!(code, 0, "{stderr}");
+        assert!(stderr.contains("nothing.ply"), "{stderr}");
+        // Each line that reports the failure (the frame's, the summary's) says why once.
+        let lines: Vec<&str> = stderr.lines().filter(|l| l.contains(&reason)).collect();
+        assert!(!lines.is_empty(), "{log}: {stderr}");
+        for line in lines {
+            assert_eq!(line.matches(&reason).count(), 1, "{log}: {line}");
+        }
+    }
+}

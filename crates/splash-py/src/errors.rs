@@ -11,7 +11,7 @@ use splash_sph::Error;
 pub fn to_py(e: Error) -> PyErr {
     let message = e.to_string();
     match &e {
-        Error::Io { source, .. } => match source.kind() {
+        Error::Io { io_error, .. } => match io_error.kind() {
             ErrorKind::NotFound => PyFileNotFoundError::new_err(message),
             ErrorKind::PermissionDenied => PyPermissionError::new_err(message),
             _ => PyOSError::new_err(message),

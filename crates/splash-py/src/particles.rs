@@ -7,6 +7,8 @@ use pyo3::exceptions::PyKeyError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use splash_sph::InputFormat;
+use splash_sph::Vec3;
+use splash_sph::attribute_names::{self, Location};
 use splash_sph::io::Attribute;
 
 use crate::arrays;
@@ -14,8 +16,10 @@ use crate::errors::to_py;
 
 /// One particle frame: positions and per-particle attributes.
 ///
-/// ``len(p)`` is the number of particles, ``p["velocity"]`` an attribute and
-/// ``"velocity" in p`` tells whether the file has it.
+/// ``len(p)`` is the number of particles, ``p["velocity"]`` (or ``p.attributes["velocity"]``)
+/// an attribute by the name the file gives it, ``p.attribute("v")`` one by any usual spelling
+/// (the alias table of ``--attributes``), ``p.attribute_names`` their names, and
+/// ``"velocity" in p`` tells whether the file has one of that name.
 #[pyclass(frozen, module = "splash_sph")]
 pub struct Particles {
     /// Particle positions, shape (N, 3), float32.
@@ -38,6 +42,52 @@ impl Particles {
             .bind(py)
             .get_item(name)?
             .ok_or_else(|| PyKeyError::new_err(name.to_string()))
+    }
+
+    /// The attribute that ``name`` names in any of its usual spellings, as ``--attributes``
+    /// finds it: ``"v"``, ``"vel"`` and ``"velocities"`` find ``velocity``, ``"rho"`` finds
+    /// ``density``, and three scalars ``vx vy vz`` (or ``velocity_x …``) come as one (N, 3)
+    /// array. Raises KeyError, listing the frame's attributes, when it has none of these.
+    fn attribute<'py>(&self, py: Python<'py>, name: &str) -> PyResult<Bound<'py, PyAny>> {
+        let dict = self.attributes.bind(py);
+        let mut names = Vec::with_capacity(dict.len());
+        for (k, v) in dict.iter() {
+            names.push((k.extract::<String>()?, arrays::is_scalar(&v)?));
+        }
+        let found = attribute_names::locate(names.iter().map(|(k, s)| (k.as_str(), *s)), name);
+        match found {
+            Some(Location::Whole(k)) => self.__getitem__(py, &k),
+            Some(Location::Components(keys)) => {
+                let mut columns = Vec::with_capacity(3);
+                for k in &keys {
+                    columns.push(arrays::scalars(&self.__getitem__(py, k)?, k)?);
+                }
+                let vectors = (0..columns[0].len())
+                    .map(|i| Vec3::new(columns[0][i], columns[1][i], columns[2][i]))
+                    .collect();
+                Ok(arrays::points_array(py, vectors).into_any())
+            }
+            None => Err(PyKeyError::new_err(format!(
+                "no attribute '{name}' (in any of its spellings); the frame has: {}",
+                if names.is_empty() {
+                    "none".to_string()
+                } else {
+                    names
+                        .iter()
+                        .map(|(k, _)| k.as_str())
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                }
+            ))),
+        }
+    }
+
+    /// The names of the attributes, as the file gives them, sorted.
+    #[getter]
+    fn attribute_names(&self, py: Python<'_>) -> PyResult<Vec<String>> {
+        let mut names: Vec<String> = self.attributes.bind(py).keys().extract()?;
+        names.sort();
+        Ok(names)
     }
 
     fn __contains__(&self, py: Python<'_>, name: &str) -> PyResult<bool> {

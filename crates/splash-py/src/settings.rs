@@ -6,7 +6,6 @@ use std::path::PathBuf;
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
-use splash_sph::field::FieldConfig;
 use splash_sph::{Bytes, Config, Engine, Length, Normals};
 
 use crate::errors::to_py;
@@ -24,7 +23,7 @@ pub struct Overrides<'py> {
 
 /// `config` (None, a TOML file's path or a dict) with `overrides` applied, validated.
 pub fn resolve(config: Option<&Bound<'_, PyAny>>, overrides: Overrides<'_>) -> PyResult<Config> {
-    let mut config = match config {
+    let config = match config {
         None => Config::default(),
         Some(c) => match c.cast::<PyDict>() {
             Ok(dict) => from_dict(dict)?,
@@ -48,46 +47,51 @@ pub fn resolve(config: Option<&Bound<'_, PyAny>>, overrides: Overrides<'_>) -> P
         threads,
         max_memory,
     } = overrides;
-    // A field of the same kind keeps the parameters the configuration gives it.
-    if let Some(kind) = field
-        && config.field.kind() != kind
-    {
-        config.field = FieldConfig::named(&kind).map_err(to_py)?;
-    }
-    if spacing.is_some() {
-        config.spacing = spacing;
-    }
-    if let Some(cell) = cell {
-        config.cell = match cell.extract::<String>() {
+    let cell = match cell {
+        None => None,
+        Some(cell) => Some(match cell.extract::<String>() {
             Ok(text) => Length::parse(&text).map_err(to_py)?,
             Err(_) => Length::World(cell.extract().map_err(|_| {
                 PyTypeError::new_err("cell must be a length such as \"r/2\" or a number")
             })?),
-        };
-    }
-    if let Some(engine) = engine {
-        config.engine = Engine::parse(&engine).map_err(to_py)?;
-    }
-    if let Some(normals) = normals {
-        config.normals = Normals::parse(&normals).map_err(to_py)?;
-    }
-    if let Some(n) = threads {
-        config.threads = Some(usize::try_from(n).ok().filter(|&n| n > 0).ok_or_else(|| {
+        }),
+    };
+    let threads = match threads {
+        None => None,
+        Some(n) => Some(usize::try_from(n).ok().filter(|&n| n > 0).ok_or_else(|| {
             PyValueError::new_err(format!("threads must be at least 1, got {n}"))
-        })?);
-    }
-    if let Some(m) = max_memory {
-        config.max_memory = Some(match m.extract::<String>() {
+        })?),
+    };
+    let max_memory = match max_memory {
+        None => None,
+        Some(m) => Some(match m.extract::<String>() {
             Ok(text) => Bytes::parse(&text).map_err(to_py)?,
             Err(_) => Bytes(m.extract().map_err(|_| {
                 PyTypeError::new_err(
                     "max_memory must be a size such as \"8G\" or a number of bytes",
                 )
             })?),
-        });
-    }
-    config.validate().map_err(to_py)?;
-    Ok(config)
+        }),
+    };
+    let overrides = splash_sph::Overrides {
+        field,
+        spacing,
+        cell,
+        engine: engine
+            .as_deref()
+            .map(Engine::parse)
+            .transpose()
+            .map_err(to_py)?,
+        normals: normals
+            .as_deref()
+            .map(Normals::parse)
+            .transpose()
+            .map_err(to_py)?,
+        threads,
+        max_memory,
+        ..Default::default()
+    };
+    config.apply(&overrides).map_err(to_py)
 }
 
 /// A configuration from a dict shaped like the TOML file (tables as nested dicts; None leaves a

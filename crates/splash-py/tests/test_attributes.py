@@ -23,6 +23,17 @@ def test_a_constant_field_interpolates_to_itself(particles):
     np.testing.assert_allclose(v, np.broadcast_to(constant, v.shape), rtol=1e-5)
 
 
+@pytest.mark.parametrize("field", ["zb05", "density", "blobby", "metaball", "anisotropic"])
+def test_every_fields_kernel_keeps_a_constant(particles, field):
+    """Each field weighs the particles with its own kernel, normalised: constants stay."""
+    density = np.full(len(particles), 997.5, dtype=np.float32)
+    mesh = splash_sph.reconstruct(
+        particles, spacing=SPACING, field=field, attributes={"density": density}
+    )
+    assert len(mesh.vertices) > 100
+    np.testing.assert_allclose(mesh.attributes["density"], 997.5, rtol=1e-5)
+
+
 def test_a_linear_field_interpolates_near_the_vertices(particles):
     """A rotation about z: each vertex gets about the velocity at its own position, as the
     weights sit within the support around it."""

@@ -1,5 +1,7 @@
 """Library errors as Python exceptions, with the messages the CLI prints."""
 
+import errno
+import os
 import subprocess
 
 import numpy as np
@@ -24,6 +26,13 @@ def test_missing_file(splash_bin, tmp_path):
         splash_sph.read_particles(path)
     assert str(path) in str(e.value)
     assert str(e.value) in cli_error(splash_bin, path, "--spacing", "0.1", "-o", tmp_path / "x.obj")
+    # The operating system's reason, once (it used to be printed twice by the CLI).
+    reason = os.strerror(errno.ENOENT)
+    assert str(e.value).count(reason) == 1, str(e.value)
+    for log in ("plain", "json"):
+        stderr = cli_error(splash_bin, path, "--spacing", "0.1", "--log-format", log)
+        lines = [line for line in stderr.splitlines() if reason in line]
+        assert lines and all(line.count(reason) == 1 for line in lines), stderr
 
 
 def test_truncated_ply(splash_bin, tmp_path):

@@ -41,48 +41,72 @@ fn spellings(name: &str) -> Vec<&str> {
     }
 }
 
-/// Takes the attribute that `requested` names out of `attributes`: the one of that exact name,
-/// else one whose name is another spelling of it, else a vector assembled from three scalar
-/// components (`{s}x {s}y {s}z` or `{s}_x {s}_y {s}_z` for a spelling `s`). None when the frame
-/// has none of these.
-pub fn take(attributes: &mut BTreeMap<String, Attribute>, requested: &str) -> Option<Attribute> {
-    if let Some(a) = attributes.remove(requested) {
-        return Some(a);
+/// Where a frame keeps the attribute a name asks for: see [`locate`].
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum Location {
+    /// One attribute of this name.
+    Whole(String),
+    /// Three scalar attributes of these names, x, y and z of a vector.
+    Components([String; 3]),
+}
+
+/// Where the attribute that `requested` names is among `names` (each attribute's name and
+/// whether it is a scalar): the one of that exact name, else one whose name is another spelling
+/// of it, else three scalar components (`{s}x {s}y {s}z` or `{s}_x {s}_y {s}_z` for a spelling
+/// `s`). None when the frame has none of these.
+pub fn locate<'a>(
+    names: impl Iterator<Item = (&'a str, bool)> + Clone,
+    requested: &str,
+) -> Option<Location> {
+    if let Some((k, _)) = names.clone().find(|(k, _)| *k == requested) {
+        return Some(Location::Whole(k.to_string()));
     }
     let spellings = spellings(requested);
-    let key = attributes
-        .keys()
-        .find(|k| spellings.iter().any(|s| s.eq_ignore_ascii_case(k)))
-        .cloned();
-    if let Some(key) = key {
-        return attributes.remove(&key);
+    if let Some((k, _)) = names
+        .clone()
+        .find(|(k, _)| spellings.iter().any(|s| s.eq_ignore_ascii_case(k)))
+    {
+        return Some(Location::Whole(k.to_string()));
     }
     for s in &spellings {
         for separator in ["", "_"] {
-            let names = ["x", "y", "z"].map(|c| format!("{s}{separator}{c}"));
-            let keys = names.each_ref().map(|n| {
-                attributes
-                    .iter()
-                    .find(|(k, a)| k.eq_ignore_ascii_case(n) && matches!(a, Attribute::Scalar(_)))
-                    .map(|(k, _)| k.clone())
+            let keys = ["x", "y", "z"].map(|c| {
+                let n = format!("{s}{separator}{c}");
+                names
+                    .clone()
+                    .find(|(k, scalar)| *scalar && k.eq_ignore_ascii_case(&n))
+                    .map(|(k, _)| k.to_string())
             });
             if let [Some(x), Some(y), Some(z)] = keys {
-                let mut column = |k: &str| match attributes.remove(k) {
-                    Some(Attribute::Scalar(values)) => values,
-                    _ => unreachable!("checked to be a scalar above"),
-                };
-                let (x, y, z) = (column(&x), column(&y), column(&z));
-                let vectors = x
-                    .iter()
-                    .zip(&y)
-                    .zip(&z)
-                    .map(|((&x, &y), &z)| Vec3::new(x, y, z))
-                    .collect();
-                return Some(Attribute::Vector(vectors));
+                return Some(Location::Components([x, y, z]));
             }
         }
     }
     None
+}
+
+/// Takes the attribute that `requested` names out of `attributes` (see [`locate`]), three
+/// components as one vector. None when the frame has none of these.
+pub fn take(attributes: &mut BTreeMap<String, Attribute>, requested: &str) -> Option<Attribute> {
+    let names = attributes
+        .iter()
+        .map(|(k, a)| (k.as_str(), matches!(a, Attribute::Scalar(_))));
+    match locate(names, requested)? {
+        Location::Whole(k) => attributes.remove(&k),
+        Location::Components(keys) => {
+            let [x, y, z] = keys.map(|k| match attributes.remove(&k) {
+                Some(Attribute::Scalar(values)) => values,
+                _ => unreachable!("located as a scalar"),
+            });
+            Some(Attribute::Vector(
+                x.iter()
+                    .zip(&y)
+                    .zip(&z)
+                    .map(|((&x, &y), &z)| Vec3::new(x, y, z))
+                    .collect(),
+            ))
+        }
+    }
 }
 
 #[cfg(test)]

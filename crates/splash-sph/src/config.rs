@@ -297,7 +297,7 @@ impl Config {
         let text = std::fs::read_to_string(path).map_err(|source| Error::Io {
             message: format!("{}: cannot read the config file: {source}", path.display()),
             path: path.to_path_buf(),
-            source,
+            io_error: source,
         })?;
         Config::from_toml(&text).map_err(|e| e.context(path.display()))
     }

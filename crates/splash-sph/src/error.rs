@@ -8,16 +8,17 @@ use std::path::PathBuf;
 #[derive(Debug, thiserror::Error)]
 #[non_exhaustive]
 pub enum Error {
-    /// A file could not be opened, read or written; `message` names the file.
+    /// A file could not be opened, read or written; `message` names the file and ends with
+    /// the operating system's reason.
     #[error("{message}")]
     Io {
         /// The file.
         path: PathBuf,
-        /// What failed, naming the file.
+        /// What failed, naming the file, then why ("…: No such file or directory (os error 2)").
         message: String,
-        #[source]
-        /// The operating system's error.
-        source: std::io::Error,
+        /// The operating system's error, for its kind. Its text already ends `message`, so it
+        /// is not also the error's `source()`: chains of causes print it once.
+        io_error: std::io::Error,
     },
     /// A particle file whose content is not a valid frame of its format.
     #[error("cannot read particles from '{}': {message}", path.display())]
@@ -61,11 +62,11 @@ impl Error {
             Error::Io {
                 path,
                 message,
-                source,
+                io_error,
             } => Error::Io {
                 path,
                 message: format!("{context}: {message}"),
-                source,
+                io_error,
             },
             Error::Format { path, message } => Error::Format {
                 path,

@@ -33,6 +33,7 @@ mod config;
 mod config_errors;
 mod length;
 mod neighbours;
+mod overrides;
 mod reconstructor;
 mod spacing;
 
@@ -54,6 +55,7 @@ pub use glam::Vec3;
 pub use io::{Attribute, InputFormat, MeshFormat, Particles, UpAxis, read_particles};
 pub use length::Length;
 pub use mesh::TriMesh;
+pub use overrides::Overrides;
 pub use recon::Reconstruction;
 pub use reconstructor::Reconstructor;
 pub use report::{Clock, FrameStats, Observer, Stage, StageFigures};

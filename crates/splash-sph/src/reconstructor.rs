@@ -155,9 +155,11 @@ impl Reconstructor {
     }
 
     /// A per-particle attribute (velocities, densities, …) interpolated onto the vertices of
-    /// `mesh`: the kernel-weighted mean of the particles within the field's support, with the
-    /// weights k(s) = max(0, (1 − s²)³) of SSP07, normalised by their sum (Shepard), so that a
-    /// constant attribute stays that constant. `values` has one entry per position; the result
+    /// `mesh`: the mean of the particles within the field's support weighted by the field's
+    /// own kernel (SSP07's and ZB05's (1 − s²)³, the density field's cubic spline, the blobbies'
+    /// Gaussian, the metaballs' polynomial; for the anisotropic field the cubic spline of its
+    /// neighbourhood radius h, an interior particle's kernel), normalised by the weights' sum
+    /// (Shepard), so that a constant attribute stays that constant. `values` has one entry per position; the result
     /// one per vertex, of the same kind.
     pub fn interpolate(
         &self,
@@ -178,7 +180,8 @@ impl Reconstructor {
         values: &[&Attribute],
     ) -> Result<Vec<Attribute>> {
         self.install(|| {
-            attributes::interpolate(&mesh.vertices, positions, values, self.params.support)
+            let kernel = self.params.field.radial_kernel();
+            attributes::interpolate(&mesh.vertices, positions, values, &kernel)
         })
     }
 

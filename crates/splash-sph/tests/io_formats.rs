@@ -558,11 +558,23 @@ fn errors_say_whose_they_are() {
     ] {
         match splash_sph::read_particles(&path, None) {
             Err(splash_sph::Error::Io {
-                path: at, source, ..
-            }) => assert_eq!((at, source.kind()), (path, kind)),
+                path: at, io_error, ..
+            }) => assert_eq!((at, io_error.kind()), (path, kind)),
             other => panic!("{}: {other:?}", path.display()),
         }
     }
+    // The operating system's reason appears once along the chain of causes (the message and
+    // its sources, as the CLI prints them), not in the message and again as a source.
+    let missing = dir.path("missing.ply");
+    let reason = fs::File::open(&missing).unwrap_err().to_string();
+    let e = splash_sph::read_particles(&missing, None).unwrap_err();
+    let mut chain = e.to_string();
+    let mut cause = std::error::Error::source(&e);
+    while let Some(c) = cause {
+        chain += &format!(": {c}");
+        cause = c.source();
+    }
+    assert_eq!(chain.matches(&reason).count(), 1, "{chain}");
     let bad = dir.file("bad.csv", "x,y,z\n1,2,oops\n");
     match splash_sph::read_particles(&bad, None) {
         Err(splash_sph::Error::Format { path, message }) => {

@@ -1,7 +1,7 @@
 """Type stubs of the native extension; the ``splash_sph`` package re-exports all of it."""
 
 import os
-from typing import Any, Dict, Mapping, Optional, Union
+from typing import Any, Dict, List, Mapping, Optional, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -12,8 +12,10 @@ _Array = npt.ArrayLike
 class Particles:
     """One particle frame: positions and per-particle attributes.
 
-    ``len(p)`` is the number of particles, ``p["velocity"]`` an attribute and
-    ``"velocity" in p`` tells whether the file has it.
+    ``len(p)`` is the number of particles, ``p["velocity"]`` (or ``p.attributes["velocity"]``)
+    an attribute by the name the file gives it, ``p.attribute("v")`` one by any usual spelling
+    (the alias table of ``--attributes``), ``p.attribute_names`` their names, and
+    ``"velocity" in p`` tells whether the file has one of that name.
     """
 
     @property
@@ -23,6 +25,14 @@ class Particles:
     def attributes(self) -> Dict[str, npt.NDArray[np.float32]]:
         """Per-particle attributes by name (``velocity``, ``density``, ...): arrays of shape
         (N, 3) for vectors and (N,) for scalars, float32."""
+    @property
+    def attribute_names(self) -> List[str]:
+        """The names of the attributes, as the file gives them, sorted."""
+    def attribute(self, name: str) -> npt.NDArray[np.float32]:
+        """The attribute that ``name`` names in any of its usual spellings, as ``--attributes``
+        finds it: ``"v"``, ``"vel"`` and ``"velocities"`` find ``velocity``, ``"rho"`` finds
+        ``density``, and three scalars ``vx vy vz`` (or ``velocity_x …``) come as one (N, 3)
+        array. Raises KeyError, listing the frame's attributes, when it has none of these."""
     def __len__(self) -> int:
         """The number of particles."""
     def __getitem__(self, name: str) -> npt.NDArray[np.float32]:

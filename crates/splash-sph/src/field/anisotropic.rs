@@ -35,6 +35,7 @@ use glam::{Mat3, Vec3};
 use serde::{Deserialize, Serialize};
 
 use super::density::{cubic_spline, cubic_spline_slope_over_q, particle_volumes};
+use super::radial_kernel::RadialKernel;
 use super::{Fitted, ScalarField};
 use crate::length::Length;
 use crate::neighbours::handler_array::HandlerArray;
@@ -269,6 +270,12 @@ pub fn symmetric_eigen(c: [f32; 6]) -> (Mat3, [f32; 3]) {
 impl ScalarField for Anisotropic {
     fn support(&self) -> f32 {
         self.support
+    }
+
+    fn radial_kernel(&self) -> RadialKernel {
+        // Not the fitted ellipsoids (their fit is a pass of its own, and a splash particle's
+        // reaches k_n·h): the kernel of an interior particle, Σ̃ ≈ I, a cubic spline of radius h.
+        RadialKernel::CubicSpline { support: self.h }
     }
 
     /// The kernels of this frame, on a handler array over their smoothed centres, with G and

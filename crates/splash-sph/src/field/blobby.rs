@@ -7,6 +7,7 @@ use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
 use super::ScalarField;
+use super::radial_kernel::RadialKernel;
 use crate::length::Length;
 use crate::neighbours::neighbourhood::Neighbourhood;
 
@@ -103,6 +104,14 @@ crate::lane_sums! {
 impl ScalarField for Blobby {
     fn support(&self) -> f32 {
         self.radius * self.cutoff_s2.sqrt()
+    }
+
+    fn radial_kernel(&self) -> RadialKernel {
+        RadialKernel::Blobby {
+            radius: self.radius,
+            blobbiness: self.blobbiness,
+            cutoff_s2: self.cutoff_s2,
+        }
     }
 
     fn value(&self, near: &Neighbourhood, x: Vec3) -> f32 {

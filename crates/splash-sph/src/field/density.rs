@@ -10,6 +10,7 @@ use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
 use super::ScalarField;
+use super::radial_kernel::RadialKernel;
 use crate::length::Length;
 use crate::neighbours::handler_array::HandlerArray;
 use crate::neighbours::neighbourhood::{Neighbourhood, map_particles};
@@ -120,6 +121,12 @@ pub fn particle_volumes(handlers: &HandlerArray, support: f32) -> Vec<f32> {
 impl ScalarField for Density {
     fn support(&self) -> f32 {
         self.support
+    }
+
+    fn radial_kernel(&self) -> RadialKernel {
+        RadialKernel::CubicSpline {
+            support: self.support,
+        }
     }
 
     fn particle_channels(&self, handlers: &HandlerArray) -> Vec<Vec<f32>> {

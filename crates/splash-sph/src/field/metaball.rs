@@ -7,6 +7,7 @@ use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
 use super::ScalarField;
+use super::radial_kernel::RadialKernel;
 use crate::length::Length;
 use crate::neighbours::neighbourhood::Neighbourhood;
 
@@ -98,6 +99,13 @@ crate::lane_sums! {
 impl ScalarField for Metaball {
     fn support(&self) -> f32 {
         self.cutoff
+    }
+
+    fn radial_kernel(&self) -> RadialKernel {
+        RadialKernel::Metaball {
+            cutoff: self.cutoff,
+            exponent: self.exponent,
+        }
     }
 
     fn value(&self, near: &Neighbourhood, x: Vec3) -> f32 {

@@ -6,6 +6,7 @@ pub(crate) mod anisotropic;
 pub(crate) mod blobby;
 pub(crate) mod density;
 pub(crate) mod metaball;
+pub(crate) mod radial_kernel;
 pub(crate) mod ssp07;
 pub(crate) mod zb05;
 
@@ -22,10 +23,14 @@ use serde::{Deserialize, Serialize};
 
 use crate::neighbours::handler_array::HandlerArray;
 use crate::neighbours::neighbourhood::Neighbourhood;
+use radial_kernel::RadialKernel;
 
 pub(crate) trait ScalarField: Send + Sync {
     /// Particles farther than this from a point do not change the field there.
     fn support(&self) -> f32;
+
+    /// The field's kernel as a weight of distance, for interpolating particle attributes.
+    fn radial_kernel(&self) -> RadialKernel;
 
     /// The field at `x` (relative to `near.anchor`, as the particles of `near` are): negative
     /// inside the fluid, zero on its surface. `near` holds every particle within

@@ -5,6 +5,7 @@ use crate::error::Result;
 use glam::{DMat3, DVec3, Vec3};
 use serde::{Deserialize, Serialize};
 
+use super::radial_kernel::RadialKernel;
 use super::{ScalarField, Scattering};
 use crate::length::Length;
 use crate::neighbours::neighbourhood::Neighbourhood;
@@ -72,6 +73,12 @@ pub struct Ssp07 {
 impl ScalarField for Ssp07 {
     fn support(&self) -> f32 {
         self.support
+    }
+
+    fn radial_kernel(&self) -> RadialKernel {
+        RadialKernel::Poly6 {
+            support: self.support,
+        }
     }
 
     fn scattering(&self) -> Option<&dyn Scattering> {

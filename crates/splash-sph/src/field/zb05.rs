@@ -6,6 +6,7 @@ use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
 use super::ScalarField;
+use super::radial_kernel::RadialKernel;
 use super::ssp07::{MeanDistance, Sums};
 use crate::length::Length;
 use crate::neighbours::neighbourhood::Neighbourhood;
@@ -60,6 +61,12 @@ crate::lane_sums! {
 impl ScalarField for Zb05 {
     fn support(&self) -> f32 {
         self.support
+    }
+
+    fn radial_kernel(&self) -> RadialKernel {
+        RadialKernel::Poly6 {
+            support: self.support,
+        }
     }
 
     fn value(&self, near: &Neighbourhood, x: Vec3) -> f32 {

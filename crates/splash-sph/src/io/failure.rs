@@ -35,7 +35,7 @@ impl IoFailure {
         Error::Io {
             path: path.to_path_buf(),
             message: format!("{what}: {}", self.message),
-            source: self.source,
+            io_error: self.source,
         }
     }
 }
