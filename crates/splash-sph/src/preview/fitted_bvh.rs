@@ -107,14 +107,30 @@ pub(crate) struct Node {
     pub count: u32,
 }
 
+/// Where a subtree's own metaballs reach: the box of their spheres (radius R) and their range
+/// in the reordered centres. The tracer collects with it exactly the metaballs along a piece of
+/// ray, whatever the node boxes were fitted to.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Reach {
+    pub bounds: Aabb,
+    pub own: [u32; 2],
+}
+
 /// The built hierarchy over a frame's metaballs.
 #[derive(Debug)]
 pub struct FittedBvh {
     pub(crate) nodes: Vec<Node>,
-    /// Leaf lists: indices into `points`, ascending within each leaf.
+    /// Per node, where its subtree's own metaballs reach.
+    pub(crate) reach: Vec<Reach>,
+    /// Leaf lists: indices into `points`, in particle order within each leaf (the order the
+    /// field is summed in, so that every hierarchy sums it alike).
     pub(crate) items: Vec<u32>,
     /// The metaball centres, reordered so that each leaf's own metaballs are contiguous.
     pub(crate) points: Vec<Vec3>,
+    /// The particle index of each of `points`.
+    pub(crate) original: Vec<u32>,
+    /// The box of all metaballs' spheres: the same for every hierarchy over these particles.
+    pub(crate) scene: Aabb,
     pub(crate) field: Metaballs,
     kind: BvhKind,
 }
@@ -185,6 +201,8 @@ struct Flat {
     items: Vec<u32>,
     /// Own metaballs in leaf order (original indices).
     order: Vec<u32>,
+    /// Per node: for leaves, the range of their own metaballs in `order`.
+    own: Vec<[u32; 2]>,
 }
 
 impl Flat {
@@ -204,6 +222,8 @@ impl Flat {
                         first: self.items.len() as u32,
                         count: items.len() as u32,
                     });
+                    let start = self.order.len() as u32;
+                    self.own.push([start, start + own as u32]);
                     self.order.extend_from_slice(&items[..own]);
                     self.items.extend_from_slice(&items);
                 }
@@ -213,6 +233,7 @@ impl Flat {
                         first: 0,
                         count: 0,
                     });
+                    self.own.push([0, 0]);
                     let (l, r) = *children;
                     stack.push((r, Some(at)));
                     stack.push((l, None));
@@ -236,7 +257,8 @@ impl FittedBvh {
         if points.len() >= u32::MAX as usize / 2 {
             bail_limit!("{} particles are too many for one preview", points.len());
         }
-        let fixed = points.len() as u64 * (12 + 4 + 2 * 32);
+        // Centres, particle indices, and per metaball up to two nodes with their reach.
+        let fixed = points.len() as u64 * (12 + 4 + 4 + 2 * (32 + 32));
         if fixed > max_bytes {
             bail_limit!(
                 "the preview's hierarchy over {} particles needs at least {} MB, more than the \
@@ -256,8 +278,11 @@ impl FittedBvh {
         if points.is_empty() {
             return Ok(FittedBvh {
                 nodes: Vec::new(),
+                reach: Vec::new(),
                 items: Vec::new(),
                 points: Vec::new(),
+                original: Vec::new(),
+                scene: Aabb::EMPTY,
                 field,
                 kind,
             });
@@ -274,28 +299,36 @@ impl FittedBvh {
         ctx.charge(own.len())?;
         let mut tree = Flat::default();
         tree.push(build_node(&ctx, own, Vec::new(), bounds)?);
-        // Renumber the metaballs in leaf order, so that a leaf's list reads nearby memory.
+        let Flat {
+            nodes,
+            mut items,
+            order,
+            own,
+        } = tree;
+        // The field is summed in particle order: sort each list by particle index, then
+        // renumber the metaballs in leaf order, so that a leaf's list reads nearby memory.
+        for n in &nodes {
+            if n.count > 0 {
+                items[n.first as usize..(n.first + n.count) as usize].sort_unstable();
+            }
+        }
         let mut new_index = vec![0u32; points.len()];
-        for (k, &i) in tree.order.iter().enumerate() {
+        for (k, &i) in order.iter().enumerate() {
             new_index[i as usize] = k as u32;
         }
-        let reordered: Vec<Vec3> = tree.order.iter().map(|&i| points[i as usize]).collect();
-        let mut items = tree.items;
+        let reordered: Vec<Vec3> = order.iter().map(|&i| points[i as usize]).collect();
         for i in &mut items {
             *i = new_index[*i as usize];
         }
-        let mut nodes = tree.nodes;
-        for n in &nodes {
-            if n.count > 0 {
-                let range = n.first as usize..(n.first + n.count) as usize;
-                items[range].sort_unstable();
-            }
-        }
-        nodes.shrink_to_fit();
+        let reach = reaches(&nodes, &own, &reordered, field.cutoff);
+        let scene = reach[0].bounds;
         Ok(FittedBvh {
             nodes,
+            reach,
             items,
             points: reordered,
+            original: order,
+            scene,
             field,
             kind,
         })
@@ -311,9 +344,9 @@ impl FittedBvh {
         let mut s = BvhStats {
             nodes: self.nodes.len(),
             entries: self.items.len(),
-            bytes: self.nodes.len() * size_of::<Node>()
+            bytes: self.nodes.len() * (size_of::<Node>() + size_of::<Reach>())
                 + self.items.len() * 4
-                + self.points.len() * 12,
+                + self.points.len() * 16,
             ..BvhStats::default()
         };
         let mut stack = vec![(0usize, 0usize)];
@@ -352,6 +385,41 @@ impl FittedBvh {
     pub fn field(&self) -> Metaballs {
         self.field
     }
+}
+
+/// Each node's [`Reach`], children before parents (they follow them in `nodes`). Leaves own
+/// the ranges `own` of `points`; a subtree's leaves are consecutive, so are their ranges.
+fn reaches(nodes: &[Node], own: &[[u32; 2]], points: &[Vec3], r: f32) -> Vec<Reach> {
+    let mut reach = vec![
+        Reach {
+            bounds: Aabb::EMPTY,
+            own: [0, 0],
+        };
+        nodes.len()
+    ];
+    for n in (0..nodes.len()).rev() {
+        reach[n] = if nodes[n].count > 0 {
+            let [a, b] = own[n];
+            let mut bounds = Aabb::EMPTY;
+            for &p in &points[a as usize..b as usize] {
+                bounds.grow_sphere(p, r);
+            }
+            Reach {
+                bounds,
+                own: [a, b],
+            }
+        } else {
+            let (l, rt) = (reach[n + 1], reach[nodes[n].first as usize]);
+            Reach {
+                bounds: Aabb {
+                    min: l.bounds.min.min(rt.bounds.min),
+                    max: l.bounds.max.max(rt.bounds.max),
+                },
+                own: [l.own[0], rt.own[1]],
+            }
+        };
+    }
+    reach
 }
 
 impl Ctx<'_> {
