@@ -130,13 +130,13 @@ pub struct Batch {
     pub fail_fast: bool,
 }
 
-/// What happened to one frame.
-pub struct FrameOutcome {
+/// What happened to one frame: its figures `S` (recon's [`FrameStats`], preview's) or error.
+pub struct FrameOutcome<S = FrameStats> {
     pub input: PathBuf,
     pub output: PathBuf,
     /// Frame number from the input's name.
     pub frame: Option<u64>,
-    pub result: Result<FrameStats>,
+    pub result: Result<S>,
 }
 
 /// This job's share of the sequence, known before any frame is read.
@@ -154,32 +154,32 @@ pub struct Plan {
 }
 
 /// The end of a run.
-pub struct RunReport {
+pub struct RunReport<S = FrameStats> {
     pub plan: Plan,
     /// The frames attempted, in frame order.
-    pub outcomes: Vec<FrameOutcome>,
+    pub outcomes: Vec<FrameOutcome<S>>,
     /// Frames not attempted because a frame failed with `fail_fast` set.
     pub not_attempted: usize,
 }
 
-impl RunReport {
-    pub fn failed(&self) -> impl Iterator<Item = &FrameOutcome> {
+impl<S> RunReport<S> {
+    pub fn failed(&self) -> impl Iterator<Item = &FrameOutcome<S>> {
         self.outcomes.iter().filter(|o| o.result.is_err())
     }
 
-    /// Every frame of this job has its mesh: written now or found complete.
+    /// Every frame of this job has its output: written now or found complete.
     pub fn complete(&self) -> bool {
         self.not_attempted == 0 && self.failed().next().is_none()
     }
 }
 
 /// Messages for the user as the run goes on.
-pub trait Progress {
+pub trait Progress<S = FrameStats> {
     fn started(&mut self, _plan: &Plan) {}
     fn spacing_estimated(&mut self, from: &Path, spacing: f32);
     /// Something that makes the output suspect, about frame `input` or the run (None).
     fn warning(&mut self, input: Option<&Path>, message: &str);
-    fn frame_done(&mut self, outcome: &FrameOutcome, done: usize, total: usize);
+    fn frame_done(&mut self, outcome: &FrameOutcome<S>, done: usize, total: usize);
 }
 
 impl Batch {

@@ -9,17 +9,122 @@
 //! - `"error"`: `message`: the run could not start (a bad flag, a missing input); the exit
 //!   status is 2 for a usage error, else 1;
 //! - `"frame"`: `time` (UTC, RFC 3339), `frame` (number or null), `input`, `output`, `status`
-//!   (`"ok"` or `"error"`), and `particles`, `triangles`, `vertices`, `seconds` or `error`;
+//!   (`"ok"` or `"error"`), and `particles`, `seconds` and the command's figures
+//!   ([`FrameFigures::json`]: recon's `triangles`, `vertices`; preview's `build_ms`,
+//!   `render_ms`, `rays_per_second`, `hits`) or `error`;
 //! - `"summary"`: `written`, `skipped`, `failed` (a list of `{frame, input, error}`),
-//!   `not_attempted`, `ok` (true when every frame of the job has its mesh).
+//!   `not_attempted`, `ok` (true when every frame of the job has its output).
+//!
+//! `recon` and `preview` share it, and the flags that drive it ([`RunArgs`]).
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::time::{SystemTime, UNIX_EPOCH};
 
+use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::json;
 
+use splash_sph::{FrameStats, InputFormat};
+
 use crate::batch::{FrameOutcome, Plan, Progress, RunReport};
+
+/// The logging, input and report flags of a run over frames (`recon`, `preview`).
+#[derive(Args)]
+pub struct RunArgs {
+    /// Log lines: plain, or json (one object per line).
+    #[arg(long, value_name = "FORMAT", default_value = "plain")]
+    pub log_format: String,
+
+    /// Input format for every file: ply, csv, raw, vtk, vtu (or vtp), bgeo or xyz.
+    #[arg(long)]
+    pub input_format: Option<String>,
+
+    /// Print figures per frame: recon's stage times and counts, preview's hierarchy and the
+    /// paper's Table 3 counts per ray.
+    #[arg(short, long)]
+    pub verbose: bool,
+
+    /// Print only errors.
+    #[arg(short, long, conflicts_with = "verbose")]
+    pub quiet: bool,
+
+    /// Write per-frame figures to this file: recon's with their averages, machine, build and
+    /// configuration (.json, .csv or .md), preview's (.json).
+    #[arg(long)]
+    pub report: Option<PathBuf>,
+}
+
+impl RunArgs {
+    pub fn log_format(&self) -> anyhow::Result<LogFormat> {
+        LogFormat::parse(&self.log_format)
+    }
+
+    pub fn input_format(&self) -> anyhow::Result<Option<InputFormat>> {
+        Ok(self
+            .input_format
+            .as_deref()
+            .map(InputFormat::parse)
+            .transpose()?)
+    }
+
+    pub fn verbosity(&self) -> Verbosity {
+        match (self.quiet, self.verbose) {
+            (true, _) => Verbosity::Quiet,
+            (_, true) => Verbosity::Verbose,
+            _ => Verbosity::Normal,
+        }
+    }
+}
+
+/// What the log says of a frame done: recon's mesh figures, preview's image figures.
+pub trait FrameFigures {
+    /// Particles read.
+    fn particles(&self) -> usize;
+    /// Seconds the frame took.
+    fn seconds(&self) -> f64;
+    /// The plain line after the input's name, `output` the file written.
+    fn line(&self, output: &Path, verbosity: Verbosity) -> String;
+    /// The `frame` event's own fields.
+    fn json(&self) -> serde_json::Map<String, serde_json::Value>;
+}
+
+impl FrameFigures for FrameStats {
+    fn particles(&self) -> usize {
+        self.particles
+    }
+
+    fn seconds(&self) -> f64 {
+        let t = self.timings;
+        (t.read + t.reconstruction() + t.write).as_secs_f64()
+    }
+
+    fn line(&self, output: &Path, verbosity: Verbosity) -> String {
+        let output = output.display();
+        if verbosity == Verbosity::Verbose {
+            format!(" -> {output}: {self}")
+        } else if self.particles == 0 {
+            format!(": no particles, wrote an empty mesh to {output}")
+        } else {
+            format!(
+                " -> {output}: {} particles, {} triangles, {:.2} s",
+                self.particles,
+                self.triangles,
+                self.seconds()
+            )
+        }
+    }
+
+    fn json(&self) -> serde_json::Map<String, serde_json::Value> {
+        let mut fields = serde_json::Map::new();
+        fields.insert("triangles".into(), self.triangles.into());
+        fields.insert("vertices".into(), self.vertices.into());
+        fields.insert(
+            "particles_outside_box".into(),
+            self.particles_outside_box.into(),
+        );
+        fields
+    }
+}
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum LogFormat {
@@ -102,12 +207,12 @@ impl Console {
         }
     }
 
-    /// Ends the bar and prints the summary; returns whether every frame has its mesh.
-    pub fn finish(&self, report: &RunReport) -> bool {
+    /// Ends the bar and prints the summary; returns whether every frame has its output.
+    pub fn finish<S>(&self, report: &RunReport<S>) -> bool {
         if let Some(bar) = &self.bar {
             bar.finish_and_clear();
         }
-        let failed: Vec<&FrameOutcome> = report.failed().collect();
+        let failed: Vec<&FrameOutcome<S>> = report.failed().collect();
         let written = report.outcomes.len() - failed.len();
         if self.format == LogFormat::Json {
             let failed: Vec<_> = failed
@@ -158,8 +263,9 @@ impl Console {
     }
 }
 
-impl Progress for Console {
-    fn started(&mut self, plan: &Plan) {
+impl Console {
+    /// This job's share, before any frame.
+    pub fn start(&self, plan: &Plan) {
         if self.format == LogFormat::Json {
             let line = json!({
                 "event": "start",
@@ -198,7 +304,8 @@ impl Progress for Console {
         }
     }
 
-    fn spacing_estimated(&mut self, from: &Path, spacing: f32) {
+    /// The spacing estimated once for the run.
+    pub fn spacing(&self, from: &Path, spacing: f32) {
         match self.format {
             LogFormat::Json => eprintln!(
                 "{}",
@@ -212,11 +319,8 @@ impl Progress for Console {
         }
     }
 
-    fn warning(&mut self, input: Option<&Path>, message: &str) {
-        self.warn(input, message);
-    }
-
-    fn frame_done(&mut self, outcome: &FrameOutcome, done: usize, total: usize) {
+    /// Frame `done` of `total` is done (or failed).
+    pub fn frame<S: FrameFigures>(&self, outcome: &FrameOutcome<S>, done: usize, total: usize) {
         if self.format == LogFormat::Json {
             eprintln!("{}", frame_json(outcome));
             return;
@@ -226,28 +330,32 @@ impl Progress for Console {
         match &outcome.result {
             Err(e) => self.say(&format!("{time} [{done}/{total}] {name}: error: {e:#}")),
             Ok(stats) if self.verbosity != Verbosity::Quiet => {
-                let output = outcome.output.display();
-                let line = if self.verbosity == Verbosity::Verbose {
-                    format!("{time} [{done}/{total}] {name} -> {output}: {stats}")
-                } else if stats.particles == 0 {
-                    format!(
-                        "{time} [{done}/{total}] {name}: no particles, wrote an empty mesh to {output}"
-                    )
-                } else {
-                    format!(
-                        "{time} [{done}/{total}] {name} -> {output}: {} particles, {} triangles, {:.2} s",
-                        stats.particles,
-                        stats.triangles,
-                        seconds(outcome)
-                    )
-                };
-                self.say(&line);
+                let figures = stats.line(&outcome.output, self.verbosity);
+                self.say(&format!("{time} [{done}/{total}] {name}{figures}"));
             }
             Ok(_) => {}
         }
         if let Some(bar) = &self.bar {
             bar.set_position(done as u64);
         }
+    }
+}
+
+impl<S: FrameFigures> Progress<S> for Console {
+    fn started(&mut self, plan: &Plan) {
+        self.start(plan);
+    }
+
+    fn spacing_estimated(&mut self, from: &Path, spacing: f32) {
+        self.spacing(from, spacing);
+    }
+
+    fn warning(&mut self, input: Option<&Path>, message: &str) {
+        self.warn(input, message);
+    }
+
+    fn frame_done(&mut self, outcome: &FrameOutcome<S>, done: usize, total: usize) {
+        self.frame(outcome, done, total);
     }
 }
 
@@ -280,17 +388,7 @@ pub fn format_in_args(args: &[std::ffi::OsString]) -> LogFormat {
     found
 }
 
-fn seconds(outcome: &FrameOutcome) -> f64 {
-    match &outcome.result {
-        Ok(stats) => {
-            let t = stats.timings;
-            (t.read + t.reconstruction() + t.write).as_secs_f64()
-        }
-        Err(_) => 0.0,
-    }
-}
-
-fn frame_json(outcome: &FrameOutcome) -> serde_json::Value {
+fn frame_json<S: FrameFigures>(outcome: &FrameOutcome<S>) -> serde_json::Value {
     let mut line = json!({
         "event": "frame",
         "time": utc_now(),
@@ -299,17 +397,25 @@ fn frame_json(outcome: &FrameOutcome) -> serde_json::Value {
         "output": outcome.output.display().to_string(),
     });
     let fields = match &outcome.result {
-        Ok(stats) => json!({
-            "status": "ok",
-            "particles": stats.particles,
-            "triangles": stats.triangles,
-            "vertices": stats.vertices,
-            "particles_outside_box": stats.particles_outside_box,
-            "seconds": (seconds(outcome) * 1e3).round() / 1e3,
-        }),
-        Err(e) => json!({"status": "error", "error": format!("{e:#}")}),
+        Ok(stats) => {
+            let mut fields = serde_json::Map::new();
+            fields.insert("status".into(), "ok".into());
+            fields.insert("particles".into(), stats.particles().into());
+            fields.extend(stats.json());
+            fields.insert(
+                "seconds".into(),
+                ((stats.seconds() * 1e3).round() / 1e3).into(),
+            );
+            fields
+        }
+        Err(e) => {
+            let mut fields = serde_json::Map::new();
+            fields.insert("status".into(), "error".into());
+            fields.insert("error".into(), format!("{e:#}").into());
+            fields
+        }
     };
-    if let (Some(line), serde_json::Value::Object(fields)) = (line.as_object_mut(), fields) {
+    if let Some(line) = line.as_object_mut() {
         line.extend(fields);
     }
     line

@@ -1,6 +1,5 @@
 //! The `splash` command: parses arguments and hands the work to the library.
 
-use std::collections::BTreeSet;
 use std::io::IsTerminal;
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -18,13 +17,12 @@ mod report;
 mod sequence;
 
 use splash_sph::{
-    Bytes, Config, Engine, InputFormat, Length, MeshFormat, Normals, OutputConfig, Overrides,
-    UpAxis,
+    Bytes, Config, Engine, Length, MeshFormat, Normals, OutputConfig, Overrides, UpAxis,
 };
 
 use batch::{Batch, Output};
-use log::{Console, LogFormat, Verbosity};
-use sequence::{FarmArgs, FrameSet};
+use log::{Console, LogFormat, RunArgs};
+use sequence::FarmArgs;
 
 #[derive(Parser)]
 #[command(
@@ -214,26 +212,8 @@ struct Recon {
     #[command(flatten)]
     farm: FarmArgs,
 
-    /// Log lines: plain, or json (one object per line).
-    #[arg(long, value_name = "FORMAT", default_value = "plain")]
-    log_format: String,
-
-    /// Input format for every file: ply, csv, raw, vtk, vtu (or vtp), bgeo or xyz.
-    #[arg(long)]
-    input_format: Option<String>,
-
-    /// Print stage times and counts per frame.
-    #[arg(short, long)]
-    verbose: bool,
-
-    /// Print only errors.
-    #[arg(short, long, conflicts_with = "verbose")]
-    quiet: bool,
-
-    /// Write per-frame figures and their averages (times, counts, memory, machine, build,
-    /// configuration) to this file: .json, .csv or .md.
-    #[arg(long)]
-    report: Option<PathBuf>,
+    #[command(flatten)]
+    run: RunArgs,
 }
 
 fn main() -> ExitCode {
@@ -303,78 +283,17 @@ fn recon(args: Recon) -> Result<ExitCode> {
             None => MeshFormat::Obj,
         },
     };
-    let input_format = args
-        .input_format
-        .as_deref()
-        .map(InputFormat::parse)
-        .transpose()?;
-    let log_format = LogFormat::parse(&args.log_format)?;
+    let input_format = args.run.input_format()?;
+    let log_format = args.run.log_format()?;
     let shard = args.farm.shard()?;
-    let frames = args
-        .farm
-        .frames
-        .as_deref()
-        .map(FrameSet::parse)
-        .transpose()?;
-    let verbosity = match (args.quiet, args.verbose) {
-        (true, _) => Verbosity::Quiet,
-        (_, true) => Verbosity::Verbose,
-        _ => Verbosity::Normal,
-    };
-
-    let mut console = Console::new(log_format, verbosity, std::io::stderr().is_terminal());
-    let discovered = sequence::discover(&args.inputs)?;
-    let mut inputs = discovered.files;
-    if !discovered.skipped.is_empty() {
-        let shown: Vec<String> = discovered
-            .skipped
-            .iter()
-            .take(5)
-            .map(|p| format!("'{}'", p.display()))
-            .collect();
-        let more = discovered.skipped.len() - shown.len();
-        console.warn(
-            None,
-            &format!(
-                "{} files of the input directories are not part of the frame sequence and \
-             are skipped: {}{}",
-                discovered.skipped.len(),
-                shown.join(", "),
-                if more > 0 {
-                    format!(" and {more} more")
-                } else {
-                    String::new()
-                }
-            ),
-        );
-    }
-    if let Some(frames) = &frames {
-        inputs = frames.select(inputs)?;
-        let present: BTreeSet<u64> = inputs
-            .iter()
-            .filter_map(|p| sequence::path_frame_number(p))
-            .collect();
-        if let Some((count, first)) = frames.missing(&present, 5)
-            && count > 0
-        {
-            let first: Vec<String> = first.iter().map(u64::to_string).collect();
-            console.warn(
-                None,
-                &format!(
-                    "{count} frames of --frames have no input (first: {})",
-                    first.join(", ")
-                ),
-            );
-        }
-        if inputs.is_empty() {
-            bail!(
-                "--frames {}: no input has one of these frame numbers",
-                args.farm.frames.unwrap_or_default()
-            );
-        }
-    }
+    let mut console = Console::new(
+        log_format,
+        args.run.verbosity(),
+        std::io::stderr().is_terminal(),
+    );
+    let inputs = sequence::select(&args.inputs, args.farm.frames.as_deref(), &console)?;
     let report_config = serde_json::to_value(&config)?;
-    if let Some(path) = &args.report {
+    if let Some(path) = &args.run.report {
         report::records::check_report_path(path)?;
     }
     let batch = Batch {
@@ -388,7 +307,7 @@ fn recon(args: Recon) -> Result<ExitCode> {
         fail_fast: args.farm.fail_fast,
     };
     let report = batch.run(&mut console)?;
-    if let Some(path) = &args.report {
+    if let Some(path) = &args.run.report {
         bench_cli::write_recon_report(path, &report.outcomes, &batch.config, report_config)?;
     }
     Ok(if console.finish(&report) {

@@ -1,10 +1,10 @@
 //! `splash preview`: one ray-traced PNG of the metaball surface per particle frame, without a
-//! mesh. The frames, `--frames`, `--shard`, `--skip-existing` and the output names are the
-//! recon batch's (sequence.rs, batch::Output); the loop is this small one of its own, since a
-//! frame here is an image and its figures are a renderer's, not a mesh's.
+//! mesh. The frames, `--frames`, `--shard`, `--skip-existing`, the output names, the logs,
+//! progress bar and summary are recon's (sequence.rs, batch.rs, log.rs); the loop is this small
+//! one of its own, since a frame here is an image and its figures are a renderer's.
 
 use std::collections::BTreeSet;
-use std::io::Write;
+use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
@@ -18,9 +18,9 @@ use splash_sph::preview::{
 };
 use splash_sph::{Bytes, Config, InputFormat, Vec3, estimate_spacing, read_particles};
 
-use crate::batch::Output;
-use crate::log::utc_now;
-use crate::sequence::{self, FarmArgs, FrameSet, path_frame_number};
+use crate::batch::{FrameOutcome, Output, Plan, RunReport};
+use crate::log::{Console, FrameFigures, RunArgs, Verbosity};
+use crate::sequence::{self, FarmArgs, path_frame_number};
 
 #[derive(Args)]
 #[command(after_help = "\
@@ -119,22 +119,8 @@ pub struct PreviewArgs {
     #[command(flatten)]
     farm: FarmArgs,
 
-    /// Input format for every file: ply, csv, raw, vtk, vtu (or vtp), bgeo or xyz.
-    #[arg(long)]
-    input_format: Option<String>,
-
-    /// Print build and render figures per frame: nodes, leaves, metaballs per leaf, and the
-    /// paper's Table 3 counts per ray.
-    #[arg(short, long)]
-    verbose: bool,
-
-    /// Print only errors.
-    #[arg(short, long, conflicts_with = "verbose")]
-    quiet: bool,
-
-    /// Write the per-frame figures to this JSON file.
-    #[arg(long)]
-    report: Option<PathBuf>,
+    #[command(flatten)]
+    run: RunArgs,
 }
 
 fn vector(text: &str, flag: &str) -> Result<Vec3> {
@@ -269,11 +255,8 @@ pub fn preview(args: PreviewArgs) -> Result<ExitCode> {
         shadows: !args.no_shadows,
     };
     let bvh = BvhKind::parse(&args.bvh).context("--bvh")?;
-    let input_format = args
-        .input_format
-        .as_deref()
-        .map(InputFormat::parse)
-        .transpose()?;
+    let input_format = args.run.input_format()?;
+    let log_format = args.run.log_format()?;
     let shard = args.farm.shard()?;
     let output = args
         .output
@@ -285,7 +268,7 @@ pub fn preview(args: PreviewArgs) -> Result<ExitCode> {
     {
         bail!("preview writes PNG images: the output name's .{ext} extension should be .png");
     }
-    if let Some(path) = &args.report
+    if let Some(path) = &args.run.report
         && path.extension().is_none_or(|e| e != "json")
     {
         bail!(
@@ -294,22 +277,12 @@ pub fn preview(args: PreviewArgs) -> Result<ExitCode> {
         );
     }
 
-    let discovered = sequence::discover(&args.inputs)?;
-    let mut inputs = discovered.files;
-    if let Some(text) = &args.farm.frames {
-        let frames = FrameSet::parse(text)?;
-        inputs = frames.select(inputs)?;
-        let present: BTreeSet<u64> = inputs.iter().filter_map(|p| path_frame_number(p)).collect();
-        if let Some((count, _)) = frames.missing(&present, 5)
-            && count > 0
-            && !args.quiet
-        {
-            eprintln!("warning: {count} frames of --frames {text} have no input");
-        }
-        if inputs.is_empty() {
-            bail!("--frames {text}: no input has one of these frame numbers");
-        }
-    }
+    let console = Console::new(
+        log_format,
+        args.run.verbosity(),
+        std::io::stderr().is_terminal(),
+    );
+    let inputs = sequence::select(&args.inputs, args.farm.frames.as_deref(), &console)?;
     let outputs: Vec<PathBuf> = inputs
         .iter()
         .map(|i| output.path_with(i, "_preview", "png"))
@@ -335,6 +308,21 @@ pub fn preview(args: PreviewArgs) -> Result<ExitCode> {
         }
     }
 
+    let assigned: Vec<usize> = (0..inputs.len())
+        .filter(|&i| shard.is_none_or(|s| s.takes(i)))
+        .collect();
+    let (skipped, to_do): (Vec<usize>, Vec<usize>) = assigned
+        .iter()
+        .partition(|&&i| args.farm.skip_existing && outputs[i].is_file());
+    let job = Plan {
+        selected: inputs.len(),
+        shard,
+        assigned: assigned.len(),
+        skipped: skipped.iter().map(|&i| inputs[i].clone()).collect(),
+        to_do: to_do.len(),
+    };
+    console.start(&job);
+
     // The spacing and the auto camera come from the first readable frame of the whole
     // selection, so that every shard and restart draws the same surface from the same view.
     let needs_reference = config.spacing.is_none() || plan.needs_frame();
@@ -356,9 +344,7 @@ pub fn preview(args: PreviewArgs) -> Result<ExitCode> {
                 input.display()
             )
         })?;
-        if !args.quiet {
-            eprintln!("spacing r = {r} estimated from {}", input.display());
-        }
+        console.spacing(input, r);
         config.spacing = Some(r);
     }
     let previewer = Previewer::new(&config)?.with_bvh(bvh);
@@ -368,56 +354,35 @@ pub fn preview(args: PreviewArgs) -> Result<ExitCode> {
     )?;
     drop(reference);
 
-    let assigned: Vec<usize> = (0..inputs.len())
-        .filter(|&i| shard.is_none_or(|s| s.takes(i)))
-        .collect();
-    let to_do: Vec<usize> = assigned
-        .iter()
-        .copied()
-        .filter(|&i| !(args.farm.skip_existing && outputs[i].is_file()))
-        .collect();
-    let skipped = assigned.len() - to_do.len();
-    let mut failed = Vec::new();
-    let mut records = Vec::new();
-    let mut written = 0;
+    let mut outcomes = Vec::with_capacity(to_do.len());
+    let mut not_attempted = 0;
     for (k, &i) in to_do.iter().enumerate() {
         let (input, output) = (&inputs[i], &outputs[i]);
         let start = Instant::now();
         let result = frame(&previewer, input, input_format, output, &camera, &style);
-        let seconds = start.elapsed().as_secs_f64();
-        match result {
-            Ok(stats) => {
-                written += 1;
-                if !args.quiet {
-                    eprintln!(
-                        "{} [{}/{}] {} -> {}: {} particles, build {:.0} ms, render {:.0} ms, {:.2} Mrays/s, {:.2} s",
-                        utc_now(),
-                        k + 1,
-                        to_do.len(),
-                        input.display(),
-                        output.display(),
-                        stats.particles,
-                        stats.build.as_secs_f64() * 1e3,
-                        stats.render.as_secs_f64() * 1e3,
-                        stats.rays_per_second() / 1e6,
-                        seconds
-                    );
-                }
-                if args.verbose {
-                    eprintln!("  {}", figures(&stats, bvh));
-                }
-                records.push(record(input, output, &stats, seconds));
-            }
-            Err(e) => {
-                eprintln!("error: {}: {e:#}", input.display());
-                failed.push((input.clone(), format!("{e:#}")));
-                if args.farm.fail_fast {
-                    break;
-                }
-            }
+        let outcome = FrameOutcome {
+            input: input.clone(),
+            output: output.clone(),
+            frame: path_frame_number(input),
+            result: result.map(|stats| PreviewFrame {
+                stats,
+                kind: bvh,
+                seconds: start.elapsed().as_secs_f64(),
+            }),
+        };
+        console.frame(&outcome, k + 1, to_do.len());
+        let failed = outcome.result.is_err();
+        outcomes.push(outcome);
+        if failed && args.farm.fail_fast {
+            not_attempted = to_do.len() - k - 1;
+            break;
         }
     }
-    if let Some(path) = &args.report {
+    if let Some(path) = &args.run.report {
+        let records: Vec<_> = outcomes
+            .iter()
+            .filter_map(|o| Some(record(&o.input, &o.output, o.result.as_ref().ok()?)))
+            .collect();
         let report = json!({
             "bvh": bvh.name(),
             "size": [width, height],
@@ -429,31 +394,16 @@ pub fn preview(args: PreviewArgs) -> Result<ExitCode> {
             .with_context(|| format!("cannot write the report '{}'", path.display()))?;
         writeln!(file, "{}", serde_json::to_string_pretty(&report)?)?;
     }
-    let not_attempted = to_do.len() - written - failed.len();
-    if failed.is_empty() && not_attempted == 0 {
-        if !args.quiet {
-            let skipped = match skipped {
-                0 => String::new(),
-                n => format!(", {n} found complete and skipped"),
-            };
-            eprintln!("done: {written} images written{skipped}");
-        }
-        return Ok(ExitCode::SUCCESS);
-    }
-    eprintln!(
-        "{} of {} frames failed:",
-        failed.len(),
-        written + failed.len()
-    );
-    for (input, e) in &failed {
-        eprintln!("  {}: {e}", input.display());
-    }
-    if not_attempted > 0 {
-        eprintln!(
-            "stopped at the first failure (--fail-fast): {not_attempted} frames not attempted"
-        );
-    }
-    Ok(ExitCode::FAILURE)
+    let report = RunReport {
+        plan: job,
+        outcomes,
+        not_attempted,
+    };
+    Ok(if console.finish(&report) {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::FAILURE
+    })
 }
 
 fn frame(
@@ -468,6 +418,55 @@ fn frame(
     let preview = previewer.render(&particles.positions, camera, style)?;
     write_png(output, &preview.image)?;
     Ok(preview.stats)
+}
+
+/// One image's figures, as the log and the report give them.
+pub struct PreviewFrame {
+    stats: PreviewStats,
+    kind: BvhKind,
+    /// Reading, building, rendering and writing.
+    seconds: f64,
+}
+
+impl FrameFigures for PreviewFrame {
+    fn particles(&self) -> usize {
+        self.stats.particles
+    }
+
+    fn seconds(&self) -> f64 {
+        self.seconds
+    }
+
+    fn line(&self, output: &Path, verbosity: Verbosity) -> String {
+        let s = &self.stats;
+        let line = format!(
+            " -> {}: {} particles, build {:.0} ms, render {:.0} ms, {:.2} Mrays/s, {:.2} s",
+            output.display(),
+            s.particles,
+            s.build.as_secs_f64() * 1e3,
+            s.render.as_secs_f64() * 1e3,
+            s.rays_per_second() / 1e6,
+            self.seconds
+        );
+        match verbosity {
+            Verbosity::Verbose => format!("{line}\n  {}", figures(s, self.kind)),
+            _ => line,
+        }
+    }
+
+    fn json(&self) -> serde_json::Map<String, serde_json::Value> {
+        let s = &self.stats;
+        let mut fields = serde_json::Map::new();
+        fields.insert("build_ms".into(), millis(s.build).into());
+        fields.insert("render_ms".into(), millis(s.render).into());
+        fields.insert("rays_per_second".into(), s.rays_per_second().round().into());
+        fields.insert("hits".into(), s.hits.into());
+        fields
+    }
+}
+
+fn millis(d: std::time::Duration) -> f64 {
+    (d.as_secs_f64() * 1e6).round() / 1e3
 }
 
 fn figures(s: &PreviewStats, kind: BvhKind) -> String {
@@ -490,7 +489,8 @@ fn figures(s: &PreviewStats, kind: BvhKind) -> String {
     )
 }
 
-fn record(input: &Path, output: &Path, s: &PreviewStats, seconds: f64) -> serde_json::Value {
+fn record(input: &Path, output: &Path, f: &PreviewFrame) -> serde_json::Value {
+    let s = &f.stats;
     let rays = s.rays.rays.max(1) as f64;
     json!({
         "frame": path_frame_number(input),
@@ -510,6 +510,6 @@ fn record(input: &Path, output: &Path, s: &PreviewStats, seconds: f64) -> serde_
         "traversals_per_ray": s.rays.nodes as f64 / rays,
         "intersection_tests_per_ray": s.rays.leaves as f64 / rays,
         "metaballs_per_ray": s.rays.metaballs as f64 / rays,
-        "seconds": seconds,
+        "seconds": f.seconds,
     })
 }

@@ -202,6 +202,63 @@ pub struct FarmArgs {
     pub fail_fast: bool,
 }
 
+/// The frames of `inputs` (files, directories, patterns) that `--frames` selects, in frame
+/// order; warns of directory files outside the sequence and of selected numbers with no input.
+pub fn select(
+    inputs: &[PathBuf],
+    frames: Option<&str>,
+    console: &crate::log::Console,
+) -> Result<Vec<PathBuf>> {
+    let frames = frames.map(|text| Ok::<_, anyhow::Error>((text, FrameSet::parse(text)?)));
+    let frames = frames.transpose()?;
+    let discovered = discover(inputs)?;
+    let mut inputs = discovered.files;
+    if !discovered.skipped.is_empty() {
+        let shown: Vec<String> = discovered
+            .skipped
+            .iter()
+            .take(5)
+            .map(|p| format!("'{}'", p.display()))
+            .collect();
+        let more = discovered.skipped.len() - shown.len();
+        console.warn(
+            None,
+            &format!(
+                "{} files of the input directories are not part of the frame sequence and \
+                 are skipped: {}{}",
+                discovered.skipped.len(),
+                shown.join(", "),
+                if more > 0 {
+                    format!(" and {more} more")
+                } else {
+                    String::new()
+                }
+            ),
+        );
+    }
+    let Some((text, frames)) = frames else {
+        return Ok(inputs);
+    };
+    inputs = frames.select(inputs)?;
+    let present: BTreeSet<u64> = inputs.iter().filter_map(|p| path_frame_number(p)).collect();
+    if let Some((count, first)) = frames.missing(&present, 5)
+        && count > 0
+    {
+        let first: Vec<String> = first.iter().map(u64::to_string).collect();
+        console.warn(
+            None,
+            &format!(
+                "{count} frames of --frames have no input (first: {})",
+                first.join(", ")
+            ),
+        );
+    }
+    if inputs.is_empty() {
+        bail!("--frames {text}: no input has one of these frame numbers");
+    }
+    Ok(inputs)
+}
+
 impl FarmArgs {
     /// The `--shard` asked for, `auto/N` read from the environment.
     pub fn shard(&self) -> Result<Option<Shard>> {

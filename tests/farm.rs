@@ -7,10 +7,10 @@ use std::collections::BTreeMap;
 use std::ffi::OsString;
 use std::fs;
 use std::path::PathBuf;
-use std::process::{Command, Output};
+use std::process::Command;
 use std::time::{Duration, Instant};
 
-use common::{TempDir, entries, fixture, lattice_ball};
+use common::{Run, TempDir, entries, finish, fixture, lattice_ball};
 use glam::Vec3;
 use ply_rs_bw::parser::Parser;
 use ply_rs_bw::ply::{DefaultElement, Property};
@@ -48,103 +48,6 @@ fn ply(points: &[Vec3], velocities: Option<&[Vec3]>) -> Vec<u8> {
         }
     }
     out
-}
-
-struct Run {
-    command: String,
-    success: bool,
-    stderr: String,
-}
-
-impl Run {
-    fn ok(self) -> Self {
-        assert!(self.success, "{} failed:\n{}", self.command, self.stderr);
-        self
-    }
-
-    fn failed(self) -> Self {
-        assert!(
-            !self.success,
-            "{} succeeded:\n{}",
-            self.command, self.stderr
-        );
-        self
-    }
-
-    fn has(self, text: &str) -> Self {
-        assert!(
-            self.stderr.contains(text),
-            "{}: no '{text}' in:\n{}",
-            self.command,
-            self.stderr
-        );
-        self
-    }
-
-    /// The JSON log lines of one event kind (every line must be an object; serde_json writes
-    /// them, so they are well-formed).
-    fn events(&self, kind: &str) -> Vec<Event> {
-        let tag = format!("{{\"event\":\"{kind}\"");
-        self.stderr
-            .lines()
-            .inspect(|l| assert!(l.starts_with('{') && l.ends_with('}'), "not JSON: {l}"))
-            .filter(|l| l.starts_with(&tag))
-            .map(|l| Event(l.to_owned()))
-            .collect()
-    }
-
-    /// Frame numbers of the `frame` events, in log order.
-    fn frames(&self) -> Vec<u64> {
-        self.events("frame")
-            .iter()
-            .map(|e| e.get("frame").parse().unwrap())
-            .collect()
-    }
-}
-
-/// One JSON log line. Parsing it with serde_json would add 15-20 s to this test's build on two
-/// cores; splash writes flat objects whose top-level fields are found by name.
-struct Event(String);
-
-impl Event {
-    /// The raw JSON text of top-level field `key`: `12`, `"3/4"`, `[…]`.
-    fn get(&self, key: &str) -> &str {
-        let text = &self.0;
-        let start = text
-            .find(&format!("\"{key}\":"))
-            .unwrap_or_else(|| panic!("no {key} in {text}"))
-            + key.len()
-            + 3;
-        let (mut depth, mut quoted, mut escaped) = (0, false, false);
-        for (i, c) in text[start..].char_indices() {
-            if std::mem::take(&mut escaped) {
-                continue;
-            }
-            match c {
-                '\\' if quoted => escaped = true,
-                '"' => quoted = !quoted,
-                '[' | '{' if !quoted => depth += 1,
-                ']' | '}' if !quoted && depth > 0 => depth -= 1,
-                ',' | '}' if !quoted && depth == 0 => return &text[start..start + i],
-                _ => {}
-            }
-        }
-        panic!("unterminated {key} in {text}")
-    }
-}
-
-fn finish(command: String, output: Output) -> Run {
-    let stderr = String::from_utf8_lossy(&output.stderr).into_owned();
-    assert!(
-        output.status.code().is_some() && !stderr.contains("panicked"),
-        "{command}: {}\n{stderr}",
-        output.status
-    );
-    Run {
-        command,
-        success: output.status.success(),
-        stderr,
-    }
 }
 
 fn splash_env(args: &[OsString], env: &[(&str, &str)]) -> Run {

@@ -4,7 +4,7 @@ mod common;
 
 use std::process::{Command, Output};
 
-use common::{TempDir, lattice_ball};
+use common::{TempDir, finish, lattice_ball};
 use glam::Vec3;
 
 fn splash(args: &[&str]) -> Output {
@@ -82,9 +82,89 @@ fn a_sharded_sequence_gives_one_png_per_frame() {
     ]);
     let log = String::from_utf8_lossy(&run.stderr);
     assert!(
-        run.status.success() && log.contains("0 images written, 3 found complete"),
+        run.status.success() && log.contains("0 frames written, 3 found complete"),
         "{log}"
     );
+}
+
+#[test]
+fn json_logs_of_a_sequence_are_one_object_per_line() {
+    let dir = TempDir::new("preview-json");
+    for k in [1, 2, 3] {
+        let points = lattice_ball(Vec3::new(0.02 * k as f32, 0.0, 0.0), 0.05, 0.01);
+        dir.file(&format!("sim/f_{k}.ply"), ply(&points));
+    }
+    dir.file(
+        "sim/f_4.ply",
+        "ply\nformat ascii 1.0\nelement vertex 5\nend_header\n",
+    );
+    let sim = dir.path("sim").display().to_string();
+    let out = dir.out_dir("png");
+    let base = [
+        sim.as_str(),
+        "--spacing",
+        "0.01",
+        "--size",
+        "40x30",
+        "-o",
+        &out,
+        "--log-format",
+        "json",
+    ];
+    let run = |extra: &[&str]| {
+        let mut args = base.to_vec();
+        args.extend(extra);
+        let output = splash(&args);
+        finish(format!("splash preview {}", args.join(" ")), output)
+    };
+    // Frames 1-3 and a broken frame 4: the same events as recon's, in the same shapes.
+    let first = run(&["--frames", "1-4,9"]).failed();
+    let start = &first.events("start")[0];
+    assert_eq!((start.get("selected"), start.get("to_do")), ("4", "4"));
+    let warnings = first.events("warning");
+    assert!(
+        warnings
+            .iter()
+            .any(|w| w.get("message").contains("1 frames of --frames")),
+        "{}",
+        first.stderr
+    );
+    assert_eq!(first.frames(), [1, 2, 3, 4]);
+    let frames = first.events("frame");
+    for f in &frames[..3] {
+        assert_eq!(f.get("status"), "\"ok\"");
+        assert!(
+            f.get("particles").parse::<usize>().unwrap() > 100,
+            "{}",
+            f.0
+        );
+        assert!(f.get("hits").parse::<u64>().unwrap() > 0, "{}", f.0);
+        for key in ["seconds", "build_ms", "render_ms", "rays_per_second"] {
+            assert!(f.get(key).parse::<f64>().unwrap() >= 0.0, "{key}: {}", f.0);
+        }
+        assert!(f.get("output").ends_with(".png\""), "{}", f.0);
+    }
+    assert_eq!(frames[3].get("status"), "\"error\"");
+    assert!(
+        frames[3].get("error").contains("f_4.ply"),
+        "{}",
+        frames[3].0
+    );
+    let summary = &first.events("summary")[0];
+    assert_eq!(summary.get("written"), "3");
+    assert_eq!(summary.get("ok"), "false");
+    assert!(summary.get("failed").contains("f_4.ply"), "{}", summary.0);
+    // Resumed with --skip-existing: the three images are found, the broken frame fails again.
+    let second = run(&["--skip-existing", "--frames", "1-4"]).failed();
+    let start = &second.events("start")[0];
+    assert_eq!((start.get("skipped"), start.get("to_do")), ("3", "1"));
+    assert_eq!(second.frames(), [4]);
+    // The spacing estimate is an event too.
+    let mut args = vec![sim.as_str(), "--size", "40x30", "-o", &out];
+    args.extend(["--frames", "1", "--log-format", "json"]);
+    let third = finish("estimate".into(), splash(&args)).ok();
+    assert_eq!(third.events("spacing").len(), 1);
+    assert_eq!(third.events("summary")[0].get("ok"), "true");
 }
 
 #[test]

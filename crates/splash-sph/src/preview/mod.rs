@@ -213,8 +213,7 @@ pub fn render_image(bvh: &FittedBvh, camera: &Camera, style: &Style) -> (Image, 
             for (x, px) in row.chunks_exact_mut(3).enumerate() {
                 let d = camera.direction(x as u32, y as u32);
                 let o = camera.position;
-                let hit =
-                    tracer.first_hit(o, d, 0.0, f32::INFINITY, false, &mut scratch, &mut counts);
+                let hit = tracer.first_hit(o, d, 0.0, f32::INFINITY, &mut scratch, &mut counts);
                 let value = match hit {
                     None => style.background,
                     Some(hit) => {
@@ -227,17 +226,14 @@ pub fn render_image(bvh: &FittedBvh, camera: &Camera, style: &Style) -> (Image, 
                         };
                         let shadowed = style.shadows
                             && facing.dot(light) > 0.0
-                            && tracer
-                                .first_hit(
-                                    p + offset * facing,
-                                    light,
-                                    0.0,
-                                    f32::INFINITY,
-                                    true,
-                                    &mut scratch,
-                                    &mut counts,
-                                )
-                                .is_some();
+                            && tracer.occluded(
+                                p + offset * facing,
+                                light,
+                                0.0,
+                                f32::INFINITY,
+                                &mut scratch,
+                                &mut counts,
+                            );
                         shade::to_srgb(shade::phong(hit.normal, d, light, shadowed, colour))
                     }
                 };

@@ -1,12 +1,22 @@
 //! Rays against the metaball surface: front-to-back traversal of the hierarchy (Sec. 5.2) and,
-//! in each leaf the ray crosses, the first root of the field on the ray's segment in its box.
+//! in each leaf the ray crosses, the field of the leaf's list along the ray (Sec. 3).
 //!
-//! Root finding: the field along the ray is a sum of polynomials in t, one per metaball within
-//! R of the ray (collected once per leaf). As in Sec. 3 it is sampled at the projections of
-//! those centres (where each metaball peaks), plus the segment's ends and a grid of step the
-//! lone-metaball radius (so that sparse droplets between projections are not stepped over);
-//! the first outside→inside pair of samples brackets the root, which a bracketed Newton
-//! iteration on the analytic derivative refines.
+//! The hierarchy only accelerates: the hit must not depend on it. So each ray has one set of
+//! samples and one field, whatever the hierarchy:
+//! - distances run from where the ray enters the box of all metaballs' spheres, and each
+//!   metaball's polynomial along the ray (its projection t_i and q_i) is computed alike;
+//! - the samples are the start, the multiples of a step (the lone-metaball radius, so that
+//!   sparse droplets are not stepped over) and the projections t_i, where each metaball peaks;
+//! - the field at a sample sums the metaballs in particle order.
+//!
+//! Pass 1 traverses the hierarchy for the first inside sample. At an inside point of its box a
+//! leaf's list holds every metaball non-zero there, so its sum is the field's to the bit;
+//! anywhere else it sums a subset in the same order, which rounding keeps below the field, so
+//! it never calls an outside sample inside. Pass 2 collects exactly the metaballs along the
+//! last step before that sample (boxes of their spheres, not the fitted boxes) and refines the
+//! root between the previous sample and it: bracketed Newton on the analytic derivative, which
+//! converges on the bracket the samples give, unlike the paper's polynomial solver that needs
+//! the polynomial's degree to stay small. A ray that starts inside walks out with pass 2 first.
 
 use glam::Vec3;
 
@@ -21,7 +31,7 @@ pub struct Hit {
     pub normal: Vec3,
 }
 
-/// The paper's Table 3 counts, summed over rays.
+/// The paper's Table 3 counts, summed over rays (pass 1, the hierarchy's work).
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct RayCounts {
     /// Rays traced (camera and shadow rays).
@@ -53,6 +63,9 @@ struct Along {
     t: f32,
     /// 1 − δ²/R², δ the centre's distance from the ray.
     q: f32,
+    /// Half the chord of the sphere of radius R on the ray.
+    half: f32,
+    /// Index into the hierarchy's centres.
     index: u32,
 }
 
@@ -61,6 +74,7 @@ struct Along {
 pub struct Scratch {
     stack: Vec<(u32, f32)>,
     along: Vec<Along>,
+    exact: Vec<(u32, Along)>,
     samples: Vec<f32>,
 }
 
@@ -70,6 +84,19 @@ pub struct Tracer<'a> {
     step: f32,
     r2: f32,
     inv_r2: f32,
+    /// Slack of box and interval tests against rounding: they may only err towards keeping.
+    margin: f32,
+}
+
+/// A ray with its origin of distances `base` = o + tb·d, where it enters the scene's box.
+struct Ray {
+    o: Vec3,
+    d: Vec3,
+    inv: Vec3,
+    tb: f32,
+    base: Vec3,
+    /// Where it leaves the scene's box (or tmax), from `base`.
+    end: f32,
 }
 
 impl<'a> Tracer<'a> {
@@ -81,51 +108,113 @@ impl<'a> Tracer<'a> {
             step: f.lone_radius().max(f.cutoff * 1e-3),
             r2: f.cutoff * f.cutoff,
             inv_r2: f.inv_r2(),
+            margin: f.cutoff * 1e-3,
         }
+    }
+
+    fn ray(&self, o: Vec3, d: Vec3, tmin: f32, tmax: f32) -> Option<Ray> {
+        let inv = d.recip();
+        let (t0, t1) = slab(&self.bvh.scene, o, inv, tmin, tmax, 0.0)?;
+        Some(Ray {
+            o,
+            d,
+            inv,
+            tb: t0,
+            base: o + t0 * d,
+            end: t1 - t0,
+        })
     }
 
     /// The first surface point on `o + t·d` (|d| = 1) with t in [`tmin`, `tmax`], entering the
     /// fluid from outside (a ray that starts inside passes its own way out and looks for the
-    /// next surface it enters). With `any`, stops at the first hit found (shadow rays).
-    #[allow(clippy::too_many_arguments)]
+    /// next surface it enters).
     pub fn first_hit(
         &self,
         o: Vec3,
         d: Vec3,
         tmin: f32,
         tmax: f32,
-        any: bool,
         scratch: &mut Scratch,
         counts: &mut RayCounts,
     ) -> Option<Hit> {
         counts.rays += 1;
+        let ray = self.ray(o, d, tmin, tmax)?;
+        let mut start = 0.0;
+        loop {
+            let s = self.first_inside(&ray, start, false, scratch, counts)?;
+            if s > start {
+                return Some(self.refine_hit(&ray, start, s, scratch));
+            }
+            start = self.exit(&ray, start, scratch)?;
+        }
+    }
+
+    /// Whether [`first_hit`](Self::first_hit) would find a surface; stops at the first inside
+    /// sample found (shadow rays).
+    pub fn occluded(
+        &self,
+        o: Vec3,
+        d: Vec3,
+        tmin: f32,
+        tmax: f32,
+        scratch: &mut Scratch,
+        counts: &mut RayCounts,
+    ) -> bool {
+        counts.rays += 1;
+        let Some(ray) = self.ray(o, d, tmin, tmax) else {
+            return false;
+        };
+        self.collect_exact(&ray, 0.0, 0.0, scratch);
+        let start = if self.excess(scratch.exact.iter().map(|e| &e.1), 0.0) >= 0.0 {
+            match self.exit(&ray, 0.0, scratch) {
+                Some(s) => s,
+                None => return false,
+            }
+        } else {
+            0.0
+        };
+        self.first_inside(&ray, start, true, scratch, counts)
+            .is_some()
+    }
+
+    /// Pass 1: the first sample at or after `start` inside the fluid (with `any`, some such
+    /// sample), from `ray.base`.
+    fn first_inside(
+        &self,
+        ray: &Ray,
+        start: f32,
+        any: bool,
+        scratch: &mut Scratch,
+        counts: &mut RayCounts,
+    ) -> Option<f32> {
         let nodes = &self.bvh.nodes;
-        let inv = d.recip();
-        let mut best = tmax;
-        let mut hit = None;
+        let m = self.margin;
+        let lo = ray.tb + start;
+        let mut best = f32::INFINITY;
+        let limit = |best: f32| ray.tb + best.min(ray.end);
         let mut stack = std::mem::take(&mut scratch.stack);
         stack.clear();
         if let Some((t0, _)) = nodes
             .first()
-            .and_then(|n| slab(&n.bounds, o, inv, tmin, best))
+            .and_then(|n| slab(&n.bounds, ray.o, ray.inv, lo, limit(best), m))
         {
             stack.push((0, t0));
         }
         while let Some((n, entry)) = stack.pop() {
-            if entry > best {
+            if entry > limit(best) {
                 continue;
             }
             counts.nodes += 1;
             let node = &nodes[n as usize];
             if node.count > 0 {
-                let Some((t0, t1)) = slab(&node.bounds, o, inv, tmin, best) else {
+                let Some((t0, t1)) = slab(&node.bounds, ray.o, ray.inv, lo, limit(best), m) else {
                     continue;
                 };
-                if let Some(h) = self.leaf_hit(node, o, d, t0, t1, scratch, counts)
-                    && h.t < best
+                let (u0, u1) = (t0 - ray.tb, (t1 - ray.tb).min(best));
+                if let Some(s) = self.leaf_inside(node, ray, start, u0, u1, scratch, counts)
+                    && s < best
                 {
-                    best = h.t;
-                    hit = Some(h);
+                    best = s;
                     if any {
                         break;
                     }
@@ -133,8 +222,22 @@ impl<'a> Tracer<'a> {
                 continue;
             }
             let (l, r) = (n + 1, node.first);
-            let sl = slab(&nodes[l as usize].bounds, o, inv, tmin, best);
-            let sr = slab(&nodes[r as usize].bounds, o, inv, tmin, best);
+            let sl = slab(
+                &nodes[l as usize].bounds,
+                ray.o,
+                ray.inv,
+                lo,
+                limit(best),
+                m,
+            );
+            let sr = slab(
+                &nodes[r as usize].bounds,
+                ray.o,
+                ray.inv,
+                lo,
+                limit(best),
+                m,
+            );
             match (sl, sr) {
                 (Some((tl, _)), Some((tr, _))) => {
                     // Far child first on the stack, so that the near one is popped first.
@@ -152,92 +255,174 @@ impl<'a> Tracer<'a> {
             }
         }
         scratch.stack = stack;
-        hit
+        best.is_finite().then_some(best)
     }
 
-    /// The first outside→inside root on [`t0`, `t1`] of the field of `node`'s list.
+    /// The projection t and distance² from the ray of centre `index`, from `ray.base`.
+    #[inline]
+    fn along(&self, ray: &Ray, index: u32) -> Option<Along> {
+        let v = self.bvh.points[index as usize] - ray.base;
+        let dist2 = v.cross(ray.d).length_squared();
+        (dist2 < self.r2).then(|| Along {
+            t: v.dot(ray.d),
+            q: 1.0 - dist2 * self.inv_r2,
+            half: (self.r2 - dist2).sqrt() + self.margin,
+            index,
+        })
+    }
+
+    /// The first sample in [`u0`, `u1`] (and after `start`) inside by `node`'s list.
     #[allow(clippy::too_many_arguments)]
-    fn leaf_hit(
+    fn leaf_inside(
         &self,
         node: &Node,
-        o: Vec3,
-        d: Vec3,
-        t0: f32,
-        t1: f32,
+        ray: &Ray,
+        start: f32,
+        u0: f32,
+        u1: f32,
         scratch: &mut Scratch,
         counts: &mut RayCounts,
-    ) -> Option<Hit> {
+    ) -> Option<f32> {
         let list = &self.bvh.items[node.first as usize..(node.first + node.count) as usize];
         counts.leaves += 1;
         counts.metaballs += list.len() as u64;
-        // Distances are measured from the segment's start, so that f32 keeps its precision
-        // for cameras far from the fluid.
-        let base = o + t0 * d;
-        let span = t1 - t0;
         let along = &mut scratch.along;
         along.clear();
         let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
         for &index in list {
-            let v = self.bvh.points[index as usize] - base;
-            let t = v.dot(d);
-            let dist2 = v.cross(d).length_squared();
-            if dist2 >= self.r2 {
+            let Some(a) = self.along(ray, index) else {
+                continue;
+            };
+            if a.t + a.half < u0 || a.t - a.half > u1 {
                 continue;
             }
-            let half = (self.r2 - dist2).sqrt();
-            if t + half <= 0.0 || t - half >= span {
-                continue;
-            }
-            lo = lo.min(t - half);
-            hi = hi.max(t + half);
-            along.push(Along {
-                t,
-                q: 1.0 - dist2 * self.inv_r2,
-                index,
-            });
+            lo = lo.min(a.t - a.half);
+            hi = hi.max(a.t + a.half);
+            along.push(a);
         }
         counts.along_ray += along.len() as u64;
-        if along.is_empty() {
-            return None;
-        }
         // The field is zero (outside) beyond the reach of the metaballs along the ray.
-        let (a0, b0) = (lo.max(0.0), hi.min(span));
+        let (a0, b0) = (lo.max(u0).max(start), hi.min(u1));
         if a0 > b0 {
             return None;
         }
         let samples = &mut scratch.samples;
         samples.clear();
-        samples.extend([a0, b0]);
-        samples.extend(along.iter().map(|m| m.t).filter(|&t| t > a0 && t < b0));
-        // The grid is fixed along the ray (multiples of the step from its origin).
-        let first = ((t0 + a0) / self.step).floor() + 1.0;
-        let last = ((t0 + b0) / self.step).ceil() - 1.0;
-        if last >= first && last - first < 65536.0 {
-            let mut k = first;
-            while k <= last {
-                let s = k * self.step - t0;
-                if s > a0 && s < b0 {
-                    samples.push(s);
+        if start >= a0 {
+            samples.push(start);
+        }
+        samples.extend(along.iter().map(|m| m.t).filter(|&t| t >= a0 && t <= b0));
+        self.grid(a0, b0, samples);
+        samples.sort_unstable_by(f32::total_cmp);
+        samples
+            .iter()
+            .copied()
+            .find(|&s| self.excess(along.iter(), s) >= 0.0)
+    }
+
+    /// The multiples of the step in [`a`, `b`].
+    fn grid(&self, a: f32, b: f32, samples: &mut Vec<f32>) {
+        // One multiple more each side: the division rounds, the test on k·step decides.
+        let first = (a / self.step).ceil() - 1.0;
+        let last = (b / self.step).floor() + 1.0;
+        if !(last >= first && last - first < 65536.0) {
+            return;
+        }
+        let mut k = first;
+        while k <= last {
+            let s = k * self.step;
+            if s >= a && s <= b {
+                samples.push(s);
+            }
+            k += 1.0;
+        }
+    }
+
+    /// Pass 2: every metaball whose sphere meets the ray between `u0` and `u1`, in particle
+    /// order, into `scratch.exact`, found through the boxes of the nodes' spheres.
+    fn collect_exact(&self, ray: &Ray, u0: f32, u1: f32, scratch: &mut Scratch) {
+        let (nodes, reach) = (&self.bvh.nodes, &self.bvh.reach);
+        let exact = &mut scratch.exact;
+        exact.clear();
+        let stack = &mut scratch.stack;
+        stack.clear();
+        if !nodes.is_empty() {
+            stack.push((0, 0.0));
+        }
+        let (t0, t1) = (ray.tb + u0, ray.tb + u1);
+        while let Some((n, _)) = stack.pop() {
+            let n = n as usize;
+            if slab(&reach[n].bounds, ray.o, ray.inv, t0, t1, self.margin).is_none() {
+                continue;
+            }
+            if nodes[n].count == 0 {
+                stack.push((nodes[n].first, 0.0));
+                stack.push((n as u32 + 1, 0.0));
+                continue;
+            }
+            let [a, b] = reach[n].own;
+            for index in a..b {
+                if let Some(m) = self.along(ray, index)
+                    && m.t + m.half >= u0
+                    && m.t - m.half <= u1
+                {
+                    exact.push((self.bvh.original[index as usize], m));
                 }
-                k += 1.0;
             }
         }
-        samples.sort_unstable_by(f32::total_cmp);
-        let mut outside: Option<f32> = None;
-        for &s in samples.iter() {
-            if self.excess(along, s) < 0.0 {
-                outside = Some(s);
-            } else if let Some(a) = outside {
-                let s = self.refine(along, a, s);
-                let normal = self.normal(along, base + s * d, d);
-                return Some(Hit { t: t0 + s, normal });
+        exact.sort_unstable_by_key(|e| e.0);
+    }
+
+    /// The first sample after `start` outside the fluid, walking on with pass 2.
+    fn exit(&self, ray: &Ray, start: f32, scratch: &mut Scratch) -> Option<f32> {
+        let mut u = start;
+        while u <= ray.end {
+            let next = u + 4.0 * self.step;
+            self.collect_exact(ray, u, next, scratch);
+            let samples = &mut scratch.samples;
+            samples.clear();
+            let exact = &scratch.exact;
+            samples.extend(exact.iter().map(|e| e.1.t).filter(|&t| t > u && t <= next));
+            self.grid(u, next, samples);
+            samples.retain(|&s| s > u);
+            samples.sort_unstable_by(f32::total_cmp);
+            if let Some(s) = samples
+                .iter()
+                .copied()
+                .find(|&s| self.excess(exact.iter().map(|e| &e.1), s) < 0.0)
+            {
+                return Some(s);
             }
+            u = next;
         }
         None
     }
 
+    /// The hit between the sample before `s` (outside) and `s` (the first inside one).
+    fn refine_hit(&self, ray: &Ray, start: f32, s: f32, scratch: &mut Scratch) -> Hit {
+        // The largest multiple of the step below s, or the start.
+        let mut k = (s / self.step).floor() + 1.0;
+        while k * self.step >= s {
+            k -= 1.0;
+        }
+        let w0 = (k * self.step).max(start);
+        self.collect_exact(ray, w0, s, scratch);
+        let exact = &scratch.exact;
+        let a = exact
+            .iter()
+            .map(|e| e.1.t)
+            .filter(|&t| t > w0 && t < s)
+            .fold(w0, f32::max);
+        let u = self.refine(exact, a, s);
+        let normal = self.normal(exact, ray.base + u * ray.d, ray.d);
+        Hit {
+            t: ray.tb + u,
+            normal,
+        }
+    }
+
     /// Σ t_i^α − T/c along the ray at `t`: ≥ 0 inside.
-    fn excess(&self, along: &[Along], t: f32) -> f32 {
+    fn excess<'b>(&self, along: impl Iterator<Item = &'b Along>, t: f32) -> f32 {
         let alpha = self.bvh.field.exponent;
         let mut sum = 0.0;
         for m in along {
@@ -251,10 +436,10 @@ impl<'a> Tracer<'a> {
     }
 
     /// [`excess`](Self::excess) and its derivative in t.
-    fn excess_slope(&self, along: &[Along], t: f32) -> (f32, f32) {
+    fn excess_slope(&self, along: &[(u32, Along)], t: f32) -> (f32, f32) {
         let alpha = self.bvh.field.exponent;
         let (mut sum, mut slope) = (0.0, 0.0);
-        for m in along {
+        for (_, m) in along {
             let dt = t - m.t;
             let k = m.q - dt * dt * self.inv_r2;
             if k > 0.0 {
@@ -268,7 +453,7 @@ impl<'a> Tracer<'a> {
 
     /// The root in [a, b] (outside at a, inside at b): Newton steps on the analytic derivative
     /// while they stay inside the bracket, bisection otherwise.
-    fn refine(&self, along: &[Along], mut a: f32, mut b: f32) -> f32 {
+    fn refine(&self, along: &[(u32, Along)], mut a: f32, mut b: f32) -> f32 {
         let tol = (self.bvh.field.cutoff * 1e-5).max(b.abs() * 4.0 * f32::EPSILON);
         let mut t = 0.5 * (a + b);
         for _ in 0..64 {
@@ -295,10 +480,10 @@ impl<'a> Tracer<'a> {
     }
 
     /// The outward unit normal at `x`: ∇f ∝ Σ t_i^(α−1)(x − p_i).
-    fn normal(&self, along: &[Along], x: Vec3, d: Vec3) -> Vec3 {
+    fn normal(&self, along: &[(u32, Along)], x: Vec3, d: Vec3) -> Vec3 {
         let alpha = self.bvh.field.exponent;
         let mut g = Vec3::ZERO;
-        for m in along {
+        for (_, m) in along {
             let v = x - self.bvh.points[m.index as usize];
             let k = 1.0 - v.length_squared() * self.inv_r2;
             if k > 0.0 {
@@ -309,12 +494,12 @@ impl<'a> Tracer<'a> {
     }
 }
 
-/// The part of [`tmin`, `tmax`] where the ray is in the box.
+/// The part of [`tmin`, `tmax`] where the ray is in the box, widened by `slack` each way.
 #[inline]
-fn slab(b: &Aabb, o: Vec3, inv: Vec3, tmin: f32, tmax: f32) -> Option<(f32, f32)> {
+fn slab(b: &Aabb, o: Vec3, inv: Vec3, tmin: f32, tmax: f32, slack: f32) -> Option<(f32, f32)> {
     let t1 = (b.min - o) * inv;
     let t2 = (b.max - o) * inv;
-    let near = t1.min(t2).max_element().max(tmin);
-    let far = t1.max(t2).min_element().min(tmax);
+    let near = t1.min(t2).max_element().max(tmin) - slack;
+    let far = t1.max(t2).min_element().min(tmax) + slack;
     (near <= far).then_some((near, far))
 }
