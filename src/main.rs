@@ -89,6 +89,12 @@ struct ConfigArgs {
     #[arg(long)]
     normals: Option<String>,
 
+    /// Move every vertex along its cube edge onto the field's exact isosurface with N Newton
+    /// steps (Marching Correctors; bare --correct: 3). Off by default: vertices then lie where
+    /// Marching Cubes' linear interpolation puts them.
+    #[arg(long, value_name = "N", num_args = 0..=1, require_equals = true, default_missing_value = "3")]
+    correct: Option<u32>,
+
     /// Cubes per side of a block of the slices engine (default 64).
     #[arg(long)]
     block: Option<u32>,
@@ -158,6 +164,9 @@ impl ConfigArgs {
         }
         if let Some(n) = &self.normals {
             config.normals = Normals::parse(n).context("--normals")?;
+        }
+        if let Some(n) = self.correct {
+            config.correct = n;
         }
         if let Some(b) = self.block {
             config.slices.block = b;

@@ -18,6 +18,7 @@ pub struct Overrides<'py> {
     pub field: Option<String>,
     pub engine: Option<String>,
     pub normals: Option<String>,
+    pub correct: Option<i64>,
     pub threads: Option<i64>,
     pub max_memory: Option<Bound<'py, PyAny>>,
 }
@@ -45,6 +46,7 @@ pub fn resolve(config: Option<&Bound<'_, PyAny>>, overrides: Overrides<'_>) -> P
         field,
         engine,
         normals,
+        correct,
         threads,
         max_memory,
     } = overrides;
@@ -70,6 +72,14 @@ pub fn resolve(config: Option<&Bound<'_, PyAny>>, overrides: Overrides<'_>) -> P
     }
     if let Some(normals) = normals {
         config.normals = Normals::parse(&normals).map_err(to_py)?;
+    }
+    if let Some(n) = correct {
+        // Out-of-range counts are refused by validate, naming the key.
+        config.correct = u32::try_from(n).map_err(|_| {
+            PyValueError::new_err(format!(
+                "correct must be from 0 to 32 Newton steps, got {n}"
+            ))
+        })?;
     }
     if let Some(n) = threads {
         config.threads = Some(usize::try_from(n).ok().filter(|&n| n > 0).ok_or_else(|| {

@@ -56,7 +56,7 @@ pub use length::Length;
 pub use mesh::TriMesh;
 pub use recon::Reconstruction;
 pub use reconstructor::Reconstructor;
-pub use report::{Clock, FrameStats, Observer, Stage, StageFigures};
+pub use report::{Clock, CorrectionFigures, FrameStats, Observer, Stage, StageFigures};
 pub use spacing::estimate_spacing;
 
 #[cfg(test)]
