@@ -49,7 +49,7 @@ fn default_config(py: Python<'_>) -> PyResult<Bound<'_, PyAny>> {
 #[allow(clippy::too_many_arguments)]
 #[pyfunction]
 #[pyo3(signature = (config=None, *, spacing=None, cell=None, field=None, engine=None,
-    normals=None, threads=None, max_memory=None))]
+    normals=None, correct=None, threads=None, max_memory=None))]
 fn config_toml<'py>(
     config: Option<&Bound<'py, PyAny>>,
     spacing: Option<f32>,
@@ -57,6 +57,7 @@ fn config_toml<'py>(
     field: Option<String>,
     engine: Option<String>,
     normals: Option<String>,
+    correct: Option<i64>,
     threads: Option<i64>,
     max_memory: Option<Bound<'py, PyAny>>,
 ) -> PyResult<String> {
@@ -66,6 +67,7 @@ fn config_toml<'py>(
         field,
         engine,
         normals,
+        correct,
         threads,
         max_memory,
     };

@@ -58,6 +58,7 @@ pub fn preview<'py>(
         field: None,
         engine: None,
         normals: None,
+        correct: None,
         threads,
         max_memory: None,
     };

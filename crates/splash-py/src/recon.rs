@@ -48,7 +48,9 @@ struct Output {
 /// ``"anisotropic"`` with its default parameters (a config's field of the same kind keeps its
 /// own). ``engine``: ``"narrow-band"`` (default), ``"full-gather"``, ``"scatter"`` or
 /// ``"slices"``; all give the same mesh. ``normals``: ``"field"`` (default, the field's
-/// gradient), ``"grid"`` (central differences) or ``"none"``. ``threads``: worker threads, all
+/// gradient), ``"grid"`` (central differences) or ``"none"``. ``correct``: Newton steps that
+/// move each vertex along its cube edge onto the field's exact isosurface (3 is plenty; 0,
+/// the default, keeps Marching Cubes' linear interpolation). ``threads``: worker threads, all
 /// cores by default; the mesh does not depend on it (each calling thread keeps its workers for
 /// its next calls). ``max_memory``: the heap a frame may plan to use (every engine checks
 /// it), in bytes or as ``"8G"``.
@@ -64,7 +66,9 @@ struct Output {
 ///
 /// ``Mesh.report`` holds the counts (``particles``, ``surface_particles``, ``vertices``,
 /// ``triangles``, ...), ``spacing`` and ``cell`` in world units, ``engine``, ``field``,
-/// ``threads``, and ``times``: seconds per stage (``handler_array``, ``surface_particles``,
+/// ``threads``, ``correction`` (with ``correct``: vertices ``moved``, their ``shift_mean`` and
+/// ``shift_max`` in edge lengths, |f − iso| ``residual_before_mean``/``_max`` and
+/// ``residual_after_mean``/``_max``), and ``times``: seconds per stage (``handler_array``, ``surface_particles``,
 /// ``band``, ``scalar_field``, ``triangulation``, their sum ``reconstruction``,
 /// ``attributes``, and ``total`` for all the native work).
 ///
@@ -75,7 +79,7 @@ struct Output {
 #[allow(clippy::too_many_arguments)]
 #[pyfunction]
 #[pyo3(signature = (positions, spacing=None, *, cell=None, field=None, engine=None, normals=None,
-    threads=None, max_memory=None, config=None, attributes=None))]
+    correct=None, threads=None, max_memory=None, config=None, attributes=None))]
 pub fn reconstruct<'py>(
     py: Python<'py>,
     positions: &Bound<'py, PyAny>,
@@ -84,6 +88,7 @@ pub fn reconstruct<'py>(
     field: Option<String>,
     engine: Option<String>,
     normals: Option<String>,
+    correct: Option<i64>,
     threads: Option<i64>,
     max_memory: Option<Bound<'py, PyAny>>,
     config: Option<&Bound<'py, PyAny>>,
@@ -95,6 +100,7 @@ pub fn reconstruct<'py>(
         field,
         engine,
         normals,
+        correct,
         threads,
         max_memory,
     };
@@ -210,6 +216,17 @@ fn report<'py>(
     report.set_item("field", field)?;
     report.set_item("threads", s.threads)?;
     report.set_item("peak_bytes", s.peak_bytes)?;
+    let c = &s.correction;
+    let correction = PyDict::new(py);
+    correction.set_item("vertices", c.vertices)?;
+    correction.set_item("moved", c.moved)?;
+    correction.set_item("shift_mean", c.shift_mean)?;
+    correction.set_item("shift_max", c.shift_max)?;
+    correction.set_item("residual_before_mean", c.residual_before_mean)?;
+    correction.set_item("residual_before_max", c.residual_before_max)?;
+    correction.set_item("residual_after_mean", c.residual_after_mean)?;
+    correction.set_item("residual_after_max", c.residual_after_max)?;
+    report.set_item("correction", correction)?;
     report.set_item("times", times)?;
     Ok(report)
 }

@@ -17,6 +17,7 @@ pub struct Overrides<'py> {
     pub field: Option<String>,
     pub engine: Option<String>,
     pub normals: Option<String>,
+    pub correct: Option<i64>,
     pub threads: Option<i64>,
     pub max_memory: Option<Bound<'py, PyAny>>,
 }
@@ -44,6 +45,7 @@ pub fn resolve(config: Option<&Bound<'_, PyAny>>, overrides: Overrides<'_>) -> P
         field,
         engine,
         normals,
+        correct,
         threads,
         max_memory,
     } = overrides;
@@ -60,6 +62,13 @@ pub fn resolve(config: Option<&Bound<'_, PyAny>>, overrides: Overrides<'_>) -> P
         None => None,
         Some(n) => Some(usize::try_from(n).ok().filter(|&n| n > 0).ok_or_else(|| {
             PyValueError::new_err(format!("threads must be at least 1, got {n}"))
+        })?),
+    };
+    // Out-of-range counts are refused by validate, naming the key.
+    let correct = match correct {
+        None => None,
+        Some(n) => Some(u32::try_from(n).map_err(|_| {
+            PyValueError::new_err(format!("correct must be from 0 to 32 Newton steps, got {n}"))
         })?),
     };
     let max_memory = match max_memory {
@@ -87,6 +96,7 @@ pub fn resolve(config: Option<&Bound<'_, PyAny>>, overrides: Overrides<'_>) -> P
             .map(Normals::parse)
             .transpose()
             .map_err(to_py)?,
+        correct,
         threads,
         max_memory,
         ..Default::default()

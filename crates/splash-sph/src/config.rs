@@ -39,6 +39,10 @@ pub struct Config {
     pub band: BandConfig,
     /// Where the mesh's vertex normals come from.
     pub normals: Normals,
+    /// Newton steps that move each vertex along its cube edge onto the field's exact
+    /// isosurface (Marching Correctors, Sec. III-E; the paper uses a few); 0, the default,
+    /// keeps Marching Cubes' linear interpolation.
+    pub correct: u32,
     /// The Marching Slices engine's blocks.
     pub slices: SlicesConfig,
     /// The scalar field and its parameters (SSP07 by default).
@@ -255,6 +259,7 @@ impl Default for Config {
             surface_particles: SurfaceParticles::default(),
             band: BandConfig::default(),
             normals: Normals::default(),
+            correct: 0,
             slices: SlicesConfig::default(),
             field: FieldConfig::default(),
             engine: Engine::default(),
@@ -353,6 +358,12 @@ impl Config {
                 self.slices.block
             );
         }
+        if self.correct > MAX_CORRECT {
+            bail_config!(
+                "correct must be from 0 to {MAX_CORRECT} Newton steps, got {}",
+                self.correct
+            );
+        }
         if self.threads == Some(0) {
             bail_config!("threads must be at least 1");
         }
@@ -414,6 +425,10 @@ impl Config {
 /// paper's coarsest cell (2r), and the reach of SSP07's kernel (4r).
 const MAX_CELL: f32 = 4.0;
 
+/// The most Newton steps `correct` takes: every step that falls back to bisection halves the
+/// bracket, and 32 halvings leave less than f32 can tell apart along an edge.
+const MAX_CORRECT: u32 = 32;
+
 /// `x` to three decimals, or in exponent notation when very large or small (f32's
 /// `Display` writes 1e30 with all its 31 digits).
 fn short(x: f32) -> String {
@@ -440,6 +455,8 @@ pub(crate) struct Params {
     /// Its kind, as configured (`ssp07`, …).
     pub field_kind: &'static str,
     pub normals: Normals,
+    /// Newton steps of the vertex correction; 0 for none.
+    pub correct: u32,
     /// Cubes per side of a Marching Slices block.
     pub block: u32,
     /// The field's support radius in world units (the field's own, kept for the gathers).
@@ -492,6 +509,7 @@ impl Params {
             field,
             field_kind: config.field.kind(),
             normals: config.normals,
+            correct: config.correct,
             block: config.slices.block,
             engine: config.engine,
             max_memory: config.max_memory.map_or_else(default_limit, |b| b.0),

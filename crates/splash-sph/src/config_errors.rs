@@ -315,6 +315,7 @@ mod tests {
         for (text, line) in [
             ("[slices]\n\nblock = 0\n", "3 | block = 0"),
             ("threads = 0\n", "1 | threads = 0"),
+            ("spacing = 0.014\ncorrect = 33\n", "2 | correct = 33"),
             ("spacing = 0.01\n\ncell = 0.5\n", "3 | cell = 0.5"),
             (
                 "[surface_particles]\ncolour_threshold = -1\n",

@@ -58,7 +58,7 @@ pub use mesh::TriMesh;
 pub use overrides::Overrides;
 pub use recon::Reconstruction;
 pub use reconstructor::Reconstructor;
-pub use report::{Clock, FrameStats, Observer, Stage, StageFigures};
+pub use report::{Clock, CorrectionFigures, FrameStats, Observer, Stage, StageFigures};
 pub use spacing::estimate_spacing;
 
 #[cfg(test)]

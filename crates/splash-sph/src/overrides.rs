@@ -20,6 +20,8 @@ pub struct Overrides {
     pub cell: Option<Length>,
     /// `normals`.
     pub normals: Option<Normals>,
+    /// `correct`: Newton steps of the correction.
+    pub correct: Option<u32>,
     /// `slices.block`.
     pub block: Option<u32>,
     /// `engine`.
@@ -49,6 +51,7 @@ impl Config {
         self.spacing = o.spacing.or(self.spacing);
         self.cell = o.cell.unwrap_or(self.cell);
         self.normals = o.normals.unwrap_or(self.normals);
+        self.correct = o.correct.unwrap_or(self.correct);
         self.slices.block = o.block.unwrap_or(self.slices.block);
         self.engine = o.engine.unwrap_or(self.engine);
         self.threads = o.threads.or(self.threads);

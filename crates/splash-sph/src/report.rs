@@ -199,6 +199,53 @@ pub struct FrameStats {
     pub timings: Timings,
     /// The slices engine's blocks (zeros for the other engines).
     pub slices: SlicesFigures,
+    /// The vertex correction of `correct` (zeros when it is off).
+    pub correction: CorrectionFigures,
+}
+
+/// What the correction step (Marching Correctors, Sec. III-E) did to the mesh's vertices:
+/// shifts along their edges as fractions of the edge, and the field's |f − iso| at the
+/// vertices before and after, in the field's units.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]
+pub struct CorrectionFigures {
+    /// Vertices corrected (every vertex strictly inside its edge).
+    pub vertices: usize,
+    /// Vertices the correction moved.
+    pub moved: usize,
+    /// Mean and largest shift, in edge lengths.
+    pub shift_mean: f64,
+    /// See `shift_mean`.
+    pub shift_max: f64,
+    /// Mean and largest |f − iso| at the linearly interpolated vertices.
+    pub residual_before_mean: f64,
+    /// See `residual_before_mean`.
+    pub residual_before_max: f64,
+    /// Mean and largest |f − iso| at the corrected vertices.
+    pub residual_after_mean: f64,
+    /// See `residual_after_mean`.
+    pub residual_after_max: f64,
+}
+
+impl fmt::Display for CorrectionFigures {
+    /// Nothing when the correction is off.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.vertices == 0 {
+            return Ok(());
+        }
+        write!(
+            f,
+            "; corrected {} of {} vertices: shift {:.3} mean, {:.3} max edge; |f − iso| \
+             {:.2e} mean, {:.2e} max before, {:.2e} mean, {:.2e} max after",
+            self.moved,
+            self.vertices,
+            self.shift_mean,
+            self.shift_max,
+            self.residual_before_mean,
+            self.residual_before_max,
+            self.residual_after_mean,
+            self.residual_after_max
+        )
+    }
 }
 
 /// The Marching Slices engine's memory per block, as in Fig. 7 of Rosenberg & Birdwell 2008.
@@ -257,7 +304,7 @@ impl fmt::Display for FrameStats {
             f,
             "{} particles ({} surface{}), {} surface vertices, {} triangles; \
              read {:.0} ms, sort {:.0} ms, t_sp {:.0} ms, band {:.0} ms, t_sf {:.0} ms, \
-             t_tri {:.0} ms, write {:.0} ms; {:.1} MB arrays, {:.1} MB peak heap, {:.1} MB peak RSS{}",
+             t_tri {:.0} ms, write {:.0} ms; {:.1} MB arrays, {:.1} MB peak heap, {:.1} MB peak RSS{}{}",
             self.particles,
             self.surface_particles,
             if self.particles_outside_box > 0 {
@@ -280,7 +327,8 @@ impl fmt::Display for FrameStats {
             self.peak_bytes as f64 / 1e6,
             self.heap_peak as f64 / 1e6,
             self.peak_rss as f64 / 1e6,
-            self.slices
+            self.slices,
+            self.correction
         )
     }
 }

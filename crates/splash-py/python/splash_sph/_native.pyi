@@ -109,6 +109,7 @@ def reconstruct(
     field: Optional[str] = None,
     engine: Optional[str] = None,
     normals: Optional[str] = None,
+    correct: Optional[int] = None,
     threads: Optional[int] = None,
     max_memory: Union[str, int, None] = None,
     config: Union[_Path, Mapping[str, Any], None] = None,
@@ -133,7 +134,8 @@ def reconstruct(
     same kind keeps its own). ``engine``: ``"narrow-band"`` (default), ``"full-gather"``,
     ``"scatter"`` or ``"slices"``; all give the same mesh. ``normals``: ``"field"``
     (default, the field's gradient), ``"grid"`` (central differences) or ``"none"``.
-    ``threads``: worker threads, all cores by default; the mesh does not depend on it (each
+    ``correct``: Newton steps that move each vertex along its cube edge onto the field's
+    exact isosurface (3 is plenty; 0, the default, keeps linear interpolation). ``threads``: worker threads, all cores by default; the mesh does not depend on it (each
     calling thread keeps its workers for its next calls). ``max_memory``: the heap a
     frame may plan to use (every engine checks it), in bytes or as ``"8G"``.
 
@@ -204,6 +206,7 @@ def config_toml(
     field: Optional[str] = None,
     engine: Optional[str] = None,
     normals: Optional[str] = None,
+    correct: Optional[int] = None,
     threads: Optional[int] = None,
     max_memory: Union[str, int, None] = None,
 ) -> str:

@@ -15,6 +15,7 @@ pub(crate) mod prepared;
 pub(crate) mod scatter;
 pub(crate) mod surface_particles;
 pub(crate) mod triangulation;
+pub(crate) mod vertex_correction;
 
 use glam::Vec3;
 

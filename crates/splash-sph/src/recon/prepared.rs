@@ -12,11 +12,12 @@ use super::budget::{self, PER_PARTICLE, mul};
 use super::field_sampling::BrickValues;
 use super::normals::set_normals;
 use super::triangulation::Triangulation;
+use super::vertex_correction::correct_vertices;
 use crate::config::Params;
 use crate::error::Result;
 use crate::field::{Fitted, ScalarField};
 use crate::neighbours::handler_array::HandlerArray;
-use crate::report::{FrameStats, Stage, Stages};
+use crate::report::{CorrectionFigures, FrameStats, Stage, Stages};
 
 /// The field, and the handler array of the frame with the field's channels; fields with
 /// adaptive kernels also come fitted to the frame, with their own handler array.
@@ -74,8 +75,9 @@ fn lookup_cell(params: &Params) -> f32 {
     params.colour_support.max(params.support / 2.0)
 }
 
-/// The last stage of every engine, timed as t_tri: the triangles, then the vertex normals that
-/// `params.normals` asks for (only the field's normals gather particles: `handlers`).
+/// The last stage of every engine, timed as t_tri: the triangles, their vertices corrected
+/// when `params.correct` asks for it, then the vertex normals that `params.normals` asks for
+/// (only the correction and the field's normals gather particles: `handlers`).
 pub(super) fn triangles_and_normals<H: Borrow<HandlerArray>>(
     stages: &mut Stages<'_>,
     params: &Params,
@@ -83,12 +85,22 @@ pub(super) fn triangles_and_normals<H: Borrow<HandlerArray>>(
     triangles: impl FnOnce() -> Result<Triangulation>,
     handlers: impl FnOnce() -> Result<H>,
 ) -> Result<Triangulation> {
-    stages.run(Stage::Triangulation, || {
+    let mut figures = CorrectionFigures::default();
+    let t = stages.run(Stage::Triangulation, || {
         let mut t = triangles()?;
         let (mesh, bricks) = (&mut t.mesh, &t.brick_vertices);
-        set_normals(params.normals, mesh, bricks, params.cell, handlers, field)?;
+        if params.correct == 0 {
+            set_normals(params.normals, mesh, bricks, params.cell, handlers, field)?;
+            return Ok(t);
+        }
+        let h = handlers()?;
+        let h = h.borrow();
+        figures = correct_vertices(mesh, bricks, params.cell, h, field, params.correct);
+        set_normals(params.normals, mesh, bricks, params.cell, || Ok(h), field)?;
         Ok(t)
-    })
+    })?;
+    stages.stats.correction = figures;
+    Ok(t)
 }
 
 /// Counts and memory figures once the mesh exists.

@@ -3,6 +3,7 @@
 
 mod anisotropic;
 pub(crate) mod common;
+mod correction;
 mod engines;
 mod field;
 mod fields;

@@ -11,6 +11,7 @@ use serde::Serialize;
 use super::blocks::Block;
 use super::lookup_cache::LookupCache;
 use super::slice_cache::{Corner, DONE_ABOVE, DONE_BELOW, NO_VERTEX, SliceCache};
+use super::sparse_seeds::SparseSeeds;
 use crate::error::Result;
 use crate::field::ScalarField;
 use crate::mesh::marching_cubes::{
@@ -26,6 +27,8 @@ pub struct Setting<'a, F: ScalarField + ?Sized> {
     pub handlers: &'a HandlerArray,
     pub field: &'a F,
     pub cell: f32,
+    /// The particle spacing r, for the sparse seeds.
+    pub spacing: f32,
     /// Cache the field's gradient at corners, for `normals = "grid"`.
     pub corner_gradients: bool,
     /// Keep every visited cube, to count visits to a cube already visited.
@@ -162,7 +165,9 @@ pub fn march<F: ScalarField + ?Sized>(
             .map(|c| c.capacity() * size_of::<f32>())
             .sum::<usize>();
     m.account();
-    m.seed(&local, (f64::from(support) / cell).ceil() as i32);
+    let reach_slabs = (f64::from(support) / cell).ceil() as i32;
+    m.seed_sparse(reach_slabs);
+    m.seed(&local, reach_slabs);
     m.run();
     m.account();
     set.in_flight.now.fetch_sub(m.counted, Ordering::Relaxed);
@@ -220,6 +225,34 @@ impl<F: ScalarField + ?Sized> Marcher<'_, F> {
                 }
                 if self.value(IVec3::new(c.x, c.y, z)) >= 0.0 {
                     self.push(IVec3::new(c.x, c.y, z));
+                    break;
+                }
+            }
+        }
+    }
+
+    /// Sparse seeds (`sparse_seeds.rs`): from each inside corner near a sparse particle,
+    /// down in −z to the first outside corner, as [`seed`](Self::seed) walks. Pushed before
+    /// the particles' seeds, so they are popped last and only start cubes that nothing else
+    /// reached: a mesh without such blobs is marched as before.
+    fn seed_sparse(&mut self, reach_slabs: i32) {
+        let top = self.n - 1;
+        let seeds = SparseSeeds {
+            handlers: self.set.handlers,
+            support: self.set.field.support(),
+            spacing: self.set.spacing,
+            cell: self.set.cell,
+            origin: self.origin,
+            lo: IVec3::ONE,
+            hi: IVec3::splat(top),
+        };
+        for c in seeds.corners(&self.positions) {
+            if self.value(c) >= 0.0 {
+                continue;
+            }
+            for z in ((c.z - reach_slabs - 1).max(0)..c.z).rev() {
+                if self.value(c.with_z(z)) >= 0.0 {
+                    self.push(c.with_z(z));
                     break;
                 }
             }

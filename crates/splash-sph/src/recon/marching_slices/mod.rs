@@ -8,6 +8,7 @@ pub mod blocks;
 pub mod lookup_cache;
 pub mod marching;
 pub mod slice_cache;
+pub mod sparse_seeds;
 pub mod weld;
 
 use std::sync::atomic::Ordering;
@@ -130,6 +131,7 @@ pub fn reconstruct(
         handlers: samples,
         field,
         cell,
+        spacing: params.spacing,
         corner_gradients: params.normals == Normals::Grid,
         check_visits: checks.visits,
         in_flight: &in_flight,
