@@ -68,7 +68,9 @@ pub fn resolve(config: Option<&Bound<'_, PyAny>>, overrides: Overrides<'_>) -> P
     let correct = match correct {
         None => None,
         Some(n) => Some(u32::try_from(n).map_err(|_| {
-            PyValueError::new_err(format!("correct must be from 0 to 32 Newton steps, got {n}"))
+            PyValueError::new_err(format!(
+                "correct must be from 0 to 32 Newton steps, got {n}"
+            ))
         })?),
     };
     let max_memory = match max_memory {

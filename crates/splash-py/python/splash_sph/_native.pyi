@@ -132,7 +132,8 @@ def reconstruct(
     units. ``field``: ``"ssp07"`` (default), ``"zb05"``, ``"density"``, ``"blobby"``,
     ``"metaball"`` or ``"anisotropic"`` with its default parameters (a config's field of the
     same kind keeps its own). ``engine``: ``"narrow-band"`` (default), ``"full-gather"``,
-    ``"scatter"`` or ``"slices"``; all give the same mesh. ``normals``: ``"field"``
+    ``"scatter"`` or ``"slices"``; all give the same mesh but for
+    small blobs away from every particle at small cells (see the README's Engines). ``normals``: ``"field"``
     (default, the field's gradient), ``"grid"`` (central differences) or ``"none"``.
     ``correct``: Newton steps that move each vertex along its cube edge onto the field's
     exact isosurface (3 is plenty; 0, the default, keeps linear interpolation). ``threads``: worker threads, all cores by default; the mesh does not depend on it (each

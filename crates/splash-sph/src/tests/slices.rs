@@ -19,6 +19,14 @@ fn params(field: &str, cell: &str, r: f32, block: u32) -> Params {
     }
 }
 
+/// With the seeds around sparse particles (`slices.sparse_seeds`).
+fn complete(field: &str, cell: &str, r: f32, block: u32) -> Params {
+    Params {
+        sparse_seeds: true,
+        ..params(field, cell, r, block)
+    }
+}
+
 fn slices(ps: &[Vec3], p: &Params, threads: usize) -> (Reconstruction, SlicesReport) {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
@@ -156,12 +164,12 @@ fn read(path: &std::path::Path) -> Vec<Vec3> {
 
 #[test]
 fn slices_give_the_narrow_band_mesh_on_a_real_frame() {
-    let Some(path) = shared_data("cbd-small/frame_0020.ply") else {
+    let Some(path) = shared_data("cbd-small/frame_0019.ply") else {
         return;
     };
     let ps = read(&path);
     for (field, block) in [("ssp07", 64), ("metaball", 16)] {
-        let what = format!("cbd-small/frame_0020, {field}, block {block}");
+        let what = format!("cbd-small/frame_0019, {field}, block {block}");
         let p = params(field, "r", 0.014, block);
         let band = reconstruct(&ps, &p, Engine::NarrowBand).unwrap();
         let (rec, report) = slices(&ps, &p, 2);
@@ -184,7 +192,7 @@ fn component_sizes(m: &TriMesh) -> Vec<usize> {
 #[test]
 fn at_half_cells_slices_find_the_blobs_away_from_every_particle() {
     let ps = read(&fixture("frame_0040.ply"));
-    let p = params("ssp07", "r/2", 0.014, 64);
+    let p = complete("ssp07", "r/2", 0.014, 64);
     let full = reconstruct(&ps, &p, Engine::FullGather).unwrap();
     let (rec, report) = slices(&ps, &p, 2);
     assert_sound(&report, "frame_0040 at r/2");
@@ -226,7 +234,7 @@ fn slices_find_every_component_of_the_full_grid_on_real_frames() {
                 for &(block, threads) in runs {
                     let what =
                         format!("{name}, {field} at {cell}, block {block}, {threads} threads");
-                    let (rec, _) = slices(&ps, &params(field, cell, 0.014, block), threads);
+                    let (rec, _) = slices(&ps, &complete(field, cell, 0.014, block), threads);
                     assert_eq!(
                         component_sizes(&rec.mesh),
                         component_sizes(&full.mesh),

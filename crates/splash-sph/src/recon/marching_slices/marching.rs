@@ -29,6 +29,8 @@ pub struct Setting<'a, F: ScalarField + ?Sized> {
     pub cell: f32,
     /// The particle spacing r, for the sparse seeds.
     pub spacing: f32,
+    /// Seed around sparse particles too (`slices.sparse_seeds`).
+    pub sparse_seeds: bool,
     /// Cache the field's gradient at corners, for `normals = "grid"`.
     pub corner_gradients: bool,
     /// Keep every visited cube, to count visits to a cube already visited.
@@ -166,7 +168,9 @@ pub fn march<F: ScalarField + ?Sized>(
             .sum::<usize>();
     m.account();
     let reach_slabs = (f64::from(support) / cell).ceil() as i32;
-    m.seed_sparse(reach_slabs);
+    if m.set.sparse_seeds {
+        m.seed_sparse(reach_slabs);
+    }
     m.seed(&local, reach_slabs);
     m.run();
     m.account();

@@ -132,6 +132,7 @@ pub fn reconstruct(
         field,
         cell,
         spacing: params.spacing,
+        sparse_seeds: params.sparse_seeds,
         corner_gradients: params.normals == Normals::Grid,
         check_visits: checks.visits,
         in_flight: &in_flight,
