@@ -15,7 +15,7 @@ use rayon::prelude::*;
 use super::band::{BRICK, Band, brick_of, local_index};
 use super::budget;
 use super::field_sampling::{BrickValues, vertex_position};
-use super::halo::{Halo, neighbour_slot, offset};
+use super::halo::{Halo, neighbour_slot, offset, owns_inside_corner};
 use crate::error::{Error, Result};
 use crate::mesh::TriMesh;
 use crate::mesh::marching_cubes::{
@@ -62,17 +62,23 @@ pub fn triangulate(
     budget: impl FnOnce(u64) -> Result<()>,
 ) -> Result<Triangulation> {
     let cell = band.cell;
-    let mut edges: Vec<BrickEdges> = band
+    let lows = values.inside_lows(band);
+    // Only bricks with edge vertices keep an edge table.
+    let mut edges: Vec<Option<Box<BrickEdges>>> = band
         .bricks
         .par_iter()
         .map_init(Halo::new, |halo, &brick| {
+            if !owns_inside_corner(band, &lows, brick) {
+                return None;
+            }
             halo.fill(band, values, brick);
-            edge_vertices(halo, brick, cell)
+            let e = edge_vertices(halo, brick, cell);
+            (!e.positions.is_empty()).then(|| Box::new(e))
         })
         .collect();
     let mut next = 0u32;
     let mut brick_vertices = Vec::with_capacity(edges.len());
-    for e in &mut edges {
+    for e in edges.iter_mut().flatten() {
         e.first = next;
         next = u32::try_from(e.positions.len())
             .ok()
@@ -84,14 +90,15 @@ pub fn triangulate(
                     u32::MAX
                 ))
             })?;
-        if !e.positions.is_empty() {
-            brick_vertices.push(e.first as usize..next as usize);
-        }
+        brick_vertices.push(e.first as usize..next as usize);
     }
     let per_brick: Vec<(Vec<[u32; 3]>, usize)> = band
         .bricks
         .par_iter()
         .map_init(Halo::new, |halo, &brick| {
+            if !owns_inside_corner(band, &lows, brick) {
+                return (Vec::new(), 0);
+            }
             halo.fill(band, values, brick);
             brick_triangles(halo, &edges)
         })
@@ -101,7 +108,7 @@ pub fn triangulate(
     budget(mesh_bytes(
         next.into(),
         triangles as u64,
-        edges.len() as u64,
+        brick_vertices.len() as u64,
     ))?;
     let what = || format!("a mesh of {next} vertices and {triangles} triangles");
     let mut mesh = TriMesh {
@@ -109,7 +116,7 @@ pub fn triangulate(
         normals: budget::try_vec(next as usize, what)?,
         triangles: budget::try_vec(triangles, what)?,
     };
-    for e in &edges {
+    for e in edges.iter().flatten() {
         mesh.vertices.extend_from_slice(&e.positions);
         mesh.normals.extend_from_slice(&e.normals);
     }
@@ -188,7 +195,7 @@ fn edge_in_surface_cell(halo: &Halo, l: IVec3, axis: usize) -> bool {
         .any(|c| halo.complete(c))
 }
 
-fn brick_triangles(halo: &Halo, edges: &[BrickEdges]) -> (Vec<[u32; 3]>, usize) {
+fn brick_triangles(halo: &Halo, edges: &[Option<Box<BrickEdges>>]) -> (Vec<[u32; 3]>, usize) {
     let mut triangles = Vec::new();
     let mut surface_cells = 0;
     for z in 0..BRICK {
@@ -211,7 +218,8 @@ fn brick_triangles(halo: &Halo, edges: &[BrickEdges]) -> (Vec<[u32; 3]>, usize) 
                         let d = brick_of(owner);
                         let b = halo.neighbours[neighbour_slot(d)]
                             .expect("a complete cell's corners lie in existing bricks");
-                        edges[b].id(local_index(owner - d * BRICK), edge_axis(e))
+                        let owned = edges[b].as_ref().expect("a crossed edge has a vertex");
+                        owned.id(local_index(owner - d * BRICK), edge_axis(e))
                     }));
                 }
             }
