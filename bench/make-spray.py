@@ -14,18 +14,27 @@ import sys
 
 
 def read_ply_xyz(path):
-    """Header lines and the vertex payload of a binary little-endian PLY of float x y z only."""
+    """The x y z payload (little-endian f32 triples) of a binary little-endian PLY whose vertex
+    properties are all floats; other properties are dropped."""
     with open(path, "rb") as f:
         data = f.read()
     end = data.index(b"end_header\n") + len(b"end_header\n")
     header = data[:end].decode("ascii").splitlines()
     if header[1] != "format binary_little_endian 1.0":
         sys.exit(f"{path}: expected a binary little-endian PLY, got {header[1]!r}")
-    props = [l.split()[-1] for l in header if l.startswith("property")]
+    props = [l.split() for l in header if l.startswith("property")]
     count = [int(l.split()[-1]) for l in header if l.startswith("element vertex")][0]
-    if props != ["x", "y", "z"] or len(data) - end != 12 * count:
-        sys.exit(f"{path}: expected exactly the float properties x y z, got {props}")
-    return count, data[end:]
+    names = [p[-1] for p in props]
+    if any(p[1] != "float" for p in props) or names[:3] != ["x", "y", "z"]:
+        sys.exit(f"{path}: expected float properties starting with x y z, got {props}")
+    stride = len(names)
+    if len(data) - end < 4 * stride * count:
+        sys.exit(f"{path}: {count} vertices announced, fewer stored")
+    if stride == 3:
+        return count, data[end : end + 12 * count]
+    values = struct.unpack_from(f"<{stride * count}f", data, end)
+    xyz = [v for i in range(count) for v in values[i * stride : i * stride + 3]]
+    return count, struct.pack(f"<{3 * count}f", *xyz)
 
 
 def main():
