@@ -110,9 +110,8 @@ impl Neighbourhood {
                 }
             }
             Some(c) => {
-                let own = &from.channels[c];
-                for i in 0..from.len() {
-                    let r = own[i].min(radius);
+                for (i, own) in from.channels[c].iter().enumerate() {
+                    let r = own.min(radius);
                     kept[n] = i as u32;
                     n += usize::from(outside(at(i)) <= r * r);
                 }

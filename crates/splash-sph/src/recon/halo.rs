@@ -47,10 +47,15 @@ impl Halo {
                 for y in lo.y..=hi.y {
                     for x in lo.x..=hi.x {
                         let bit = (x - d.x * BRICK + BRICK * (y - d.y * BRICK)) as u32;
-                        if word >> bit & 1 == 1 {
-                            let rank = (word & ((1u64 << bit) - 1)).count_ones() as usize;
-                            self.values[halo_index(IVec3::new(x, y, z))] = plane[rank];
-                        }
+                        // A full plane (inside the fluid's band, most of them) needs no count.
+                        let rank = if word == u64::MAX {
+                            bit as usize
+                        } else if word >> bit & 1 == 1 {
+                            (word & ((1u64 << bit) - 1)).count_ones() as usize
+                        } else {
+                            continue;
+                        };
+                        self.values[halo_index(IVec3::new(x, y, z))] = plane[rank];
                     }
                 }
             }
