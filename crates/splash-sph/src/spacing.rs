@@ -4,7 +4,7 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
-use crate::neighbours::bucket_grid::BucketGrid;
+use crate::neighbours::bucket_grid::{BucketGrid, Nearest};
 
 /// Cells per axis stay below 2^20 + 1 so that a cell's coordinates pack into 21 bits each for
 /// hashing, and shells stay bounded whatever the outliers.
@@ -79,7 +79,7 @@ const SAMPLES: usize = 20_000;
 /// [`estimate_spacing`] from at most `max_samples` particles.
 fn estimate_sampled(particles: &[Vec3], max_samples: usize) -> Option<f32> {
     let grid = grid_for(particles)?;
-    let nearest = median(nearest_distances(&grid, particles, max_samples))?;
+    let nearest = median_nearest(&grid, particles, max_samples)?;
     Some(
         density_spacing(
             &grid,
@@ -171,7 +171,7 @@ fn grid_for(particles: &[Vec3]) -> Option<BucketGrid> {
         extent,
         (2.0 * spread(pool.len())).max(min_cell),
     );
-    let cell = match median(nearest_distances(&pool_grid, &pool, POOL_QUERIES)) {
+    let cell = match median_nearest(&pool_grid, &pool, POOL_QUERIES) {
         Some(d) => 2.0 * d * (pool.len() as f32 / finite as f32).powf(1.0 / dims as f32),
         None => 2.0 * spread(finite),
     };
@@ -183,6 +183,49 @@ fn grid_for(particles: &[Vec3]) -> Option<BucketGrid> {
         extent,
         cell.max(min_cell),
     ))
+}
+
+/// Shells a nearest-neighbour search of [`median_nearest`] goes before it gives up.
+const NEAREST_SHELLS: i32 = 2;
+
+/// `median(nearest_distances(..))`, without finishing the searches that cannot change it: the
+/// searches stop after a few shells, and only those whose lower bound lies below the median
+/// of the rest (taking them as infinite) are run to the end. Isolated particles (spray, far
+/// outliers) each cost a full scan otherwise.
+fn median_nearest(grid: &BucketGrid, particles: &[Vec3], max_samples: usize) -> Option<f32> {
+    let samples: Vec<Vec3> = stratified(particles, max_samples)
+        .filter(|p| p.is_finite())
+        .collect();
+    let mut found: Vec<Nearest> = samples
+        .par_iter()
+        .map(|&p| grid.nearest_within(p, NEAREST_SHELLS))
+        .collect();
+    // A sample without any other particle means every finite particle coincides with it, so
+    // all samples have none; else every search finds one when run to the end.
+    if !found.iter().any(|n| matches!(n, Nearest::Found(_))) {
+        return median(nearest_distances(grid, particles, max_samples));
+    }
+    loop {
+        let as_found = |n: &Nearest| match *n {
+            Nearest::Found(d) => d,
+            _ => f32::INFINITY,
+        };
+        let m = median(found.iter().map(as_found).collect())?;
+        let open: Vec<usize> = (0..found.len())
+            .filter(|&i| matches!(found[i], Nearest::AtLeast(b) if b < m))
+            .collect();
+        if open.is_empty() {
+            return Some(m.sqrt());
+        }
+        // Finishing a search only lowers the median: the bounds left stay above it.
+        let exact: Vec<Nearest> = open
+            .par_iter()
+            .map(|&i| grid.nearest_within(samples[i], i32::MAX))
+            .collect();
+        for (&i, n) in open.iter().zip(exact) {
+            found[i] = n;
+        }
+    }
 }
 
 /// Nearest non-zero distance from each of at most `max_samples` stratified samples.
@@ -637,6 +680,17 @@ mod tests {
                 brute_force(&particles, samples),
                 "{samples} samples"
             );
+        }
+        // The median, with searches cut short, is the full searches' median on every grid.
+        for grid in grids.iter().chain([&auto]) {
+            for samples in [1, 2, 7, 64, 1000] {
+                assert_eq!(
+                    median_nearest(grid, &particles, samples),
+                    median(brute_force(&particles, samples)),
+                    "cell {}, {samples} samples",
+                    grid.cell
+                );
+            }
         }
     }
 

@@ -97,6 +97,15 @@ impl BucketGrid {
     /// shells of cells at growing Chebyshev distance `k` around `p`'s cell. Anything beyond
     /// shell `k` is at least `k` cells away, so a candidate within `k * cell` is final.
     pub fn nearest(&self, p: Vec3) -> Option<f32> {
+        match self.nearest_within(p, i32::MAX) {
+            Nearest::Found(d) => Some(d),
+            Nearest::None | Nearest::AtLeast(_) => None,
+        }
+    }
+
+    /// [`BucketGrid::nearest`], giving up after shell `shells`: an isolated particle (spray,
+    /// far outliers) then costs a few shells, and the caller learns only a lower bound.
+    pub fn nearest_within(&self, p: Vec3, shells: i32) -> Nearest {
         let c = self.cell_of(p);
         let mut best = f32::INFINITY;
         let mut visited = 0;
@@ -127,6 +136,10 @@ impl BucketGrid {
             if covered {
                 break;
             }
+            if k >= shells {
+                // Whatever lies beyond shell k is at least k cells away.
+                return Nearest::AtLeast(best.min(reach * reach));
+            }
             // An isolated particle (a far outlier) would need ever larger shells: once they
             // cost more than the occupied buckets, scanning everything is cheaper.
             if visited > self.occupied {
@@ -134,8 +147,21 @@ impl BucketGrid {
                 break;
             }
         }
-        best.is_finite().then_some(best)
+        if best.is_finite() {
+            Nearest::Found(best)
+        } else {
+            Nearest::None
+        }
     }
+}
+
+/// What [`BucketGrid::nearest_within`] found: the squared distance, that there is no other
+/// particle, or a lower bound on the squared distance when it gave up.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Nearest {
+    Found(f32),
+    None,
+    AtLeast(f32),
 }
 
 /// Smallest non-zero squared distance from `p` to `points`.

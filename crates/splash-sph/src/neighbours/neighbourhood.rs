@@ -24,6 +24,8 @@ pub struct Neighbourhood {
     pub z: Vec<f32>,
     /// As `HandlerArray::channels`, for the gathered particles; padding holds 0.
     pub channels: Vec<Vec<f32>>,
+    /// Scratch of [`Neighbourhood::filter_box`]: indices of the particles it keeps.
+    kept: Vec<u32>,
 }
 
 impl Neighbourhood {
@@ -90,19 +92,42 @@ impl Neighbourhood {
         own_reach: Option<usize>,
     ) {
         self.clear(lo);
-        let reach = reach(&from.channels, radius, own_reach);
         let shift = from.anchor - lo;
         let (blo, bhi) = (Vec3::ZERO, hi - lo);
-        self.channels.resize_with(from.channels.len(), Vec::new);
-        self.grow(from.len());
+        let at = |i: usize| Vec3::new(from.x[i], from.y[i], from.z[i]) + shift;
+        let outside = |p: Vec3| (p - p.clamp(blo, bhi)).length_squared();
+        // The indices kept, compacted branch-free, then each array gathered once.
+        let kept = &mut self.kept;
+        kept.clear();
+        kept.resize(from.len(), 0);
         let mut n = 0;
-        for i in 0..from.len() {
-            let p = Vec3::new(from.x[i], from.y[i], from.z[i]) + shift;
-            let r = reach(i);
-            let kept = (p - p.clamp(blo, bhi)).length_squared() <= r * r;
-            n = self.put(n, p, kept, |c| from.channels[c][i]);
+        match own_reach {
+            None => {
+                let r2 = radius * radius;
+                for i in 0..from.len() {
+                    kept[n] = i as u32;
+                    n += usize::from(outside(at(i)) <= r2);
+                }
+            }
+            Some(c) => {
+                for (i, own) in from.channels[c].iter().enumerate() {
+                    let r = own.min(radius);
+                    kept[n] = i as u32;
+                    n += usize::from(outside(at(i)) <= r * r);
+                }
+            }
         }
-        self.truncate(n);
+        kept.truncate(n);
+        let shifted = |v: &[f32], s: f32, out: &mut Vec<f32>| {
+            out.extend(kept.iter().map(|&i| v[i as usize] + s));
+        };
+        shifted(&from.x, shift.x, &mut self.x);
+        shifted(&from.y, shift.y, &mut self.y);
+        shifted(&from.z, shift.z, &mut self.z);
+        self.channels.resize_with(from.channels.len(), Vec::new);
+        for (out, v) in self.channels.iter_mut().zip(&from.channels) {
+            out.extend(kept.iter().map(|&i| v[i as usize]));
+        }
         self.pad();
     }
 

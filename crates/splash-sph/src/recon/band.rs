@@ -7,6 +7,7 @@
 //!
 //! Vertex `v` sits at `v * cell` in world coordinates, so the grid is the same in every frame.
 
+use super::brick_values::BrickValues;
 use super::budget;
 use crate::error::Result;
 use glam::{IVec3, Vec3};
@@ -157,54 +158,62 @@ impl Band {
         band
     }
 
-    /// Adds the vertices of `other` and their values, keeping bricks in (z, y, x) order.
+    /// Adds the vertices of `other` and their values, keeping bricks in (z, y, x) order; where
+    /// both have a vertex, `other`'s value wins unless it is NaN.
     pub fn merge(
         &mut self,
-        values: &mut Vec<[f32; BRICK_VERTICES]>,
+        values: &mut BrickValues,
         other: Band,
-        other_values: Vec<[f32; BRICK_VERTICES]>,
-    ) {
-        let mut all: Vec<(IVec3, [u64; 8], [f32; BRICK_VERTICES])> =
-            Vec::with_capacity(self.bricks.len() + other.bricks.len());
-        let mut added = Vec::new();
-        for ((b, m), v) in other.bricks.into_iter().zip(other.masks).zip(other_values) {
-            match self.brick_index(b) {
-                Some(i) => {
-                    for (word, add) in self.masks[i].iter_mut().zip(m) {
-                        *word |= add;
-                    }
-                    for (k, &x) in v.iter().enumerate() {
-                        if !x.is_nan() {
-                            values[i][k] = x;
-                        }
-                    }
-                }
-                None => added.push((b, m, v)),
-            }
-        }
-        if added.is_empty() {
-            return;
-        }
-        all.extend(
-            self.bricks
-                .drain(..)
-                .zip(self.masks.drain(..))
-                .zip(values.drain(..))
-                .map(|((b, m), v)| (b, m, v)),
-        );
-        all.extend(added);
-        all.sort_unstable_by_key(|(b, _, _)| (b.z, b.y, b.x));
-        for (b, m, v) in all {
-            self.bricks.push(b);
-            self.masks.push(m);
-            values.push(v);
-        }
-        self.index = self
+        other_values: BrickValues,
+    ) -> Result<()> {
+        // Each merged brick with its index in `self` and in `other`.
+        let mut sources: Vec<(IVec3, Option<usize>, Option<usize>)> = self
             .bricks
             .iter()
             .enumerate()
-            .map(|(i, &b)| (b, i as u32))
+            .map(|(i, &b)| (b, Some(i), None))
             .collect();
+        for (j, &b) in other.bricks.iter().enumerate() {
+            match self.brick_index(b) {
+                Some(i) => sources[i].2 = Some(j),
+                None => sources.push((b, None, Some(j))),
+            }
+        }
+        sources.sort_unstable_by_key(|(b, _, _)| (b.z, b.y, b.x));
+        let masks = sources
+            .iter()
+            .map(|&(_, i, j)| {
+                let mut mask = i.map_or([0; 8], |i| self.masks[i]);
+                for (word, add) in mask.iter_mut().zip(j.map_or([0; 8], |j| other.masks[j])) {
+                    *word |= add;
+                }
+                mask
+            })
+            .collect();
+        let bricks = sources.iter().map(|s| s.0).collect();
+        let merged = Band::from_parts(self.cell, bricks, masks);
+        let merged_values = BrickValues::sample(
+            &merged,
+            || (),
+            |_, k| {
+                let (_, i, j) = sources[k];
+                let mut v = i.map_or([f32::NAN; BRICK_VERTICES], |i| {
+                    values.dense(&self.masks[i], i)
+                });
+                if let Some(j) = j {
+                    let add = other_values.dense(&other.masks[j], j);
+                    for (a, &x) in v.iter_mut().zip(&add) {
+                        if !x.is_nan() {
+                            *a = x;
+                        }
+                    }
+                }
+                v
+            },
+        )?;
+        *self = merged;
+        *values = merged_values;
+        Ok(())
     }
 
     fn from_parts(cell: f32, bricks: Vec<IVec3>, masks: Vec<[u64; 8]>) -> Band {

@@ -12,7 +12,7 @@ use rayon::prelude::*;
 
 use super::band::{BRICK, Band};
 use super::field_sampling::BrickValues;
-use super::halo::{Halo, offset};
+use super::halo::{Halo, offset, owns_inside_corner};
 use crate::error::Result;
 use crate::mesh::marching_cubes::{case_index, cases};
 
@@ -40,7 +40,7 @@ pub fn close_band(
             .flat_map(|&b| (0..27).map(move |n| b + IVec3::new(n % 3, n / 3 % 3, n / 9) - 1))
             .collect();
         let grown_values = sample(&grown, band.bricks.len() + grown.bricks.len())?;
-        band.merge(values, grown, grown_values);
+        band.merge(values, grown, grown_values)?;
         scan.sort_unstable_by_key(|b| (b.z, b.y, b.x));
         scan.dedup();
         scan.retain(|&b| band.brick_index(b).is_some());
@@ -50,8 +50,10 @@ pub fn close_band(
 /// Grid vertices that must join the band, found in the bricks `scan`, sorted and without
 /// repeats.
 fn missing_vertices(band: &Band, values: &BrickValues, scan: &[IVec3]) -> Vec<IVec3> {
+    let lows = values.inside_lows(band);
     let mut missing: Vec<IVec3> = scan
         .par_iter()
+        .filter(|&&brick| owns_inside_corner(band, &lows, brick))
         .map_init(Halo::new, |halo, &brick| {
             halo.fill(band, values, brick);
             let mut out = Vec::new();

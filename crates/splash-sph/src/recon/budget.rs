@@ -14,15 +14,15 @@ use crate::error::{Error, Result};
 /// (hash map, ~20).
 pub const PER_PARTICLE: u64 = 48;
 
-/// Heap bytes per brick of 8³ vertices once its values are sampled: values (2048), mask (64),
+/// Heap bytes per brick of 8³ vertices once its values are sampled, at most: values (2048 when
+/// all its vertices are in the band, packed to the band's vertices), mask (64),
 /// coordinates (12), index entry (~24), the triangulation's edge table (~350) and the band's
 /// build (~50, pairs grouped per brick).
 pub const PER_BRICK: u64 = 2048 + 64 + 12 + 24 + 350 + 50;
 
-/// Heap bytes the triangulation holds per mesh vertex at its peak: per-brick positions and
-/// normals (24), the mesh's (24), the field normals' gradients (12), and two triangles per
-/// vertex held per brick and in the mesh (2 × 2 × 12).
-pub const PER_MESH_VERTEX: u64 = 24 + 24 + 12 + 48;
+/// Heap bytes the triangulation holds per mesh vertex at its peak: positions and normals (24),
+/// the field normals' gradients (12), and two triangles per vertex (2 × 12).
+pub const PER_MESH_VERTEX: u64 = 24 + 12 + 24;
 
 /// Mesh vertices expected per surface particle at cell = r (scaled by (r / cell)²): about 1.6
 /// on `fixtures/frame_0040.ply` at cells r and r/2; 2 leaves room for splashier frames.

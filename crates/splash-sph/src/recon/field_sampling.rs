@@ -3,78 +3,69 @@
 //! narrows that list to its own reach in two steps, and each vertex sums over the short list.
 
 use glam::{IVec3, Vec3};
-use rayon::prelude::*;
 
 use super::band::{BRICK, BRICK_VERTICES, Band, local_index};
-use super::budget;
 use crate::error::Result;
 use crate::field::ScalarField;
 use crate::neighbours::handler_array::HandlerArray;
 use crate::neighbours::neighbourhood::Neighbourhood;
 
-/// Field values per brick, NaN at vertices outside the band.
-pub type BrickValues = Vec<[f32; BRICK_VERTICES]>;
+pub use super::brick_values::BrickValues;
 
 pub fn sample_field<F: ScalarField + ?Sized>(
     band: &Band,
     handlers: &HandlerArray,
     field: &F,
 ) -> Result<BrickValues> {
-    let mut out = budget::try_vec(band.bricks.len(), || {
-        format!("the field values of {} bricks", band.bricks.len())
-    })?;
     let cell = band.cell;
     let reach = field.support();
     let own_reach = field.reach_channel();
-    band.bricks
-        .par_iter()
-        .zip(&band.masks)
-        .map_init(
-            || [(); 3].map(|_| Neighbourhood::default()),
-            |[brick_near, block_near, group_near], (&brick, mask)| {
-                let mut values = [f32::NAN; BRICK_VERTICES];
-                let base = brick * BRICK;
-                let corner = |l: IVec3| vertex_position(base + l, cell);
-                brick_near.gather_box(
-                    handlers,
-                    corner(IVec3::ZERO),
-                    corner(IVec3::splat(BRICK - 1)),
+    BrickValues::sample(
+        band,
+        || [(); 3].map(|_| Neighbourhood::default()),
+        |[brick_near, block_near, group_near], b| {
+            let (brick, mask) = (band.bricks[b], &band.masks[b]);
+            let mut values = [f32::NAN; BRICK_VERTICES];
+            let base = brick * BRICK;
+            let corner = |l: IVec3| vertex_position(base + l, cell);
+            brick_near.gather_box(
+                handlers,
+                corner(IVec3::ZERO),
+                corner(IVec3::splat(BRICK - 1)),
+                reach,
+                own_reach,
+            );
+            // Two levels of narrowing, 4³ then 2³ vertices, keep each list within a few
+            // percent of the particles really in reach.
+            for block in cubes(IVec3::ZERO, BRICK, 4) {
+                if !has_vertices(mask, block, 4) {
+                    continue;
+                }
+                block_near.filter_box(
+                    brick_near,
+                    corner(block),
+                    corner(block + 3),
                     reach,
                     own_reach,
                 );
-                // Two levels of narrowing, 4³ then 2³ vertices, keep each list within a few
-                // percent of the particles really in reach.
-                for block in cubes(IVec3::ZERO, BRICK, 4) {
-                    if !has_vertices(mask, block, 4) {
+                for group in cubes(block, 4, 2) {
+                    if !has_vertices(mask, group, 2) {
                         continue;
                     }
-                    block_near.filter_box(
-                        brick_near,
-                        corner(block),
-                        corner(block + 3),
-                        reach,
-                        own_reach,
-                    );
-                    for group in cubes(block, 4, 2) {
-                        if !has_vertices(mask, group, 2) {
-                            continue;
-                        }
-                        let glo = corner(group);
-                        group_near.filter_box(block_near, glo, corner(group + 1), reach, own_reach);
-                        for l in cubes(group, 2, 1) {
-                            let i = local_index(l);
-                            if mask[l.z as usize] >> (i % 64) & 1 == 1 {
-                                let x = (l - group).as_vec3() * cell;
-                                values[i] = field.value(group_near, x);
-                            }
+                    let glo = corner(group);
+                    group_near.filter_box(block_near, glo, corner(group + 1), reach, own_reach);
+                    for l in cubes(group, 2, 1) {
+                        let i = local_index(l);
+                        if mask[l.z as usize] >> (i % 64) & 1 == 1 {
+                            let x = (l - group).as_vec3() * cell;
+                            values[i] = field.value(group_near, x);
                         }
                     }
                 }
-                values
-            },
-        )
-        .collect_into_vec(&mut out);
-    Ok(out)
+            }
+            values
+        },
+    )
 }
 
 /// Lowest corners of the cubes of side `step` tiling the cube of side `side` at `lo`.

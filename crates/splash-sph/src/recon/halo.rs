@@ -3,7 +3,7 @@
 
 use glam::{IVec3, Vec3};
 
-use super::band::{BRICK, Band, local_index};
+use super::band::{BRICK, Band};
 use super::field_sampling::BrickValues;
 use crate::mesh::marching_cubes::corner_offset;
 
@@ -40,11 +40,22 @@ impl Halo {
             let Some(b) = *slot else { continue };
             let lo = (d * BRICK).max(IVec3::splat(-1));
             let hi = (d * BRICK + BRICK - 1).min(IVec3::splat(BRICK + 1));
+            let mask = &band.masks[b];
             for z in lo.z..=hi.z {
+                let lz = (z - d.z * BRICK) as usize;
+                let (word, plane) = (mask[lz], values.plane(mask, b, lz));
                 for y in lo.y..=hi.y {
                     for x in lo.x..=hi.x {
-                        let l = IVec3::new(x, y, z);
-                        self.values[halo_index(l)] = values[b][local_index(l - d * BRICK)];
+                        let bit = (x - d.x * BRICK + BRICK * (y - d.y * BRICK)) as u32;
+                        // A full plane (inside the fluid's band, most of them) needs no count.
+                        let rank = if word == u64::MAX {
+                            bit as usize
+                        } else if word >> bit & 1 == 1 {
+                            (word & ((1u64 << bit) - 1)).count_ones() as usize
+                        } else {
+                            continue;
+                        };
+                        self.values[halo_index(IVec3::new(x, y, z))] = plane[rank];
                     }
                 }
             }
@@ -93,4 +104,24 @@ pub fn offset(c: usize) -> IVec3 {
 pub fn neighbour_slot(d: IVec3) -> usize {
     let s = d + 1;
     (s.x + 3 * s.y + 9 * s.z) as usize
+}
+
+/// Whether brick `brick` owns a cell (lowest corner in it) with an inside corner, given each
+/// brick's [`BrickValues::inside_lows`]: only those bricks can own crossed cells and the
+/// edges of their vertices; the rest (most of the band around a droplet) are skipped.
+pub fn owns_inside_corner(band: &Band, lows: &[[u8; 3]], brick: IVec3) -> bool {
+    (0..8).any(|c| {
+        let d = offset(c);
+        band.brick_index(brick + d).is_some_and(|n| {
+            let low = lows[n];
+            // The neighbour's inside vertices must reach its side facing this brick.
+            (0..3).all(|a| {
+                if d[a] == 1 {
+                    low[a] == 0
+                } else {
+                    low[a] < BRICK as u8
+                }
+            })
+        })
+    })
 }

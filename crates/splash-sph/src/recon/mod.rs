@@ -4,6 +4,7 @@
 
 pub(crate) mod band;
 pub(crate) mod band_closure;
+pub(crate) mod brick_values;
 pub(crate) mod budget;
 pub(crate) mod field_sampling;
 pub(crate) mod full_grid;

@@ -5,7 +5,7 @@
 use glam::Vec3;
 
 use super::Reconstruction;
-use super::band::{BRICK_VERTICES, Band};
+use super::band::Band;
 use super::band_closure::close_band;
 use super::budget::{self, PER_BRICK, mul};
 use super::field_sampling::sample_field;
@@ -90,7 +90,7 @@ pub(crate) fn gather(
             sample_field(grown, samples, field)
         })
     })?;
-    let held = held + (band.heap_bytes() + values.capacity() * BRICK_VERTICES * 4) as u64;
+    let held = held + (band.heap_bytes() + values.heap_bytes()) as u64;
     let triangulation = triangles_and_normals(
         &mut stages,
         params,

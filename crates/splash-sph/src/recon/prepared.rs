@@ -7,7 +7,7 @@ use std::sync::Arc;
 use glam::Vec3;
 
 use super::Reconstruction;
-use super::band::{BRICK_VERTICES, Band};
+use super::band::Band;
 use super::budget::{self, PER_PARTICLE, mul};
 use super::field_sampling::BrickValues;
 use super::normals::set_normals;
@@ -111,7 +111,7 @@ pub(super) fn finish(
     handler_bytes: usize,
     triangulation: Triangulation,
 ) -> Reconstruction {
-    let values_bytes = values.capacity() * BRICK_VERTICES * size_of::<f32>();
+    let values_bytes = values.heap_bytes();
     let mesh = triangulation.mesh;
     stats.bricks = band.bricks.len();
     stats.surface_vertices = band.surface_vertices();

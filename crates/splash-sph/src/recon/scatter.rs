@@ -43,7 +43,7 @@ pub fn reconstruct(
         field,
         || {
             triangulate(&band, &values, |mesh| {
-                let held = (band.heap_bytes() + values.capacity() * BRICK_VERTICES * 4) as u64;
+                let held = (band.heap_bytes() + values.heap_bytes()) as u64;
                 budget::check(params, held.saturating_add(mesh), || {
                     "the mesh of the full grid's surface".into()
                 })
@@ -116,27 +116,28 @@ pub fn scatter_field(
             }
         }
     }
-    let mut values: BrickValues = budget::try_vec(band.bricks.len(), || {
-        format!("the field values of {} bricks", band.bricks.len())
-    })?;
-    for (&brick, mask) in band.bricks.iter().zip(&band.masks) {
-        let mut v = [f32::NAN; BRICK_VERTICES];
-        let base = brick * BRICK;
-        for z in 0..BRICK {
-            for y in 0..BRICK {
-                for x in 0..BRICK {
-                    let l = IVec3::new(x, y, z);
-                    let i = local_index(l);
-                    if mask[z as usize] >> (i % 64) & 1 == 0 {
-                        continue;
+    BrickValues::sample(
+        band,
+        || (),
+        |_, b| {
+            let (brick, mask) = (band.bricks[b], &band.masks[b]);
+            let mut v = [f32::NAN; BRICK_VERTICES];
+            let base = brick * BRICK;
+            for z in 0..BRICK {
+                for y in 0..BRICK {
+                    for x in 0..BRICK {
+                        let l = IVec3::new(x, y, z);
+                        let i = local_index(l);
+                        if mask[z as usize] >> (i % 64) & 1 == 0 {
+                            continue;
+                        }
+                        let g = (base + l - grid.lo).as_uvec3();
+                        let at = (g.z as usize * ny + g.y as usize) * nx + g.x as usize;
+                        v[i] = field.value_of_sums(&sums[at * stride..(at + 1) * stride]);
                     }
-                    let g = (base + l - grid.lo).as_uvec3();
-                    let at = (g.z as usize * ny + g.y as usize) * nx + g.x as usize;
-                    v[i] = field.value_of_sums(&sums[at * stride..(at + 1) * stride]);
                 }
             }
-        }
-        values.push(v);
-    }
-    Ok(values)
+            v
+        },
+    )
 }

@@ -38,7 +38,7 @@ fn gathered_ssp07_matches_brute_force() {
     for (b, brick) in band.bricks.iter().enumerate() {
         for i in (0..512).step_by(5) {
             let l = IVec3::new(i % 8, i / 8 % 8, i / 64);
-            let got = values[b][local_index(l)];
+            let got = values.get(&band.masks[b], b, local_index(l));
             if got.is_nan() {
                 // Outside the requested box: not part of the band.
                 continue;
@@ -93,7 +93,7 @@ fn gathered_anisotropic_matches_brute_force() {
     for (b, brick) in band.bricks.iter().enumerate() {
         for i in (0..512).step_by(7) {
             let l = IVec3::new(i % 8, i / 8 % 8, i / 64);
-            let got = values[b][local_index(l)];
+            let got = values.get(&band.masks[b], b, local_index(l));
             if got.is_nan() {
                 continue;
             }

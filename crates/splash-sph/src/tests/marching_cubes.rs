@@ -3,10 +3,11 @@
 
 use crate::mesh::topology::{signed_volume, topology};
 use crate::recon::band::{BRICK, BRICK_VERTICES, Band, local_index};
+use crate::recon::brick_values::BrickValues;
 use crate::recon::triangulation::triangulate;
 use glam::{IVec3, Vec3};
 
-fn random_field(n: i32, seed: u64) -> (Band, Vec<[f32; BRICK_VERTICES]>) {
+fn random_field(n: i32, seed: u64) -> (Band, BrickValues) {
     let cell = 0.1;
     // Vertices 0..=n on each axis; the half-cell margin keeps rounding off the box's edge.
     let band = Band::full(
@@ -23,7 +24,7 @@ fn random_field(n: i32, seed: u64) -> (Band, Vec<[f32; BRICK_VERTICES]>) {
             .wrapping_add(1_442_695_040_888_963_407);
         (state >> 40) as f32 / (1u64 << 24) as f32 - 0.5
     };
-    let mut values = vec![[f32::NAN; BRICK_VERTICES]; band.bricks.len()];
+    let mut dense = vec![[f32::NAN; BRICK_VERTICES]; band.bricks.len()];
     for (b, &brick) in band.bricks.iter().enumerate() {
         for i in 0..BRICK_VERTICES as i32 {
             let l = IVec3::new(i % BRICK, i / BRICK % BRICK, i / (BRICK * BRICK));
@@ -32,9 +33,10 @@ fn random_field(n: i32, seed: u64) -> (Band, Vec<[f32; BRICK_VERTICES]>) {
                 continue;
             }
             let border = v.min_element() == 0 || v.max_element() == n;
-            values[b][local_index(l)] = if border { 1.0 } else { next() };
+            dense[b][local_index(l)] = if border { 1.0 } else { next() };
         }
     }
+    let values = BrickValues::sample(&band, || (), |_, b| dense[b]).unwrap();
     (band, values)
 }
 

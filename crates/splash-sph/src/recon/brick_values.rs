@@ -1,0 +1,136 @@
+//! The field values of the band (Sec. 4.1), packed: each brick keeps one value per surface
+//! vertex of its mask, in mask bit order, instead of all 8³. An isolated droplet's band fills
+//! a small part of the bricks it touches, and a dense brick array made its memory grow with
+//! the bricks (2 KiB each), not with its vertices.
+
+use rayon::prelude::*;
+
+use super::band::{BRICK, BRICK_VERTICES, Band};
+use super::budget;
+use crate::error::Result;
+
+/// Field values of a band's surface vertices; NaN where a vertex is not in the band.
+#[derive(Debug, Default)]
+pub struct BrickValues {
+    /// Where each brick's values start in `values`; one more entry than bricks.
+    starts: Vec<usize>,
+    values: Vec<f32>,
+}
+
+impl BrickValues {
+    /// Values per brick of `band`, each given as all 8³ vertices (those outside the mask are
+    /// dropped) by `dense(state, brick index)`, in parallel with one `init()` state per task.
+    pub fn sample<S>(
+        band: &Band,
+        init: impl Fn() -> S + Sync + Send,
+        dense: impl Fn(&mut S, usize) -> [f32; BRICK_VERTICES] + Sync + Send,
+    ) -> Result<BrickValues> {
+        let what = || format!("the field values of {} bricks", band.bricks.len());
+        let mut starts = budget::try_vec(band.bricks.len() + 1, what)?;
+        let mut total = 0usize;
+        starts.push(0);
+        for mask in &band.masks {
+            total += mask.iter().map(|w| w.count_ones() as usize).sum::<usize>();
+            starts.push(total);
+        }
+        let mut values = budget::try_filled(total, 0.0f32, || {
+            format!("the field values of {total} band vertices")
+        })?;
+        let mut slices: Vec<&mut [f32]> = budget::try_vec(band.bricks.len(), what)?;
+        let mut rest = values.as_mut_slice();
+        for w in starts.windows(2) {
+            let (head, tail) = rest.split_at_mut(w[1] - w[0]);
+            slices.push(head);
+            rest = tail;
+        }
+        slices
+            .into_par_iter()
+            .enumerate()
+            .for_each_init(init, |state, (b, out)| {
+                pack(&band.masks[b], &dense(state, b), out);
+            });
+        Ok(BrickValues { starts, values })
+    }
+
+    /// The value of vertex `local` of brick `b`, whose mask is `mask`; NaN outside the band.
+    #[cfg(test)]
+    pub fn get(&self, mask: &[u64; 8], b: usize, local: usize) -> f32 {
+        let (w, bit) = (local / 64, local % 64);
+        if mask[w] >> bit & 1 == 0 {
+            return f32::NAN;
+        }
+        let before: u32 = mask[..w].iter().map(|m| m.count_ones()).sum();
+        let rank = before + (mask[w] & ((1u64 << bit) - 1)).count_ones();
+        self.values[self.starts[b] + rank as usize]
+    }
+
+    /// Brick `b`'s values in word `z` of its mask `mask` (the plane of local z), by bit.
+    #[inline]
+    pub fn plane(&self, mask: &[u64; 8], b: usize, z: usize) -> &[f32] {
+        let before: usize = mask[..z].iter().map(|m| m.count_ones() as usize).sum();
+        let start = self.starts[b] + before;
+        &self.values[start..start + mask[z].count_ones() as usize]
+    }
+
+    /// For each brick, the lowest local coordinate on each axis of its inside (negative)
+    /// vertices, [`BRICK`] where it has none.
+    pub fn inside_lows(&self, band: &Band) -> Vec<[u8; 3]> {
+        band.masks
+            .par_iter()
+            .enumerate()
+            .map(|(b, mask)| {
+                let mut low = [BRICK as u8; 3];
+                let mut k = self.starts[b];
+                for (z, &word) in mask.iter().enumerate() {
+                    let mut bits = word;
+                    while bits != 0 {
+                        let bit = bits.trailing_zeros() as u8;
+                        if self.values[k] < 0.0 {
+                            let l = [bit % 8, bit / 8, z as u8];
+                            for (a, c) in low.iter_mut().zip(l) {
+                                *a = (*a).min(c);
+                            }
+                        }
+                        k += 1;
+                        bits &= bits - 1;
+                    }
+                }
+                low
+            })
+            .collect()
+    }
+
+    /// All 8³ values of brick `b` (mask `mask`), NaN outside the band.
+    pub fn dense(&self, mask: &[u64; 8], b: usize) -> [f32; BRICK_VERTICES] {
+        let mut out = [f32::NAN; BRICK_VERTICES];
+        let mut k = self.starts[b];
+        for (z, &word) in mask.iter().enumerate() {
+            let mut bits = word;
+            while bits != 0 {
+                let bit = bits.trailing_zeros() as usize;
+                out[64 * z + bit] = self.values[k];
+                k += 1;
+                bits &= bits - 1;
+            }
+        }
+        out
+    }
+
+    pub fn heap_bytes(&self) -> usize {
+        self.starts.capacity() * size_of::<usize>() + self.values.capacity() * size_of::<f32>()
+    }
+}
+
+/// Writes the values of `dense` whose bits `mask` sets into `out`, in bit order.
+fn pack(mask: &[u64; 8], dense: &[f32; BRICK_VERTICES], out: &mut [f32]) {
+    let mut k = 0;
+    for (z, &word) in mask.iter().enumerate() {
+        let mut bits = word;
+        while bits != 0 {
+            let bit = bits.trailing_zeros() as usize;
+            out[k] = dense[64 * z + bit];
+            k += 1;
+            bits &= bits - 1;
+        }
+    }
+}
