@@ -15,7 +15,6 @@ pub(crate) mod surface_following;
 mod trimming;
 pub(crate) mod virtual_grid;
 
-
 use std::collections::BTreeMap;
 use std::time::Instant;
 
@@ -104,7 +103,7 @@ pub fn extract(
         timings.grid_construction = start.elapsed();
 
         let start = Instant::now();
-        let seeds = seed_cells::seed_cells(&it, &grid, level);
+        let seeds = seed_cells::seed_cells(&it, &grid, level, iso.seed_reach);
         stats.seed_cells = seeds.len();
         timings.seed_cells = start.elapsed();
 

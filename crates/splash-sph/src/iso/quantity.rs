@@ -129,7 +129,10 @@ pub(crate) fn interpolant(
     let supports: Vec<f32> = match lookup(attributes, "h") {
         Some(Attribute::Scalar(h)) if h.len() == n => {
             if let Some(i) = h.iter().position(|h| !(h.is_finite() && *h > 0.0)) {
-                bail_input!("particle {i} has a smoothing length h = {} (not positive)", h[i]);
+                bail_input!(
+                    "particle {i} has a smoothing length h = {} (not positive)",
+                    h[i]
+                );
             }
             h.iter().map(|h| 2.0 * h * scale).collect()
         }
@@ -163,7 +166,8 @@ pub(crate) fn interpolant(
     if let Some(v) = volumes {
         columns.push(v);
     }
-    let mut handlers = HandlerArray::with_channels(positions, max_support.max(f32::MIN_POSITIVE), columns)?;
+    let mut handlers =
+        HandlerArray::with_channels(positions, max_support.max(f32::MIN_POSITIVE), columns)?;
     if !volume_given {
         // 1/(σ Σ_j W_ij) with one support: the density field's volumes (m = ρ₀ r³ cancels).
         let v = particle_volumes(&handlers, support * scale);
@@ -171,7 +175,12 @@ pub(crate) fn interpolant(
     }
     let volume = handlers.channels.len() - 1;
     let mut extra_channels = Vec::with_capacity(extra_widths.len());
-    let mut next = raw + if matches!(quantity, Attribute::Vector(_)) { 3 } else { 1 };
+    let mut next = raw
+        + if matches!(quantity, Attribute::Vector(_)) {
+            3
+        } else {
+            1
+        };
     for w in extra_widths {
         extra_channels.push((next, w));
         next += w;
@@ -208,7 +217,10 @@ fn magnitude(c: &[Vec<f32>]) -> Vec<f32> {
 /// surface.
 fn vorticity(it: &Interpolant, first: usize) -> Vec<f32> {
     let h = &it.handlers;
-    let (v, vol) = (&h.channels[first..first + 3], &h.channels[it.channels.volume]);
+    let (v, vol) = (
+        &h.channels[first..first + 3],
+        &h.channels[it.channels.volume],
+    );
     let vel = |j: usize| DVec3::new(v[0][j].into(), v[1][j].into(), v[2][j].into());
     (0..h.positions.len())
         .into_par_iter()

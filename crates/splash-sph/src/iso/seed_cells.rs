@@ -1,4 +1,4 @@
-//! Seed cells (Sec. III-C): for every pair of particles within h of each other whose raw values
+//! Seed cells (Sec. III-C): for every pair of particles within a reach of each other whose raw values
 //! lie on both sides of the level, every virtual cell the segment between them passes through
 //! (a 3D grid walk, Amanatides & Woo). By the intermediate value theorem for the raw data, each
 //! connected component of the isosurface gets at least one seed.
@@ -10,7 +10,12 @@ use super::sph_interpolant::Interpolant;
 use super::virtual_grid::VirtualGrid;
 
 /// The seed cells of `level` in lexicographic (z, y, x) order, each once.
-pub(crate) fn seed_cells(it: &Interpolant, grid: &VirtualGrid, level: f64) -> Vec<IVec3> {
+pub(crate) fn seed_cells(
+    it: &Interpolant,
+    grid: &VirtualGrid,
+    level: f64,
+    reach: f32,
+) -> Vec<IVec3> {
     let h = &it.handlers;
     let values = &h.channels[it.channels.value];
     let supports = &h.channels[it.channels.support];
@@ -18,8 +23,8 @@ pub(crate) fn seed_cells(it: &Interpolant, grid: &VirtualGrid, level: f64) -> Ve
         .into_par_iter()
         .fold(Vec::new, |mut out, i| {
             let (p, above) = (h.positions[i], f64::from(values[i]) >= level);
-            // h = s/2; inclusive with a rounding margin, so lattice neighbours at exactly h pair.
-            let reach = 0.5 * supports[i] * (1.0 + 1e-4);
+            // Inclusive with a rounding margin, so lattice neighbours at exactly the reach pair.
+            let reach = reach * supports[i] * (1.0 + 1e-4);
             let c = h.cell_of(p);
             h.for_each_in_cells(c - IVec3::ONE, c + IVec3::ONE, |range| {
                 for j in range.filter(|&j| j > i) {
@@ -98,9 +103,12 @@ mod tests {
     fn the_walk_visits_face_neighbours_from_one_end_to_the_other() {
         let grid = VirtualGrid { cell: 0.1 };
         let mut cells = Vec::new();
-        walk(&grid, Vec3::new(0.05, 0.05, 0.05), Vec3::new(0.37, 0.22, -0.08), |c| {
-            cells.push(c)
-        });
+        walk(
+            &grid,
+            Vec3::new(0.05, 0.05, 0.05),
+            Vec3::new(0.37, 0.22, -0.08),
+            |c| cells.push(c),
+        );
         assert_eq!(cells[0], IVec3::ZERO);
         assert_eq!(*cells.last().unwrap(), IVec3::new(3, 2, -1));
         assert_eq!(cells.len(), 7);

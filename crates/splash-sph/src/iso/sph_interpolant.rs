@@ -119,7 +119,11 @@ impl Interpolant {
                 *s += vw * f64::from(ch[first + k][j]);
             }
         });
-        let norm = if self.shepard && weight > 0.0 { 1.0 / weight } else { 1.0 };
+        let norm = if self.shepard && weight > 0.0 {
+            1.0 / weight
+        } else {
+            1.0
+        };
         for (o, s) in out.iter_mut().zip(sums) {
             *o = (s * norm) as f32;
         }

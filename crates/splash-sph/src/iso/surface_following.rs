@@ -98,7 +98,11 @@ pub(crate) fn follow(
         cache.retain_up_to(z0 + 1);
         missing.clear();
         for &cell in &batch {
-            missing.extend((0..8).map(|c| corner(cell, c)).filter(|&n| cache.get(n).is_none()));
+            missing.extend(
+                (0..8)
+                    .map(|c| corner(cell, c))
+                    .filter(|&n| cache.get(n).is_none()),
+            );
         }
         missing.sort_unstable_by_key(|&n| key(n));
         missing.dedup();

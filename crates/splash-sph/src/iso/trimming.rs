@@ -28,7 +28,11 @@ pub(crate) fn trim(
 ) -> Trimmed {
     let mut out = Trimmed::default();
     let mut cut_of: FxHashMap<(u32, u32), u32> = FxHashMap::default();
-    let side = |v: u32| (weights[v as usize] - threshold).partial_cmp(&0.0).map_or(0, |o| o as i32);
+    let side = |v: u32| {
+        (weights[v as usize] - threshold)
+            .partial_cmp(&0.0)
+            .map_or(0, |o| o as i32)
+    };
     for &tri in triangles {
         let s = tri.map(side);
         let (below, above) = (
@@ -89,7 +93,10 @@ mod tests {
     fn cases_a_to_e_give_the_expected_triangles() {
         // (a) all at or above: kept as it is.
         let a = one([0.9, 0.5, 0.7]);
-        assert_eq!((a.triangles, a.cuts.len(), a.cases), (vec![[0, 1, 2]], 0, [1, 0, 0, 0, 0]));
+        assert_eq!(
+            (a.triangles, a.cuts.len(), a.cases),
+            (vec![[0, 1, 2]], 0, [1, 0, 0, 0, 0])
+        );
         // (b) all at or below: dropped.
         let b = one([0.2, 0.5, 0.3]);
         assert!(b.triangles.is_empty() && b.cuts.is_empty() && b.cases[1] == 1);

@@ -19,9 +19,12 @@ use crate::mesh::marching_cubes::corner_offset;
 /// Crossed cells of the full grid over the particles' box widened by the support.
 fn full_grid(it: &Interpolant, grid: &VirtualGrid, run: &Following) -> FxHashSet<IVec3> {
     let h = &it.handlers;
-    let (lo, hi) = h.positions.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(l, u), &p| {
-        (l.min(p), u.max(p))
-    });
+    let (lo, hi) = h
+        .positions
+        .iter()
+        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(l, u), &p| {
+            (l.min(p), u.max(p))
+        });
     let reach = h.cell_size();
     let to_cell = |x: Vec3| (x.as_dvec3() / grid.cell).floor().as_ivec3();
     let (a, b) = (to_cell(lo - reach) - 1, to_cell(hi + reach) + 1);
@@ -75,7 +78,14 @@ fn components(cells: &FxHashSet<IVec3>) -> usize {
         count += 1;
         let mut stack = vec![start];
         while let Some(c) = stack.pop() {
-            for d in [IVec3::X, IVec3::Y, IVec3::Z, -IVec3::X, -IVec3::Y, -IVec3::Z] {
+            for d in [
+                IVec3::X,
+                IVec3::Y,
+                IVec3::Z,
+                -IVec3::X,
+                -IVec3::Y,
+                -IVec3::Z,
+            ] {
                 let n = c + d;
                 if cells.contains(&n) && seen.insert(n) {
                     stack.push(n);
@@ -95,11 +105,23 @@ fn compare(
     support: f32,
     cell: f32,
     shepard: bool,
+    reach: f32,
 ) -> usize {
-    let it = interpolant(positions, &mut attributes, request, &[], support, 1.0, shepard).unwrap();
-    let (lo, hi) = positions.iter().fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(l, u), &p| {
-        (l.min(p), u.max(p))
-    });
+    let it = interpolant(
+        positions,
+        &mut attributes,
+        request,
+        &[],
+        support,
+        1.0,
+        shepard,
+    )
+    .unwrap();
+    let (lo, hi) = positions
+        .iter()
+        .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(l, u), &p| {
+            (l.min(p), u.max(p))
+        });
     let grid = VirtualGrid::new(cell, lo, hi, support).unwrap();
     let run = Following {
         level: f64::from(request.level),
@@ -107,15 +129,22 @@ fn compare(
         cache_slices: 3,
         max_cells: u64::MAX,
     };
-    let seeds = seed_cells(&it, &grid, run.level);
+    let seeds = seed_cells(&it, &grid, run.level, reach);
     let followed = follow(&it, &grid, &seeds, &run).unwrap();
     let found: FxHashSet<IVec3> = followed.cells.iter().map(|c| c.cell).collect();
     let brute = full_grid(&it, &grid, &run);
     let (nf, nb) = (components(&found), components(&brute));
     let missed = brute.difference(&found).count();
-    assert_eq!(nf, nb, "components: followed {nf}, full grid {nb}; {missed} cells missed");
+    assert_eq!(
+        nf, nb,
+        "components: followed {nf}, full grid {nb}; {missed} cells missed"
+    );
     assert_eq!(found, brute, "{missed} crossed cells missed");
-    assert!(followed.cache.hit_ratio() > 0.5, "{}", followed.cache.hit_ratio());
+    assert!(
+        followed.cache.hit_ratio() > 0.5,
+        "{}",
+        followed.cache.hit_ratio()
+    );
     nb
 }
 
@@ -142,7 +171,15 @@ fn random_data_every_component_is_found() {
             derived: Derived::Value,
             level: 0.0,
         };
-        let n = compare(&positions, attributes, &request, 2.0 * r, 0.5 * r, shepard);
+        let n = compare(
+            &positions,
+            attributes,
+            &request,
+            2.0 * r,
+            0.5 * r,
+            shepard,
+            1.0,
+        );
         assert!(n > 3, "{n} components");
     }
 }
@@ -160,7 +197,15 @@ fn real_frame_density_and_speed_every_component_is_found() {
             derived,
             level,
         };
-        let n = compare(&frame.positions, frame.attributes.clone(), &request, 2.0 * r, r, true);
+        let n = compare(
+            &frame.positions,
+            frame.attributes.clone(),
+            &request,
+            2.0 * r,
+            r,
+            true,
+            1.0,
+        );
         assert!(n >= 1, "{name}: {n} components");
     }
 }
