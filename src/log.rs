@@ -311,6 +311,11 @@ fn frame_json(outcome: &FrameOutcome) -> serde_json::Value {
     };
     if let (Some(line), serde_json::Value::Object(fields)) = (line.as_object_mut(), fields) {
         line.extend(fields);
+        if let Ok(stats) = &outcome.result
+            && let Some(iso) = &stats.iso
+        {
+            line.insert("iso".into(), json!(iso));
+        }
     }
     line
 }

@@ -199,6 +199,8 @@ pub struct FrameStats {
     pub timings: Timings,
     /// The slices engine's blocks (zeros for the other engines).
     pub slices: SlicesFigures,
+    /// The figures of an isosurface (`splash iso`) instead of a reconstruction's.
+    pub iso: Option<crate::iso::IsoStats>,
 }
 
 /// The Marching Slices engine's memory per block, as in Fig. 7 of Rosenberg & Birdwell 2008.
@@ -253,6 +255,16 @@ impl fmt::Display for FrameStats {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let ms = |d: Duration| d.as_secs_f64() * 1e3;
         let t = &self.timings;
+        if let Some(iso) = &self.iso {
+            return write!(
+                f,
+                "{} particles, {iso}; read {:.0} ms, write {:.0} ms; {:.1} MB peak RSS",
+                self.particles,
+                ms(t.read),
+                ms(t.write),
+                self.peak_rss as f64 / 1e6
+            );
+        }
         write!(
             f,
             "{} particles ({} surface{}), {} surface vertices, {} triangles; \
