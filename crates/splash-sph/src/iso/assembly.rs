@@ -81,7 +81,7 @@ fn project(it: &Interpolant, mut x: Vec3, level: f64, iterations: u32) -> Vec3 {
     for _ in 0..iterations {
         let s = it.sample(x, it.channels.value);
         let g2 = s.gradient.length_squared();
-        if !(g2 > 0.0) || s.value == level {
+        if g2.is_nan() || g2 <= 0.0 || s.value == level {
             break;
         }
         x -= (s.gradient * ((s.value - level) / g2)).as_vec3();

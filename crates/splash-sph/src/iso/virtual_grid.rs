@@ -20,7 +20,7 @@ impl VirtualGrid {
     pub fn new(cell: f32, lo: Vec3, hi: Vec3, reach: f32) -> Result<VirtualGrid> {
         let cell = f64::from(cell);
         let far = (lo.abs().max(hi.abs()).max_element() + reach) as f64 / cell;
-        if !(far < MAX_INDEX) {
+        if far.is_nan() || far >= MAX_INDEX {
             bail_limit!(
                 "the particles reach {} from the origin, {far:.3e} virtual cells of {}; at most \
                  {MAX_INDEX:.0} fit (a particle far from the fluid?)",
