@@ -8,6 +8,7 @@ use std::time::Instant;
 use anyhow::{Context, Result, anyhow, bail};
 
 use splash_sph::io::{self, VertexAttributes};
+use splash_sph::iso::{self, IsoRequest};
 use splash_sph::{
     Attribute, Config, FrameStats, InputFormat, MeshFormat, Particles, Reconstructor, TriMesh,
     attribute_names, estimate_spacing, read_particles,
@@ -128,6 +129,8 @@ pub struct Batch {
     pub skip_existing: bool,
     /// Stops at the first failing frame instead of going on with the others.
     pub fail_fast: bool,
+    /// An isosurface of a particle quantity per frame (`splash iso`) instead of the surface.
+    pub iso: Option<IsoRequest>,
 }
 
 /// What happened to one frame: its figures `S` (recon's [`FrameStats`], preview's) or error.
@@ -341,6 +344,15 @@ impl Batch {
             positions: particles,
             attributes,
         } = frame;
+        if let Some(request) = &self.iso {
+            let read = start.elapsed();
+            let mut stats = self.iso_frame(
+                input, output, request, particles, attributes, spacing, progress,
+            )?;
+            stats.timings.read = read;
+            stats.particles_outside_box = outside_box;
+            return Ok(stats);
+        }
         let wanted = particle_attributes(input, attributes, &self.config.output.attributes)?;
         let read = start.elapsed();
         if particles.is_empty() {
@@ -423,6 +435,72 @@ impl Batch {
         let mut stats = rec.stats;
         stats.particles_outside_box = outside_box;
         stats.timings.read = read;
+        stats.timings.write = start.elapsed();
+        Ok(stats)
+    }
+}
+
+impl Batch {
+    /// One frame's isosurface, written with its extra attributes.
+    #[allow(clippy::too_many_arguments)]
+    fn iso_frame(
+        &self,
+        input: &Path,
+        output: &Path,
+        request: &IsoRequest,
+        particles: Vec<splash_sph::Vec3>,
+        attributes: BTreeMap<String, Attribute>,
+        spacing: &mut Option<f32>,
+        progress: &mut dyn Progress,
+    ) -> Result<FrameStats> {
+        let r = match *spacing {
+            Some(r) => r,
+            None if particles.is_empty() => 1.0,
+            None => {
+                let r = estimate_spacing(&particles).ok_or_else(|| {
+                    anyhow!(
+                        "cannot estimate the particle spacing from {} particles; give --spacing",
+                        particles.len()
+                    )
+                })?;
+                progress.spacing_estimated(input, r);
+                *spacing = Some(r);
+                r
+            }
+        };
+        let config = Config {
+            spacing: Some(r),
+            // The CLI runs in its global pool, sized by the same setting.
+            threads: None,
+            ..self.config.clone()
+        };
+        let surface = iso::extract(&particles, attributes, request, &config)
+            .with_context(|| format!("'{}'", input.display()))?;
+        let (mut mesh, mut named) = (surface.mesh, surface.attributes);
+        let start = Instant::now();
+        if let Some(axis) = self.config.output.up_axis {
+            axis.rotate(&mut mesh.vertices);
+            axis.rotate(&mut mesh.normals);
+            for (_, a) in &mut named {
+                if let Attribute::Vector(v) = a {
+                    axis.rotate(v);
+                }
+            }
+        }
+        let attributes = VertexAttributes {
+            named: &named,
+            ..Default::default()
+        };
+        io::write_mesh_file_with(output, &mesh, &attributes, self.format)?;
+        let mut stats = FrameStats {
+            spacing: r,
+            cell: surface.stats.cell,
+            particles: particles.len(),
+            triangles: mesh.triangles.len(),
+            vertices: mesh.vertices.len(),
+            iso: Some(surface.stats),
+            ..FrameStats::default()
+        };
         stats.timings.write = start.elapsed();
         Ok(stats)
     }

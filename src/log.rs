@@ -122,6 +122,9 @@ impl FrameFigures for FrameStats {
             "particles_outside_box".into(),
             self.particles_outside_box.into(),
         );
+        if let Some(iso) = &self.iso {
+            fields.insert("iso".into(), json!(iso));
+        }
         fields
     }
 }

@@ -19,6 +19,7 @@ const ALIASES: &[(&str, &[&str])] = &[
     ("density", &["density", "densities", "rho", "dens"]),
     ("pressure", &["pressure", "pressures"]),
     ("mass", &["mass", "masses"]),
+    ("h", &["h", "smoothing_length", "hsml"]),
     ("id", &["id", "ids", "particle_id", "pid"]),
 ];
 

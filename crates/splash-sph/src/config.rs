@@ -50,6 +50,8 @@ pub struct Config {
     pub field: FieldConfig,
     /// How meshes are written.
     pub output: OutputConfig,
+    /// Isosurfaces of particle quantities (`splash iso`, Marching Correctors).
+    pub iso: crate::iso::IsoConfig,
     /// `[min x, min y, min z, max x, max y, max z]`: particles outside this box (bounds
     /// included in it) are dropped before the reconstruction, with their attributes. All are
     /// kept when absent.
@@ -274,6 +276,7 @@ impl Default for Config {
             threads: None,
             max_memory: None,
             output: OutputConfig::default(),
+            iso: crate::iso::IsoConfig::default(),
             particle_aabb: None,
         }
     }
@@ -399,6 +402,7 @@ impl Config {
             );
         }
         self.field.validate()?;
+        self.iso.validate()?;
         Ok(())
     }
 

@@ -40,6 +40,7 @@ mod spacing;
 pub mod bytes;
 pub mod field;
 pub mod io;
+pub mod iso;
 pub mod mesh;
 pub mod preview;
 mod recon;

@@ -201,6 +201,8 @@ pub struct FrameStats {
     pub slices: SlicesFigures,
     /// The vertex correction of `correct` (zeros when it is off).
     pub correction: CorrectionFigures,
+    /// The figures of an isosurface (`splash iso`) instead of a reconstruction's.
+    pub iso: Option<crate::iso::IsoStats>,
 }
 
 /// What the correction step (Marching Correctors, Sec. III-E) did to the mesh's vertices:
@@ -300,6 +302,16 @@ impl fmt::Display for FrameStats {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         let ms = |d: Duration| d.as_secs_f64() * 1e3;
         let t = &self.timings;
+        if let Some(iso) = &self.iso {
+            return write!(
+                f,
+                "{} particles, {iso}; read {:.0} ms, write {:.0} ms; {:.1} MB peak RSS",
+                self.particles,
+                ms(t.read),
+                ms(t.write),
+                self.peak_rss as f64 / 1e6
+            );
+        }
         write!(
             f,
             "{} particles ({} surface{}), {} surface vertices, {} triangles; \

@@ -8,6 +8,8 @@ mod engines;
 mod field;
 mod fields;
 mod gradients;
+mod iso;
+mod iso_components;
 mod marching_cubes;
 mod reconstruction;
 mod slices;

@@ -1,0 +1,198 @@
+//! Marching Correctors (Rosenthal, Linsen et al.): isosurfaces of any SPH quantity, exact with
+//! respect to the SPH interpolant. A virtual grid whose cells are materialised only as seeds or
+//! when the surface crosses them, seeds from particle pairs, surface following with a slice
+//! cache, Newton correction of every vertex along its edge, trimming at free boundaries by the
+//! sum of weights, and normals from the SPH gradient.
+
+mod assembly;
+pub(crate) mod quantity;
+pub(crate) mod seed_cells;
+mod settings;
+mod slice_cache;
+pub(crate) mod sph_interpolant;
+mod stats;
+pub(crate) mod surface_following;
+mod trimming;
+pub(crate) mod virtual_grid;
+
+use std::collections::BTreeMap;
+use std::time::Instant;
+
+use glam::Vec3;
+
+use crate::config::Config;
+use crate::error::{Error, Result};
+use crate::io::Attribute;
+use crate::mesh::TriMesh;
+
+pub use quantity::{Derived, IsoRequest};
+pub use settings::IsoConfig;
+pub use stats::{CORRECTION_BINS, CorrectionStats, IsoStats, IsoTimings};
+
+/// An isosurface: its mesh (normals from ∇A, pointing to larger A), the extra attributes
+/// interpolated onto its vertices (named as `config.output.attributes`), and its figures.
+#[derive(Debug, Clone)]
+pub struct Isosurface {
+    /// The triangles, wound counter-clockwise seen from the side where A is above the level.
+    pub mesh: TriMesh,
+    /// `config.output.attributes`, one value per vertex each.
+    pub attributes: Vec<(String, Attribute)>,
+    /// Counts and times.
+    pub stats: IsoStats,
+}
+
+/// The isosurface `request` of the particles at `positions` with per-particle `attributes`
+/// (every column of the frame, by name), as `config` says: the spacing (required), the virtual
+/// cell `cell`, `[iso]`, `threads` and the extra attributes of `output.attributes`.
+pub fn extract(
+    positions: &[Vec3],
+    mut attributes: BTreeMap<String, Attribute>,
+    request: &IsoRequest,
+    config: &Config,
+) -> Result<Isosurface> {
+    config.validate()?;
+    let Some(r) = config.spacing else {
+        return Err(Error::config("the isosurface needs the particle spacing"));
+    };
+    if !request.level.is_finite() {
+        bail_config!("the level must be a finite number, got {}", request.level);
+    }
+    let iso = &config.iso;
+    let pool = crate::reconstructor::worker_pool(config.threads)?;
+    let mut run = move || -> Result<Isosurface> {
+        let level = f64::from(request.level);
+        let start = Instant::now();
+        let mut timings = IsoTimings::default();
+        let it = quantity::interpolant(
+            positions,
+            &mut attributes,
+            request,
+            &config.output.attributes,
+            iso.support.resolve(r),
+            iso.kernel_scale,
+            iso.shepard,
+        )?;
+        let cell = config.cell.resolve(r);
+        let mut stats = IsoStats {
+            level,
+            cell,
+            ..IsoStats::default()
+        };
+        let mut mesh = TriMesh::default();
+        let names = config.output.attributes.clone();
+        let empty = |stats| Isosurface {
+            mesh: TriMesh::default(),
+            attributes: names
+                .iter()
+                .map(|n| (n.clone(), Attribute::Scalar(Vec::new())))
+                .collect(),
+            stats,
+        };
+        if positions.is_empty() {
+            return Ok(empty(stats));
+        }
+        let (lo, hi) = positions
+            .iter()
+            .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), &p| {
+                (lo.min(p), hi.max(p))
+            });
+        let reach = it.handlers.cell_size();
+        let grid = virtual_grid::VirtualGrid::new(cell, lo, hi, reach)?;
+        let extent = ((hi - lo + 2.0 * reach) / cell).ceil().as_dvec3();
+        stats.virtual_cells = (extent.x * extent.y * extent.z).min(u64::MAX as f64) as u64;
+        timings.grid_construction = start.elapsed();
+
+        let start = Instant::now();
+        let seeds = seed_cells::seed_cells(&it, &grid, level, iso.seed_reach);
+        stats.seed_cells = seeds.len();
+        timings.seed_cells = start.elapsed();
+
+        let start = Instant::now();
+        let followed = surface_following::follow(
+            &it,
+            &grid,
+            &seeds,
+            &surface_following::Following {
+                level,
+                node_threshold: f64::from(iso.node_threshold),
+                cache_slices: iso.cache_slices,
+                max_cells: iso.max_cells,
+            },
+        )?;
+        drop(seeds);
+        stats.visited_cells = followed.visited;
+        stats.crossed_cells = followed.cells.len();
+        stats.discarded_cells = followed.discarded;
+        stats.node_lookups = followed.cache.lookups;
+        stats.node_evaluations = followed.cache.evaluations;
+        stats.cache_hit_ratio = followed.cache.hit_ratio();
+        stats.cache_peak_nodes = followed.cache.peak_nodes;
+        let tri = assembly::triangulate(&followed.cells, &grid);
+        drop(followed);
+        stats.untrimmed_triangles = tri.triangles.len();
+        timings.surface_extraction = start.elapsed();
+
+        let start = Instant::now();
+        let (vertices, correction) = assembly::place(&it, &tri.edges, level, iso.correct);
+        stats.correction = correction;
+        timings.correction = start.elapsed();
+
+        let start = Instant::now();
+        let done = assembly::finish(
+            &it,
+            vertices,
+            &tri.triangles,
+            level,
+            iso.correct,
+            f64::from(iso.vertex_threshold),
+        );
+        stats.trim_cases = done.trim_cases;
+        mesh.vertices = done.vertices;
+        mesh.normals = done.normals;
+        mesh.triangles = done.triangles;
+        stats.vertices = mesh.vertices.len();
+        stats.triangles = mesh.triangles.len();
+        let attributes = split_extras(&names, &it.channels.extras, &done.extras);
+        timings.finishing = start.elapsed();
+        stats.timings = timings;
+        Ok(Isosurface {
+            mesh,
+            attributes,
+            stats,
+        })
+    };
+    match pool {
+        Some(pool) => pool.install(run),
+        None => run(),
+    }
+}
+
+/// The per-vertex rows of interpolated extras split into one attribute per name.
+fn split_extras(
+    names: &[String],
+    widths: &[(usize, usize)],
+    rows: &[f32],
+) -> Vec<(String, Attribute)> {
+    let total: usize = widths.iter().map(|w| w.1).sum();
+    let mut offset = 0;
+    names
+        .iter()
+        .zip(widths)
+        .map(|(name, &(_, w))| {
+            let column = |c: usize| rows.iter().skip(offset + c).step_by(total.max(1)).copied();
+            let a = if w == 1 {
+                Attribute::Scalar(column(0).collect())
+            } else {
+                Attribute::Vector(
+                    column(0)
+                        .zip(column(1))
+                        .zip(column(2))
+                        .map(|((x, y), z)| Vec3::new(x, y, z))
+                        .collect(),
+                )
+            };
+            offset += w;
+            (name.clone(), a)
+        })
+        .collect()
+}
