@@ -38,10 +38,11 @@ impl CrossedEdge {
     /// at a point. The directional derivative along the edge drives each step; a step that
     /// leaves the bracket known to hold the root (initially the whole edge, narrowed with every
     /// evaluation) or meets a flat derivative falls back to false position on the bracket
-    /// (Illinois variant), else bisection, so the result never leaves the edge and never moves
+    /// (Illinois variant) where that cuts at least a tenth off either end, else bisection, so the result never leaves the edge and never moves
     /// away from a root the corners bracket. False position rather than bisection: on an edge
     /// nearly tangent to the surface Newton overshoots, and three bisections left vertices of a
-    /// sphere up to 2 % of its radius off (false position: 1e-7).
+    /// sphere up to 2 % of its radius off (false position: 1e-7); bisection where false
+    /// position would crawl along one end (the steep blobby field at cell r).
     pub fn correct(
         &self,
         level: f32,
@@ -87,7 +88,8 @@ impl CrossedEdge {
             let secant = lo + (hi - lo) * r_lo / (r_lo - r_hi);
             t = if slope.is_finite() && slope != 0.0 && inside(newton) {
                 newton
-            } else if inside(secant) {
+            } else if inside(secant) && (secant - lo).min(hi - secant) > 0.1 * (hi - lo) {
+                // False position, unless it would crawl along one end of the bracket.
                 secant
             } else {
                 0.5 * (lo + hi)
