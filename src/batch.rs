@@ -419,13 +419,7 @@ impl Batch {
         drop(particles);
         let start = Instant::now();
         if let Some(axis) = self.config.output.up_axis {
-            axis.rotate(&mut mesh.vertices);
-            axis.rotate(&mut mesh.normals);
-            for (_, a) in &mut vertex_attributes {
-                if let Attribute::Vector(v) = a {
-                    axis.rotate(v);
-                }
-            }
+            axis.rotate_mesh(&mut mesh, &mut vertex_attributes);
         }
         let attributes = VertexAttributes {
             named: &vertex_attributes,
@@ -479,13 +473,7 @@ impl Batch {
         let (mut mesh, mut named) = (surface.mesh, surface.attributes);
         let start = Instant::now();
         if let Some(axis) = self.config.output.up_axis {
-            axis.rotate(&mut mesh.vertices);
-            axis.rotate(&mut mesh.normals);
-            for (_, a) in &mut named {
-                if let Attribute::Vector(v) = a {
-                    axis.rotate(v);
-                }
-            }
+            axis.rotate_mesh(&mut mesh, &mut named);
         }
         let attributes = VertexAttributes {
             named: &named,

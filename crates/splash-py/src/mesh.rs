@@ -143,13 +143,7 @@ impl Mesh {
         }
         py.detach(|| {
             if let Some(axis) = up_axis {
-                axis.rotate(&mut mesh.vertices);
-                axis.rotate(&mut mesh.normals);
-                for (_, a) in &mut named {
-                    if let Attribute::Vector(v) = a {
-                        axis.rotate(v);
-                    }
-                }
+                axis.rotate_mesh(&mut mesh, &mut named);
             }
             let attributes = VertexAttributes {
                 named: &named,

@@ -487,6 +487,17 @@ impl UpAxis {
             };
         }
     }
+
+    /// Rotates a mesh's vertices and normals and the vector attributes of its vertices.
+    pub fn rotate_mesh(self, mesh: &mut TriMesh, attributes: &mut [(String, Attribute)]) {
+        self.rotate(&mut mesh.vertices);
+        self.rotate(&mut mesh.normals);
+        for (_, a) in attributes {
+            if let Attribute::Vector(v) = a {
+                self.rotate(v);
+            }
+        }
+    }
 }
 
 /// Rejects meshes that would make a corrupt file rather than writing them.
