@@ -487,6 +487,7 @@ impl Batch {
             triangles: mesh.triangles.len(),
             vertices: mesh.vertices.len(),
             iso: Some(surface.stats),
+            peak_rss: crate::memory::peak_rss().unwrap_or(0),
             ..FrameStats::default()
         };
         stats.timings.write = start.elapsed();
