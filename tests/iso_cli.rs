@@ -204,3 +204,32 @@ fn json_log_has_the_iso_figures_and_threads_do_not_change_the_mesh() {
         "1 and 2 threads wrote different files"
     );
 }
+
+/// `--correct=0` keeps Marching Cubes' vertices (no correction figures), `--correct=1` moves
+/// them: the flag reaches iso's Newton steps, not recon's field correction it shares a name with.
+#[test]
+fn correct_sets_the_newton_steps() {
+    let dir = TempDir::new("iso-correct");
+    let mut shifts = Vec::new();
+    for steps in ["--correct=0", "--correct=1", "--correct"] {
+        let out = dir.path("c.ply");
+        let args = [
+            "--attribute",
+            "density",
+            "--level",
+            "1000",
+            steps,
+            "--log-format",
+            "json",
+            "-o",
+            out.to_str().unwrap(),
+        ];
+        let run = iso(&[&args[..], &FAST].concat()).ok();
+        let frame = &run.events("frame")[0];
+        let figures = common::Event(frame.get("iso").to_owned());
+        let correction = common::Event(figures.get("correction").to_owned());
+        shifts.push(correction.get("mean").parse::<f64>().unwrap());
+    }
+    assert_eq!(shifts[0], 0.0, "{shifts:?}");
+    assert!(shifts[1] > 0.0 && shifts[2] > 0.0, "{shifts:?}");
+}
