@@ -85,3 +85,13 @@ def test_bad_arguments():
         splash_sph.iso(positions, np.zeros(4), 1.0)
     with pytest.raises(ValueError, match="correct"):
         splash_sph.iso(positions, np.zeros(4), 1.0, spacing=0.1, correct=-1)
+
+
+def test_vorticity_kernel_scale_and_correct_equal_the_cli(frame, splash_bin, tmp_path):
+    cli_iso(splash_bin, tmp_path / "y.ply", "--attribute", "velocity", "--vorticity",
+            "--level", "20", "--kernel-scale", "0.75", "--correct=0")
+    mesh = splash_sph.iso(frame, "velocity", 20.0, vorticity=True, spacing=FRAME_SPACING,
+                          cell="r", kernel_scale=0.75, correct=0)
+    assert mesh.faces.shape[0] > 100 and mesh.report["correction"]["mean"] == 0.0
+    mesh.write(tmp_path / "x.ply")
+    assert (tmp_path / "x.ply").read_bytes() == (tmp_path / "y.ply").read_bytes()

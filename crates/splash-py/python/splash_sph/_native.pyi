@@ -195,7 +195,8 @@ def iso(
     Marching Cubes vertices). ``shepard``: normalise by the sum of weights (plain SPH by
     default). ``kernel_scale``: multiplies every particle's kernel support.
     ``attributes``: names of the particles' attributes to interpolate onto the vertices
-    (with a ``Particles`` only); they come back in ``Mesh.attributes``. ``threads``: worker
+    (with a ``Particles`` only), with the quantity's sums (plain SPH unless ``shepard``,
+    which makes them kernel-weighted means); they come back in ``Mesh.attributes``. ``threads``: worker
     threads (all cores by default; the mesh does not depend on it). ``config``: a TOML
     file's path or a dict as for ``reconstruct``; its ``[iso]`` table holds the thresholds,
     and the keyword arguments override it.
