@@ -240,6 +240,9 @@ seed cells, cells used, cache hit ratio, correction sizes and stage times. Examp
   splash iso 'frames/*.ply' --attribute pressure --level 3000 --spacing 0.014 -o iso/
   splash iso frame.vtk --attribute velocity --magnitude --level 2.5 --attributes density -o v.ply
   splash iso frame.ply --attribute velocity --vorticity --level 20 -o w.ply")]
+#[command(mut_arg("correct", |a| a.help("Newton steps per vertex along its cube edge onto the \
+    interpolant's level (--correct alone: 3, the default; --correct=0: plain Marching Cubes \
+    vertices)")))]
 struct Iso {
     #[command(flatten)]
     base: Recon,
@@ -259,11 +262,6 @@ struct Iso {
     /// Isosurface of the vorticity magnitude |curl v| of a velocity attribute (SPH curl).
     #[arg(long)]
     vorticity: bool,
-
-    /// Newton steps per vertex along its cube edge (--correct alone: 3, the default;
-    /// --correct=0: plain Marching Cubes vertices).
-    #[arg(long, value_name = "N", num_args = 0..=1, require_equals = true, default_missing_value = "3")]
-    correct: Option<u32>,
 
     /// Shepard-normalised interpolation (plain SPH by default, as in the paper).
     #[arg(long)]
@@ -309,19 +307,22 @@ fn show_config(args: &ConfigArgs) -> Result<ExitCode> {
     Ok(ExitCode::SUCCESS)
 }
 
-fn iso(args: Iso) -> Result<ExitCode> {
+fn iso(mut args: Iso) -> Result<ExitCode> {
     let derived = match (args.magnitude, args.vorticity) {
         (true, _) => splash_sph::iso::Derived::Magnitude,
         (_, true) => splash_sph::iso::Derived::Vorticity,
         _ => splash_sph::iso::Derived::Value,
     };
     let request = splash_sph::iso::IsoRequest {
-        attribute: args.attribute,
+        attribute: std::mem::take(&mut args.attribute),
         derived,
         level: args.level,
     };
+    // recon's --correct (flattened in) sets iso's Newton steps here, not the Marching Cubes
+    // field's.
+    let correct = args.base.params.correct.take();
     let mut config = args.base.params.resolve()?;
-    if let Some(n) = args.correct {
+    if let Some(n) = correct {
         config.iso.correct = n;
     }
     if args.shepard {

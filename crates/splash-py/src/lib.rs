@@ -4,6 +4,7 @@
 
 mod arrays;
 mod errors;
+mod iso;
 mod mesh;
 mod particles;
 mod pools;
@@ -79,6 +80,7 @@ fn config_toml<'py>(
 #[pyo3(name = "_native")]
 fn native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(recon::reconstruct, m)?)?;
+    m.add_function(wrap_pyfunction!(iso::iso, m)?)?;
     m.add_function(wrap_pyfunction!(preview::preview, m)?)?;
     m.add_function(wrap_pyfunction!(particles::read_particles, m)?)?;
     m.add_function(wrap_pyfunction!(estimate_spacing, m)?)?;

@@ -1,5 +1,6 @@
 //! `read_particles` and the `Particles` it returns.
 
+use std::collections::BTreeMap;
 use std::path::PathBuf;
 
 use numpy::{PyArray2, PyUntypedArrayMethods};
@@ -29,6 +30,25 @@ pub struct Particles {
     /// (N, 3) for vectors and (N,) for scalars, float32.
     #[pyo3(get)]
     attributes: Py<PyDict>,
+}
+
+impl Particles {
+    /// Positions and every attribute by name, as the library takes a frame (copied: the
+    /// arrays may have been edited or replaced since the file was read).
+    pub(crate) fn columns(
+        &self,
+        py: Python<'_>,
+    ) -> PyResult<(Vec<Vec3>, BTreeMap<String, Attribute>)> {
+        let positions = arrays::points(self.positions.bind(py).as_any(), "positions")?.into_vec();
+        let mut columns = BTreeMap::new();
+        for (name, values) in self.attributes.bind(py).iter() {
+            let name: String = name.extract()?;
+            let what = format!("attributes['{name}']");
+            let a = crate::iso::column(&values, &what, positions.len())?;
+            columns.insert(name, a);
+        }
+        Ok((positions, columns))
+    }
 }
 
 #[pymethods]

@@ -9,6 +9,7 @@ default), as the ``splash`` command line runs it, on numpy arrays::
     mesh = splash_sph.reconstruct(p.positions, spacing=0.014, cell="r/2")
     mesh.write("frame_0040.obj")
     back = splash_sph.read_mesh("frame_0040.obj")   # numpy arrays of a written mesh
+    rho = splash_sph.iso(p, "density", 1000.0, spacing=0.014)   # isosurface of a quantity
 
 Lengths are multiples of the particle spacing r (``"2r"``, ``"r"``, ``"r/2"``) or plain
 numbers in world units. Library errors raise OSError (files) or ValueError (data, settings)
@@ -21,6 +22,7 @@ from ._native import (
     config_toml,
     default_config,
     estimate_spacing,
+    iso,
     preview,
     read_particles,
     reconstruct,
@@ -34,6 +36,7 @@ __all__ = [
     "config_toml",
     "default_config",
     "estimate_spacing",
+    "iso",
     "preview",
     "read_particles",
     "read_mesh",

@@ -1,7 +1,7 @@
 """Type stubs of the native extension; the ``splash_sph`` package re-exports all of it."""
 
 import os
-from typing import Any, Dict, List, Mapping, Optional, Union
+from typing import Any, Dict, List, Mapping, Optional, Sequence, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -159,6 +159,57 @@ def reconstruct(
     parallel. Raises ValueError for a bad array, bad settings (naming the key or value),
     non-finite coordinates (naming the particle) or a grid over the memory limit; OSError
     when the config file cannot be read.
+    """
+
+def iso(
+    particles: Union[Particles, _Array],
+    attribute: Union[str, _Array],
+    level: float,
+    *,
+    spacing: Optional[float] = None,
+    magnitude: bool = False,
+    vorticity: bool = False,
+    cell: Union[str, float, None] = None,
+    correct: Optional[int] = None,
+    shepard: Optional[bool] = None,
+    kernel_scale: Optional[float] = None,
+    attributes: Optional[Sequence[str]] = None,
+    threads: Optional[int] = None,
+    config: Union[_Path, Mapping[str, Any], None] = None,
+) -> Mesh:
+    """The isosurface A = ``level`` of a particle quantity, exact with respect to the SPH
+    interpolant A(x) = sum_j (m_j/rho_j) A_j W(x - x_j, 2h_j) (Marching Correctors), as
+    ``splash iso`` computes it: the same settings give the same mesh.
+
+    ``particles``: a ``Particles`` (from ``read_particles``) with ``attribute`` the name of
+    one of its attributes (any spelling of the alias table: ``"v"`` finds ``velocity``,
+    ``vx vy vz`` make one vector); or an (N, 3) positions array with ``attribute`` an (N,)
+    or (N, 3) array of per-particle values. Volumes m/rho come from ``mass`` and ``density``
+    attributes when the particles have both, else from the particles as the density field
+    computes them.
+
+    ``magnitude``: the isosurface of |A| of a vector attribute; ``vorticity``: of |curl v| of
+    a velocity (SPH curl). ``spacing``: the particle spacing r (required unless the config
+    gives it). ``cell``: the virtual grid's cell (``"r/2"`` by default, ``"r"``, a number).
+    ``correct``: Newton steps per vertex along its cube edge (3 by default; 0 gives plain
+    Marching Cubes vertices). ``shepard``: normalise by the sum of weights (plain SPH by
+    default). ``kernel_scale``: multiplies every particle's kernel support.
+    ``attributes``: names of the particles' attributes to interpolate onto the vertices
+    (with a ``Particles`` only), with the quantity's sums (plain SPH unless ``shepard``,
+    which makes them kernel-weighted means); they come back in ``Mesh.attributes``. ``threads``: worker
+    threads (all cores by default; the mesh does not depend on it). ``config``: a TOML
+    file's path or a dict as for ``reconstruct``; its ``[iso]`` table holds the thresholds,
+    and the keyword arguments override it.
+
+    Normals are the SPH gradient, pointing towards larger A; triangles are trimmed where the
+    sum of weights falls, so surfaces are open at the free surface. ``Mesh.report`` holds
+    the JSON log's ``iso`` figures (``level``, ``cell``, ``seed_cells``, ``visited_cells``,
+    ``crossed_cells``, ``cache_hit_ratio``, ``vertices``, ``triangles``, ``correction``, ...)
+    with ``particles``, ``spacing`` and ``times`` in seconds.
+
+    Raises KeyError for an attribute the particles do not have (the message lists theirs),
+    ValueError for a vector without ``magnitude`` or ``vorticity``, a bad array or bad
+    settings, TypeError for an argument of the wrong kind.
     """
 
 def preview(

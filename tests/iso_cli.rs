@@ -1,0 +1,235 @@
+//! `splash iso` end to end on the bundled real frame: the mesh and its vertex attributes, the
+//! errors for an unknown attribute and for a vector without a scalar of it, the JSON log's `iso`
+//! figures, and the same bytes whatever the thread count.
+
+mod common;
+
+use std::fs;
+use std::path::Path;
+use std::process::Command;
+
+use common::{Run, TempDir, finish, fixture};
+use ply_rs_bw::parser::Parser;
+use ply_rs_bw::ply::{DefaultElement, Ply, Property};
+
+/// The fixture's spacing, and cells of r: a few hundred milliseconds per run.
+const FAST: [&str; 4] = ["--spacing", "0.014", "--cell", "r"];
+
+fn iso(args: &[&str]) -> Run {
+    let frame = fixture("frame_0040.ply");
+    let output = Command::new(env!("CARGO_BIN_EXE_splash"))
+        .arg("iso")
+        .arg(&frame)
+        .args(args)
+        .output()
+        .expect("cannot start splash");
+    finish(
+        format!("splash iso {} {}", frame.display(), args.join(" ")),
+        output,
+    )
+}
+
+fn read_ply(path: &Path) -> Ply<DefaultElement> {
+    let bytes = fs::read(path).unwrap();
+    Parser::<DefaultElement>::new()
+        .read_ply(&mut &bytes[..])
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+}
+
+fn float(e: &DefaultElement, name: &str) -> f32 {
+    match e.get(name) {
+        Some(Property::Float(v)) => *v,
+        other => panic!("vertex property {name}: {other:?}"),
+    }
+}
+
+#[test]
+fn density_isosurface_has_triangles_and_unit_normals() {
+    let dir = TempDir::new("iso-density");
+    let out = dir.path("out.ply");
+    let out_s = out.to_str().unwrap();
+    let args = [
+        "--attribute",
+        "density",
+        "--level",
+        "1000",
+        "--shepard",
+        "-o",
+        out_s,
+    ];
+    iso(&[&args[..], &FAST].concat()).ok();
+    let ply = read_ply(&out);
+    let vertices = &ply.payload["vertex"];
+    let faces = &ply.payload["face"];
+    assert!(
+        vertices.len() > 1000 && faces.len() > 1000,
+        "{} vertices, {} triangles",
+        vertices.len(),
+        faces.len()
+    );
+    for v in vertices {
+        let n = ["nx", "ny", "nz"].map(|c| float(v, c));
+        let length = n.iter().map(|c| c * c).sum::<f32>().sqrt();
+        assert!((length - 1.0).abs() < 1e-3, "normal {n:?}");
+    }
+    for f in faces {
+        let Property::ListInt(l) = &f["vertex_indices"] else {
+            panic!("{f:?}")
+        };
+        assert_eq!(l.len(), 3);
+        assert!(l.iter().all(|&i| (i as usize) < vertices.len()));
+    }
+}
+
+/// The fixture's range of densities.
+fn density_range() -> (f32, f32) {
+    let particles = read_ply(&fixture("frame_0040.ply"));
+    particles.payload["vertex"]
+        .iter()
+        .map(|p| float(p, "density"))
+        .fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), d| {
+            (lo.min(d), hi.max(d))
+        })
+}
+
+#[test]
+fn speed_isosurface_carries_interpolated_density() {
+    let dir = TempDir::new("iso-speed");
+    let (lo, hi) = density_range();
+    assert!(0.0 < lo && lo < hi, "densities from {lo} to {hi}");
+    for shepard in [false, true] {
+        let out = dir.path(&format!("v{shepard}.out"));
+        let out_s = out.to_str().unwrap();
+        let mut args = vec![
+            "--attribute",
+            "velocity",
+            "--magnitude",
+            "--level",
+            "1.0",
+            "--attributes",
+            "density",
+            "--format",
+            "ply",
+            "-o",
+            out_s,
+        ];
+        if shepard {
+            args.push("--shepard");
+        }
+        iso(&[&args[..], &FAST].concat()).ok();
+        let ply = read_ply(&out);
+        let vertices = &ply.payload["vertex"];
+        assert!(!vertices.is_empty() && !ply.payload["face"].is_empty());
+        for v in vertices {
+            let rho = float(v, "density");
+            // Plain SPH sums V W ρ_j, whose weights add up to about 1 inside the fluid and
+            // less at its surface; Shepard's mean stays within the particles' range.
+            let (min, max) = if shepard {
+                (lo * (1.0 - 1e-5), hi * (1.0 + 1e-5))
+            } else {
+                (0.0, 1.5 * hi)
+            };
+            assert!(
+                rho > min && rho <= max,
+                "shepard {shepard}: density {rho} outside {min}..{max}"
+            );
+        }
+    }
+}
+
+#[test]
+fn unknown_attribute_names_the_file_and_lists_the_frame_attributes() {
+    let dir = TempDir::new("iso-unknown");
+    let out = dir.path("x.ply");
+    let args = ["--attribute", "pressure", "--level", "1", "-o"];
+    iso(&[&args[..], &[out.to_str().unwrap()], &FAST].concat())
+        .failed()
+        .has("frame_0040.ply")
+        .has("no particle attribute 'pressure'")
+        .has("density, velocity");
+    assert!(dir.entries().is_empty(), "{:?}", dir.entries());
+}
+
+#[test]
+fn vector_without_magnitude_fails_clearly() {
+    let dir = TempDir::new("iso-vector");
+    let out = dir.path("x.ply");
+    let args = ["--attribute", "velocity", "--level", "1", "-o"];
+    iso(&[&args[..], &[out.to_str().unwrap()], &FAST].concat())
+        .failed()
+        .has("frame_0040.ply")
+        .has("vector attribute")
+        .has("--magnitude");
+    assert!(dir.entries().is_empty(), "{:?}", dir.entries());
+}
+
+#[test]
+fn json_log_has_the_iso_figures_and_threads_do_not_change_the_mesh() {
+    let dir = TempDir::new("iso-json");
+    let mut meshes = Vec::new();
+    for threads in ["1", "2"] {
+        let out = dir.path(&format!("t{threads}.ply"));
+        let args = [
+            "--attribute",
+            "density",
+            "--level",
+            "1000",
+            "--threads",
+            threads,
+            "--log-format",
+            "json",
+            "-o",
+            out.to_str().unwrap(),
+        ];
+        let run = iso(&[&args[..], &FAST].concat()).ok();
+        let frames = run.events("frame");
+        assert_eq!(frames.len(), 1, "{}", run.stderr);
+        let frame = &frames[0];
+        assert_eq!(frame.get("status"), "\"ok\"");
+        let figures = common::Event(frame.get("iso").to_owned());
+        assert_eq!(figures.get("level"), "1000.0");
+        for key in ["seed_cells", "visited_cells", "crossed_cells"] {
+            let n: u64 = figures.get(key).parse().unwrap();
+            assert!(n > 0, "{key} = {n}");
+        }
+        let ratio: f64 = figures.get("cache_hit_ratio").parse().unwrap();
+        assert!((0.0..=1.0).contains(&ratio), "hit ratio {ratio}");
+        let triangles: usize = frame.get("triangles").parse().unwrap();
+        assert_eq!(figures.get("triangles"), frame.get("triangles"));
+        assert_eq!(read_ply(&out).payload["face"].len(), triangles);
+        meshes.push(fs::read(&out).unwrap());
+    }
+    assert!(
+        meshes[0] == meshes[1],
+        "1 and 2 threads wrote different files"
+    );
+}
+
+/// `--correct=0` keeps Marching Cubes' vertices (no correction figures), `--correct=1` moves
+/// them: the flag reaches iso's Newton steps, not recon's field correction it shares a name with.
+#[test]
+fn correct_sets_the_newton_steps() {
+    let dir = TempDir::new("iso-correct");
+    let mut shifts = Vec::new();
+    for steps in ["--correct=0", "--correct=1", "--correct"] {
+        let out = dir.path("c.ply");
+        let args = [
+            "--attribute",
+            "density",
+            "--level",
+            "1000",
+            steps,
+            "--log-format",
+            "json",
+            "-o",
+            out.to_str().unwrap(),
+        ];
+        let run = iso(&[&args[..], &FAST].concat()).ok();
+        let frame = &run.events("frame")[0];
+        let figures = common::Event(frame.get("iso").to_owned());
+        let correction = common::Event(figures.get("correction").to_owned());
+        shifts.push(correction.get("mean").parse::<f64>().unwrap());
+    }
+    assert_eq!(shifts[0], 0.0, "{shifts:?}");
+    assert!(shifts[1] > 0.0 && shifts[2] > 0.0, "{shifts:?}");
+}
