@@ -240,9 +240,16 @@ seed cells, cells used, cache hit ratio, correction sizes and stage times. Examp
   splash iso 'frames/*.ply' --attribute pressure --level 3000 --spacing 0.014 -o iso/
   splash iso frame.vtk --attribute velocity --magnitude --level 2.5 --attributes density -o v.ply
   splash iso frame.ply --attribute velocity --vorticity --level 20 -o w.ply")]
-#[command(mut_arg("correct", |a| a.help("Newton steps per vertex along its cube edge onto the \
-    interpolant's level (--correct alone: 3, the default; --correct=0: plain Marching Cubes \
-    vertices)")))]
+// recon's flags that shape the free surface mean nothing here: hidden, and refused if given.
+#[command(
+    mut_arg("correct", |a| a.help("Newton steps per vertex along its cube edge onto the \
+        interpolant's level (--correct alone: 3, the default; --correct=0: plain Marching Cubes \
+        vertices)")),
+    mut_arg("field", |a| a.hide(true)),
+    mut_arg("normals", |a| a.hide(true)),
+    mut_arg("engine", |a| a.hide(true)),
+    mut_arg("block", |a| a.hide(true)),
+)]
 struct Iso {
     #[command(flatten)]
     base: Recon,
@@ -321,6 +328,17 @@ fn iso(mut args: Iso) -> Result<ExitCode> {
     // recon's --correct (flattened in) sets iso's Newton steps here, not the Marching Cubes
     // field's.
     let correct = args.base.params.correct.take();
+    let p = &args.base.params;
+    for (given, flag) in [
+        (p.field.is_some(), "--field"),
+        (p.normals.is_some(), "--normals"),
+        (p.engine.is_some(), "--engine"),
+        (p.block.is_some(), "--block"),
+    ] {
+        if given {
+            bail!("{flag} shapes recon's free surface and means nothing to iso");
+        }
+    }
     let mut config = args.base.params.resolve()?;
     if let Some(n) = correct {
         config.iso.correct = n;
@@ -409,4 +427,16 @@ fn recon_with(
     } else {
         ExitCode::FAILURE
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use clap::CommandFactory;
+
+    /// clap checks the definitions (unique names, valid defaults) only in debug builds, and the
+    /// tests run in release: a duplicate `--correct` once went unnoticed this way.
+    #[test]
+    fn the_command_line_definitions_are_consistent() {
+        super::Cli::command().debug_assert();
+    }
 }

@@ -233,3 +233,22 @@ fn correct_sets_the_newton_steps() {
     assert_eq!(shifts[0], 0.0, "{shifts:?}");
     assert!(shifts[1] > 0.0 && shifts[2] > 0.0, "{shifts:?}");
 }
+
+#[test]
+fn recon_only_flags_are_refused_not_ignored() {
+    let dir = TempDir::new("iso-recon-flags");
+    let out = dir.path("x.ply");
+    for flag in [
+        "--engine=slices",
+        "--field=density",
+        "--normals=grid",
+        "--block=16",
+    ] {
+        let args = ["--attribute", "density", "--level", "1000", flag, "-o"];
+        iso(&[&args[..], &[out.to_str().unwrap()], &FAST].concat())
+            .failed()
+            .has(flag.split('=').next().unwrap())
+            .has("means nothing to iso");
+    }
+    assert!(dir.entries().is_empty(), "{:?}", dir.entries());
+}
