@@ -339,6 +339,13 @@ fn iso(mut args: Iso) -> Result<ExitCode> {
             bail!("{flag} shapes recon's free surface and means nothing to iso");
         }
     }
+    if args.base.run.report.is_some() {
+        bail!(
+            "--report is recon's and preview's: iso's figures (the paper's seed cells, cells \
+             used, cache hit ratio, correction sizes, stage times) are in -v and in \
+             --log-format json"
+        );
+    }
     let mut config = args.base.params.resolve()?;
     if let Some(n) = correct {
         config.iso.correct = n;

@@ -252,3 +252,21 @@ fn recon_only_flags_are_refused_not_ignored() {
     }
     assert!(dir.entries().is_empty(), "{:?}", dir.entries());
 }
+
+#[test]
+fn report_is_refused_with_where_the_figures_are() {
+    let dir = TempDir::new("iso-report");
+    let out = dir.path("x.ply");
+    let report = dir.path("r.md");
+    let args = ["--attribute", "density", "--level", "1000", "--report"];
+    iso(&[
+        &args[..],
+        &[report.to_str().unwrap(), "-o", out.to_str().unwrap()],
+        &FAST,
+    ]
+    .concat())
+    .failed()
+    .has("--report")
+    .has("--log-format json");
+    assert!(dir.entries().is_empty(), "{:?}", dir.entries());
+}
