@@ -76,12 +76,8 @@ pub fn iso<'py>(
     let overrides = Overrides {
         spacing,
         cell,
-        field: None,
-        engine: None,
-        normals: None,
-        correct: None,
         threads,
-        max_memory: None,
+        ..Overrides::default()
     };
     let mut config = settings::resolve(config, overrides)?;
     if config.spacing.is_none() {

@@ -54,13 +54,8 @@ pub fn preview<'py>(
 ) -> PyResult<Bound<'py, PyArray3<u8>>> {
     let overrides = Overrides {
         spacing,
-        cell: None,
-        field: None,
-        engine: None,
-        normals: None,
-        correct: None,
         threads,
-        max_memory: None,
+        ..Overrides::default()
     };
     let mut config = settings::resolve(config, overrides)?;
     if config.spacing.is_none() {

@@ -11,6 +11,7 @@ use splash_sph::{Bytes, Config, Engine, Length, Normals};
 use crate::errors::to_py;
 
 /// The keyword arguments that override the configuration; None leaves its value.
+#[derive(Default)]
 pub struct Overrides<'py> {
     pub spacing: Option<f32>,
     pub cell: Option<Bound<'py, PyAny>>,
