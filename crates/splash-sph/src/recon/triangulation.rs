@@ -167,18 +167,7 @@ fn count_brick(halo: &Halo) -> (BrickEdges, usize) {
         for y in 0..BRICK {
             for x in 0..BRICK {
                 let l = IVec3::new(x, y, z);
-                let v0 = halo.at(l);
-                if v0.is_nan() {
-                    continue;
-                }
-                for axis in 0..3 {
-                    let v1 = halo.at(l + IVec3::AXES[axis]);
-                    if v1.is_nan()
-                        || (v0 < 0.0) == (v1 < 0.0)
-                        || !edge_in_surface_cell(halo, l, axis)
-                    {
-                        continue;
-                    }
+                for (axis, _, _) in vertex_edges(halo, l) {
                     let bit = 3 * local_index(l) + axis;
                     edges.bits[bit / 64] |= 1 << (bit % 64);
                 }
@@ -212,19 +201,8 @@ fn edge_vertices(
         for y in 0..BRICK {
             for x in 0..BRICK {
                 let l = IVec3::new(x, y, z);
-                let v0 = halo.at(l);
-                if v0.is_nan() {
-                    continue;
-                }
-                for axis in 0..3 {
+                for (axis, v0, v1) in vertex_edges(halo, l) {
                     let e = IVec3::AXES[axis];
-                    let v1 = halo.at(l + e);
-                    if v1.is_nan()
-                        || (v0 < 0.0) == (v1 < 0.0)
-                        || !edge_in_surface_cell(halo, l, axis)
-                    {
-                        continue;
-                    }
                     let p0 = vertex_position(brick * BRICK + l, cell);
                     let (p, t) = edge_crossing(p0, axis, cell, v0, v1);
                     let (g0, g1) = (halo.gradient(l, cell), halo.gradient(l + e, cell));
@@ -236,6 +214,18 @@ fn edge_vertices(
         }
     }
     debug_assert_eq!(k, positions.len(), "the vertices counted");
+}
+
+/// The edges leaving vertex `l` in +x, +y, +z that carry a mesh vertex: the field changes sign
+/// along them and one of the four cells around them is triangulated. Yields (axis, value at
+/// `l`, value at the other end).
+fn vertex_edges(halo: &Halo, l: IVec3) -> impl Iterator<Item = (usize, f32, f32)> + '_ {
+    let v0 = halo.at(l);
+    (0..3).filter_map(move |axis| {
+        let v1 = halo.at(l + IVec3::AXES[axis]);
+        let crossed = !v0.is_nan() && !v1.is_nan() && (v0 < 0.0) != (v1 < 0.0);
+        (crossed && edge_in_surface_cell(halo, l, axis)).then_some((axis, v0, v1))
+    })
 }
 
 fn edge_in_surface_cell(halo: &Halo, l: IVec3, axis: usize) -> bool {
