@@ -122,14 +122,7 @@ fn every_field_lands_its_vertices_on_its_isosurface() {
         .into_iter()
         .map(|p| p + jitter.vec3() * 0.4 * r)
         .collect();
-    for field in [
-        "ssp07",
-        "zb05",
-        "density",
-        "blobby",
-        "metaball",
-        "anisotropic",
-    ] {
+    for field in crate::field::FieldConfig::KINDS {
         for cell in ["r", "r/2"] {
             let what = format!("{field} at {cell}");
             let p = field_params(field, r, cell);
