@@ -39,6 +39,13 @@ pub fn local_index(l: IVec3) -> usize {
     (l.x + BRICK * (l.y + BRICK * l.z)) as usize
 }
 
+/// The local coordinates of a brick's vertices, in [`local_index`] order (x fastest).
+#[inline]
+pub fn local_vertices() -> impl Iterator<Item = IVec3> {
+    (0..BRICK * BRICK * BRICK)
+        .map(|i| IVec3::new(i % BRICK, i / BRICK % BRICK, i / (BRICK * BRICK)))
+}
+
 #[inline]
 pub fn brick_of(v: IVec3) -> IVec3 {
     IVec3::new(v.x >> 3, v.y >> 3, v.z >> 3)

@@ -12,7 +12,7 @@ use std::ops::Range;
 use glam::{IVec3, Vec3};
 use rayon::prelude::*;
 
-use super::band::{BRICK, Band, brick_of, local_index};
+use super::band::{BRICK, Band, brick_of, local_index, local_vertices};
 use super::budget;
 use super::field_sampling::{BrickValues, vertex_position};
 use super::halo::{Halo, neighbour_slot, offset, owns_inside_corner};
@@ -163,20 +163,15 @@ fn count_brick(halo: &Halo) -> (BrickEdges, usize) {
         first_triangle: 0,
     };
     let mut cells = 0;
-    for z in 0..BRICK {
-        for y in 0..BRICK {
-            for x in 0..BRICK {
-                let l = IVec3::new(x, y, z);
-                for (axis, _, _) in vertex_edges(halo, l) {
-                    let bit = 3 * local_index(l) + axis;
-                    edges.bits[bit / 64] |= 1 << (bit % 64);
-                }
-                if halo.complete(l) {
-                    let n = cases()[case_index(&halo.corners(l))].triangles().len();
-                    edges.triangles += n;
-                    cells += usize::from(n > 0);
-                }
-            }
+    for l in local_vertices() {
+        for (axis, _, _) in vertex_edges(halo, l) {
+            let bit = 3 * local_index(l) + axis;
+            edges.bits[bit / 64] |= 1 << (bit % 64);
+        }
+        if halo.complete(l) {
+            let n = cases()[case_index(&halo.corners(l))].triangles().len();
+            edges.triangles += n;
+            cells += usize::from(n > 0);
         }
     }
     let mut count = 0;
@@ -197,20 +192,15 @@ fn edge_vertices(
     normals: &mut [Vec3],
 ) {
     let mut k = 0;
-    for z in 0..BRICK {
-        for y in 0..BRICK {
-            for x in 0..BRICK {
-                let l = IVec3::new(x, y, z);
-                for (axis, v0, v1) in vertex_edges(halo, l) {
-                    let e = IVec3::AXES[axis];
-                    let p0 = vertex_position(brick * BRICK + l, cell);
-                    let (p, t) = edge_crossing(p0, axis, cell, v0, v1);
-                    let (g0, g1) = (halo.gradient(l, cell), halo.gradient(l + e, cell));
-                    positions[k] = p;
-                    normals[k] = crossing_normal(g0, g1, t, axis, v0, v1);
-                    k += 1;
-                }
-            }
+    for l in local_vertices() {
+        for (axis, v0, v1) in vertex_edges(halo, l) {
+            let e = IVec3::AXES[axis];
+            let p0 = vertex_position(brick * BRICK + l, cell);
+            let (p, t) = edge_crossing(p0, axis, cell, v0, v1);
+            let (g0, g1) = (halo.gradient(l, cell), halo.gradient(l + e, cell));
+            positions[k] = p;
+            normals[k] = crossing_normal(g0, g1, t, axis, v0, v1);
+            k += 1;
         }
     }
     debug_assert_eq!(k, positions.len(), "the vertices counted");
@@ -238,27 +228,22 @@ fn edge_in_surface_cell(halo: &Halo, l: IVec3, axis: usize) -> bool {
 /// The triangles of the brick's surface cells, into `out` (as many as [`count_brick`] found).
 fn brick_triangles(halo: &Halo, edges: &[Option<Box<BrickEdges>>], out: &mut [[u32; 3]]) {
     let mut k = 0;
-    for z in 0..BRICK {
-        for y in 0..BRICK {
-            for x in 0..BRICK {
-                let l = IVec3::new(x, y, z);
-                if !halo.complete(l) {
-                    continue;
-                }
-                let case = case_index(&halo.corners(l));
-                for t in cases()[case].triangles() {
-                    out[k] = t.map(|e| {
-                        let e = e as usize;
-                        let owner = l + offset(edge_corners(e).0);
-                        let d = brick_of(owner);
-                        let b = halo.neighbours[neighbour_slot(d)]
-                            .expect("a complete cell's corners lie in existing bricks");
-                        let owned = edges[b].as_ref().expect("a crossed edge has a vertex");
-                        owned.id(local_index(owner - d * BRICK), edge_axis(e))
-                    });
-                    k += 1;
-                }
-            }
+    for l in local_vertices() {
+        if !halo.complete(l) {
+            continue;
+        }
+        let case = case_index(&halo.corners(l));
+        for t in cases()[case].triangles() {
+            out[k] = t.map(|e| {
+                let e = e as usize;
+                let owner = l + offset(edge_corners(e).0);
+                let d = brick_of(owner);
+                let b = halo.neighbours[neighbour_slot(d)]
+                    .expect("a complete cell's corners lie in existing bricks");
+                let owned = edges[b].as_ref().expect("a crossed edge has a vertex");
+                owned.id(local_index(owner - d * BRICK), edge_axis(e))
+            });
+            k += 1;
         }
     }
     debug_assert_eq!(k, out.len(), "the triangles counted");
