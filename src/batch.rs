@@ -357,7 +357,7 @@ impl Batch {
         let read = start.elapsed();
         if particles.is_empty() {
             // Nothing to reconstruct, and nothing to estimate a spacing from.
-            let empty: Vec<(String, Attribute)> = wanted
+            let mut empty: Vec<(String, Attribute)> = wanted
                 .iter()
                 .map(|(name, a)| {
                     let empty = match a {
@@ -367,31 +367,13 @@ impl Batch {
                     (name.clone(), empty)
                 })
                 .collect();
-            let attributes = VertexAttributes {
-                named: &empty,
-                ..Default::default()
-            };
-            io::write_mesh_file_with(output, &TriMesh::default(), &attributes, self.format)?;
+            self.write_mesh(output, &mut TriMesh::default(), &mut empty)?;
             let mut stats = FrameStats::default();
             stats.timings.read = read;
             stats.particles_outside_box = outside_box;
             return Ok(stats);
         }
-        // One spacing, hence one grid, for the whole sequence.
-        let r = match *spacing {
-            Some(r) => r,
-            None => {
-                let r = estimate_spacing(&particles).ok_or_else(|| {
-                    anyhow!(
-                        "cannot estimate the particle spacing from {} particles; give --spacing or --particle-radius",
-                        particles.len()
-                    )
-                })?;
-                progress.spacing_estimated(input, r);
-                *spacing = Some(r);
-                r
-            }
-        };
+        let r = sequence_spacing(input, &particles, spacing, progress)?;
         // One reconstructor, hence one thread pool, for the whole run.
         let reconstructor = match reconstructor {
             Some(rec) => rec,
@@ -418,14 +400,7 @@ impl Batch {
         let mut vertex_attributes: Vec<(String, Attribute)> = names.zip(interpolated).collect();
         drop(particles);
         let start = Instant::now();
-        if let Some(axis) = self.config.output.up_axis {
-            axis.rotate_mesh(&mut mesh, &mut vertex_attributes);
-        }
-        let attributes = VertexAttributes {
-            named: &vertex_attributes,
-            ..Default::default()
-        };
-        io::write_mesh_file_with(output, &mesh, &attributes, self.format)?;
+        self.write_mesh(output, &mut mesh, &mut vertex_attributes)?;
         let mut stats = rec.stats;
         stats.particles_outside_box = outside_box;
         stats.timings.read = read;
@@ -435,6 +410,29 @@ impl Batch {
 }
 
 impl Batch {
+    /// Writes a frame's mesh and its vertex attributes, turned upright if asked, whole or not
+    /// at all.
+    fn write_mesh(
+        &self,
+        output: &Path,
+        mesh: &mut TriMesh,
+        named: &mut [(String, Attribute)],
+    ) -> Result<()> {
+        if let Some(axis) = self.config.output.up_axis {
+            axis.rotate_mesh(mesh, named);
+        }
+        let attributes = VertexAttributes {
+            named,
+            ..Default::default()
+        };
+        Ok(io::write_mesh_file_with(
+            output,
+            mesh,
+            &attributes,
+            self.format,
+        )?)
+    }
+
     /// One frame's isosurface, written with its extra attributes.
     #[allow(clippy::too_many_arguments)]
     fn iso_frame(
@@ -448,19 +446,8 @@ impl Batch {
         progress: &mut dyn Progress,
     ) -> Result<FrameStats> {
         let r = match *spacing {
-            Some(r) => r,
             None if particles.is_empty() => 1.0,
-            None => {
-                let r = estimate_spacing(&particles).ok_or_else(|| {
-                    anyhow!(
-                        "cannot estimate the particle spacing from {} particles; give --spacing",
-                        particles.len()
-                    )
-                })?;
-                progress.spacing_estimated(input, r);
-                *spacing = Some(r);
-                r
-            }
+            _ => sequence_spacing(input, &particles, spacing, progress)?,
         };
         let config = Config {
             spacing: Some(r),
@@ -472,14 +459,7 @@ impl Batch {
             .with_context(|| format!("'{}'", input.display()))?;
         let (mut mesh, mut named) = (surface.mesh, surface.attributes);
         let start = Instant::now();
-        if let Some(axis) = self.config.output.up_axis {
-            axis.rotate_mesh(&mut mesh, &mut named);
-        }
-        let attributes = VertexAttributes {
-            named: &named,
-            ..Default::default()
-        };
-        io::write_mesh_file_with(output, &mesh, &attributes, self.format)?;
+        self.write_mesh(output, &mut mesh, &mut named)?;
         let mut stats = FrameStats {
             spacing: r,
             cell: surface.stats.cell,
@@ -581,6 +561,28 @@ fn particle_attributes(
         out.push((name.clone(), attribute));
     }
     Ok(out)
+}
+
+/// The sequence's spacing: the one given or found on an earlier frame, else estimated from this
+/// frame's particles and kept, so that the whole sequence shares one spacing, hence one grid.
+fn sequence_spacing(
+    input: &Path,
+    particles: &[splash_sph::Vec3],
+    spacing: &mut Option<f32>,
+    progress: &mut dyn Progress,
+) -> Result<f32> {
+    if let Some(r) = *spacing {
+        return Ok(r);
+    }
+    let r = estimate_spacing(particles).ok_or_else(|| {
+        anyhow!(
+            "cannot estimate the particle spacing from {} particles; give --spacing or --particle-radius",
+            particles.len()
+        )
+    })?;
+    progress.spacing_estimated(input, r);
+    *spacing = Some(r);
+    Ok(r)
 }
 
 #[cfg(test)]
