@@ -2,8 +2,10 @@
 //! cell (eqs. 6–8), stored contiguously, with the start of every non-empty cell.
 //!
 //! Unlike the paper's `startIndices`, which holds one integer per cell of the bounding box, the
-//! cell starts live in a hash map over non-empty cells only, so a droplet far from the fluid
-//! costs one entry instead of a box full of empty cells.
+//! cell starts are kept for non-empty cells only, found through a hash map over the Morton
+//! blocks of 4³ cells that hold particles, so a droplet far from the fluid costs one entry
+//! instead of a box full of empty cells, and a gather over a few hundred cells costs a few
+//! dozen hash lookups (one per cell was half of every gather's time).
 
 use crate::error::Result;
 use glam::{DVec3, IVec3, Vec3};
@@ -25,8 +27,27 @@ pub struct HandlerArray {
     /// per-particle data (the density field's volumes m/ρ in channel 0; the anisotropic
     /// field's matrices); empty for the others, whose gathers then copy positions only.
     pub channels: Vec<Vec<f32>>,
-    /// Non-empty cell id → range of `positions`.
-    cells: FxHashMap<u64, (u32, u32)>,
+    /// Morton block (cell id >> 6) → its non-empty cells.
+    blocks: FxHashMap<u64, CellBlock>,
+    /// Where each non-empty cell's particles start, in cell id order, then the particle count.
+    starts: Vec<u32>,
+}
+
+/// The non-empty cells of a Morton block of 4³ cells: a bit per cell (by the low 6 bits of its
+/// id), and the index in `starts` of the first.
+#[derive(Clone, Copy)]
+struct CellBlock {
+    occupied: u64,
+    first: u32,
+}
+
+impl CellBlock {
+    /// The index in `starts` of the cell with low id bits `bit`, if it holds particles.
+    #[inline]
+    fn cell(&self, bit: u64) -> Option<usize> {
+        (self.occupied >> bit & 1 == 1)
+            .then(|| self.first as usize + (self.occupied & ((1 << bit) - 1)).count_ones() as usize)
+    }
 }
 
 impl HandlerArray {
@@ -102,24 +123,28 @@ impl HandlerArray {
             .par_iter()
             .map(|&(_, i)| particles[i as usize])
             .collect();
-        let mut cells = FxHashMap::default();
-        let mut start = 0;
-        for (i, w) in handlers.windows(2).enumerate() {
-            if w[0].0 != w[1].0 {
-                cells.insert(w[0].0, (start as u32, i as u32 + 1));
-                start = i + 1;
+        let mut blocks = FxHashMap::<u64, CellBlock>::default();
+        let mut starts = Vec::new();
+        for (i, h) in handlers.iter().enumerate() {
+            if i > 0 && handlers[i - 1].0 == h.0 {
+                continue;
             }
+            let block = blocks.entry(h.0 >> 6).or_insert(CellBlock {
+                occupied: 0,
+                first: starts.len() as u32,
+            });
+            block.occupied |= 1 << (h.0 & 63);
+            starts.push(i as u32);
         }
-        if let Some(last) = handlers.last() {
-            cells.insert(last.0, (start as u32, handlers.len() as u32));
-        }
+        starts.push(handlers.len() as u32);
         let handlers_array = HandlerArray {
             cell_size,
             origin,
             last,
             positions,
             channels: Vec::new(),
-            cells,
+            blocks,
+            starts,
         };
         Ok((handlers_array, handlers))
     }
@@ -133,13 +158,21 @@ impl HandlerArray {
     }
 
     /// The handler-order range of one cell's particles.
-    pub fn cell_range(&self, cell: IVec3) -> std::ops::Range<usize> {
+    #[cfg(test)]
+    fn cell_range(&self, cell: IVec3) -> std::ops::Range<usize> {
         let rel = cell - self.origin;
         if rel.min_element() < 0 || rel.max_element() >= 1 << AXIS_BITS {
             return 0..0;
         }
-        match self.cells.get(&morton(rel)) {
-            Some(&(s, e)) => s as usize..e as usize,
+        let id = morton(rel);
+        let block = self.blocks.get(&(id >> 6));
+        self.range_in(block, id)
+    }
+
+    #[inline]
+    fn range_in(&self, block: Option<&CellBlock>, id: u64) -> std::ops::Range<usize> {
+        match block.and_then(|b| b.cell(id & 63)) {
+            Some(k) => self.starts[k] as usize..self.starts[k + 1] as usize,
             None => 0..0,
         }
     }
@@ -155,13 +188,42 @@ impl HandlerArray {
         self.for_each_in_cells(self.cell_of(lo), self.cell_of(hi), f);
     }
 
-    /// Calls `f` with the handler-order range of every non-empty cell from `a` to `b`.
+    /// Calls `f` with the handler-order range of every non-empty cell from `a` to `b`, in
+    /// (z, y, x) order.
     pub fn for_each_in_cells(&self, a: IVec3, b: IVec3, mut f: impl FnMut(std::ops::Range<usize>)) {
         let (a, b) = self.occupied_part(a, b);
+        if a.cmpgt(b).any() {
+            return;
+        }
+        let (a, b) = (a - self.origin, b - self.origin);
+        // Each Morton block of the box looked up once, into a small table when it fits.
+        let (ba, bb) = (a >> 2i32, b >> 2i32);
+        let dims = bb - ba + 1;
+        let mut table = [None; 64];
+        let mut looked = 0u64;
+        let small = dims.x * dims.y * dims.z <= 64;
+        let mut last = (u64::MAX, None);
         for z in a.z..=b.z {
             for y in a.y..=b.y {
                 for x in a.x..=b.x {
-                    let range = self.cell_range(IVec3::new(x, y, z));
+                    let rel = IVec3::new(x, y, z);
+                    let id = morton(rel);
+                    let key = id >> 6;
+                    let block = if small {
+                        let d = (rel >> 2i32) - ba;
+                        let slot = (d.x + dims.x * (d.y + dims.y * d.z)) as usize;
+                        if looked >> slot & 1 == 0 {
+                            table[slot] = self.blocks.get(&key).copied();
+                            looked |= 1 << slot;
+                        }
+                        table[slot]
+                    } else {
+                        if last.0 != key {
+                            last = (key, self.blocks.get(&key).copied());
+                        }
+                        last.1
+                    };
+                    let range = self.range_in(block.as_ref(), id);
                     if !range.is_empty() {
                         f(range);
                     }
@@ -184,7 +246,8 @@ impl HandlerArray {
                 .iter()
                 .map(|c| c.capacity() * size_of::<f32>())
                 .sum::<usize>()
-            + self.cells.capacity() * (size_of::<(u64, (u32, u32))>() + 1)
+            + self.blocks.capacity() * (size_of::<(u64, CellBlock)>() + 1)
+            + self.starts.capacity() * size_of::<u32>()
     }
 }
 

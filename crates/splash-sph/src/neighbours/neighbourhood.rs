@@ -4,6 +4,8 @@
 use glam::{IVec3, Vec3};
 use rayon::prelude::*;
 
+#[cfg(target_arch = "x86_64")]
+use super::box_filter;
 use super::handler_array::HandlerArray;
 
 /// Width of the lane-parallel accumulators; the gathered arrays are padded to a multiple of it.
@@ -65,7 +67,27 @@ impl Neighbourhood {
         self.clear(lo);
         let reach = reach(&handlers.channels, radius, own_reach);
         self.channels.resize_with(handlers.channels.len(), Vec::new);
-        handlers.for_each_in_cells(cells.0, cells.1, |range| {
+        handlers.for_each_in_cells(cells.0, cells.1, |mut range| {
+            #[cfg(target_arch = "x86_64")]
+            if simd() {
+                self.reserve(range.len() + LANES);
+                let within = box_filter::Reach {
+                    lo,
+                    hi,
+                    radius,
+                    own: own_reach,
+                };
+                let out = box_filter::Out {
+                    xyz: [&mut self.x, &mut self.y, &mut self.z],
+                    channels: &mut self.channels,
+                };
+                let positions = &handlers.positions;
+                if let Some(stop) =
+                    box_filter::gather(positions, &handlers.channels, range.clone(), within, out)
+                {
+                    range.start = stop;
+                }
+            }
             let start = self.x.len();
             self.grow(start + range.len());
             let mut n = start;
@@ -94,6 +116,26 @@ impl Neighbourhood {
         self.clear(lo);
         let shift = from.anchor - lo;
         let (blo, bhi) = (Vec3::ZERO, hi - lo);
+        self.channels.resize_with(from.channels.len(), Vec::new);
+        #[cfg(target_arch = "x86_64")]
+        if simd() {
+            self.reserve(from.len() + LANES);
+            let within = box_filter::Reach {
+                lo: blo,
+                hi: bhi,
+                radius,
+                own: own_reach,
+            };
+            let out = box_filter::Out {
+                xyz: [&mut self.x, &mut self.y, &mut self.z],
+                channels: &mut self.channels,
+            };
+            let xyz = [&from.x[..], &from.y, &from.z];
+            if box_filter::filter(xyz, &from.channels, shift, within, out).is_some() {
+                self.pad();
+                return;
+            }
+        }
         let at = |i: usize| Vec3::new(from.x[i], from.y[i], from.z[i]) + shift;
         let outside = |p: Vec3| (p - p.clamp(blo, bhi)).length_squared();
         // The indices kept, compacted branch-free, then each array gathered once.
@@ -124,7 +166,6 @@ impl Neighbourhood {
         shifted(&from.x, shift.x, &mut self.x);
         shifted(&from.y, shift.y, &mut self.y);
         shifted(&from.z, shift.z, &mut self.z);
-        self.channels.resize_with(from.channels.len(), Vec::new);
         for (out, v) in self.channels.iter_mut().zip(&from.channels) {
             out.extend(kept.iter().map(|&i| v[i as usize]));
         }
@@ -141,6 +182,17 @@ impl Neighbourhood {
             values[n] = channel(c);
         }
         n + usize::from(kept)
+    }
+
+    /// Room for `more` values past the end of every array.
+    #[cfg(target_arch = "x86_64")]
+    fn reserve(&mut self, more: usize) {
+        for v in [&mut self.x, &mut self.y, &mut self.z]
+            .into_iter()
+            .chain(&mut self.channels)
+        {
+            v.reserve(more);
+        }
     }
 
     fn grow(&mut self, len: usize) {
@@ -220,6 +272,16 @@ impl Neighbourhood {
     pub fn len(&self) -> usize {
         self.x.len()
     }
+}
+
+/// Whether the AVX2 paths may run (where the CPU has AVX2); tests turn them off to compare the
+/// scalar paths with them.
+#[cfg(target_arch = "x86_64")]
+fn simd() -> bool {
+    #[cfg(test)]
+    return !tests::SCALAR.get();
+    #[cfg(not(test))]
+    true
 }
 
 /// Particle i's reach: `radius`, or with `own_reach` the smaller of it and the particle's
@@ -322,4 +384,85 @@ macro_rules! lane_sums {
             lanes(near, x, $p)
         }
     };
+}
+
+#[cfg(test)]
+pub(super) mod tests {
+    use std::cell::Cell;
+
+    use super::*;
+
+    thread_local!(pub static SCALAR: Cell<bool> = const { Cell::new(false) });
+
+    /// Runs `f` on the scalar paths, then on the AVX2 ones where the CPU has them.
+    fn both<T>(mut f: impl FnMut() -> T) -> (T, T) {
+        SCALAR.set(true);
+        let scalar = f();
+        SCALAR.set(false);
+        (scalar, f())
+    }
+
+    fn arrays(n: &Neighbourhood) -> Vec<Vec<u32>> {
+        let bits = |v: &Vec<f32>| v.iter().map(|x| x.to_bits()).collect();
+        [&n.x, &n.y, &n.z]
+            .into_iter()
+            .chain(&n.channels)
+            .map(bits)
+            .collect()
+    }
+
+    /// A cloud with a per-particle reach channel and a second channel, some particles exactly
+    /// on box faces, and cells of all sizes (the last cell of the array included).
+    fn cloud() -> HandlerArray {
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = move || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let mut points: Vec<Vec3> = (0..20000)
+            .map(|_| Vec3::new(next(), next(), next()) * 2.0 - 0.5)
+            .collect();
+        points.extend((0..40).map(|i| Vec3::new(0.25, i as f32 / 40.0, 0.5)));
+        let reach: Vec<f32> = points.iter().map(|_| 0.05 + 0.3 * next()).collect();
+        let other: Vec<f32> = points.iter().map(|_| next()).collect();
+        HandlerArray::with_channels(&points, 0.125, vec![reach, other]).unwrap()
+    }
+
+    #[test]
+    fn simd_gathers_and_filters_equal_the_scalar_ones_bit_for_bit() {
+        let h = cloud();
+        let boxes = [
+            (Vec3::splat(0.25), Vec3::new(0.5, 0.375, 0.75), 0.2),
+            (Vec3::new(-0.3, 0.1, 0.2), Vec3::new(-0.25, 0.1, 0.2), 0.3),
+            (Vec3::splat(1.4), Vec3::splat(1.6), 0.25),
+        ];
+        for (lo, hi, radius) in boxes {
+            for own in [None, Some(0)] {
+                let (a, b) = both(|| {
+                    let mut near = Neighbourhood::default();
+                    near.gather_box(&h, lo, hi, radius, own);
+                    let mut narrow = Neighbourhood::default();
+                    let mid = (lo + hi) / 2.0;
+                    narrow.filter_box(&near, lo, mid, radius * 0.6, own);
+                    (arrays(&near), arrays(&narrow))
+                });
+                assert_eq!(a, b, "box {lo}..{hi}, own reach {own:?}");
+                assert!(
+                    a.0[0].len() > 8 && a.1[0].len() > 8,
+                    "the box keeps particles: {} {}",
+                    a.0[0].len(),
+                    a.1[0].len()
+                );
+                assert!(a.1[0].len() < a.0[0].len(), "the narrower box keeps fewer");
+            }
+        }
+        let (a, b) = both(|| {
+            let mut near = Neighbourhood::default();
+            near.gather_cell(&h, IVec3::new(2, 2, 2), 0.2);
+            arrays(&near)
+        });
+        assert_eq!(a, b);
+    }
 }
