@@ -86,24 +86,42 @@ pub fn filter(
     Some(())
 }
 
-/// Appends the particles `range` of `positions` (with `channels`) within reach, relative to
-/// `reach.lo`, up to the last 8 particles of the arrays, which it does not read; returns where
-/// it stopped. `None` where the CPU lacks AVX2.
+/// Appends the particles of the `ranges` of `positions` (with `channels`) within reach,
+/// relative to `reach.lo`, in order, up to the first range that reaches into the arrays' last
+/// 8 particles, which it leaves; returns how many ranges it did. `None` where the CPU lacks
+/// AVX2.
 pub fn gather(
     positions: &[Vec3],
     channels: &[Vec<f32>],
-    range: Range<usize>,
+    ranges: &[Range<usize>],
     reach: Reach,
     out: Out,
 ) -> Option<usize> {
     if !std::arch::is_x86_feature_detected!("avx2") {
         return None;
     }
-    assert!(range.end <= positions.len());
-    assert!(channels.iter().all(|v| v.len() == positions.len()));
-    check(channels, &reach, &out, range.len() + 8);
-    // SAFETY: as in `filter`; lanes past the range are read only while inside the arrays.
-    Some(unsafe { gather_avx2(bytemuck::cast_slice(positions), channels, range, reach, out) })
+    let total = positions.len();
+    let done = ranges
+        .iter()
+        .position(|r| r.start + r.len().saturating_sub(1) / 8 * 8 + 8 > total)
+        .unwrap_or(ranges.len());
+    let ranges = &ranges[..done];
+    assert!(ranges.iter().all(|r| r.end <= total));
+    assert!(channels.iter().all(|v| v.len() == total));
+    let room = ranges.iter().map(|r| r.len()).sum::<usize>() + 8;
+    check(channels, &reach, &out, room);
+    // SAFETY: as in `filter`; every chunk read lies within the arrays (the ranges left out
+    // are those it would not).
+    unsafe {
+        gather_avx2(
+            bytemuck::cast_slice(positions),
+            channels,
+            ranges,
+            reach,
+            out,
+        )
+    };
+    Some(done)
 }
 
 fn check(channels: &[Vec<f32>], reach: &Reach, out: &Out, room: usize) {
@@ -230,26 +248,24 @@ fn deinterleave(a: __m256, b: __m256, c: __m256) -> [__m256; 3] {
 unsafe fn gather_avx2(
     xyz: &[f32],
     channels: &[Vec<f32>],
-    range: Range<usize>,
+    ranges: &[Range<usize>],
     reach: Reach,
     mut out: Out,
-) -> usize {
+) {
     let lanes = Lanes::new(&reach);
-    let total = xyz.len() / 3;
-    let mut i = range.start;
-    // Lanes past the range are loaded but never kept.
-    while i < range.end && i + 8 <= total {
-        // SAFETY (loads here and in `store`): i + 8 ≤ the arrays' length.
-        let at = |k: usize| unsafe { _mm256_loadu_ps(xyz.as_ptr().add(3 * i + 8 * k)) };
-        let p = deinterleave(at(0), at(1), at(2));
-        let own = reach
-            .own
-            .map(|c| unsafe { _mm256_loadu_ps(channels[c].as_ptr().add(i)) });
-        let valid = (1usize << (range.end - i).min(8)) - 1;
-        let mask = lanes.kept(&p, own) & valid;
-        let shifted: [__m256; 3] = std::array::from_fn(|k| _mm256_sub_ps(p[k], lanes.lo[k]));
-        unsafe { store(&shifted, channels, i, mask, &mut out) };
-        i += 8;
+    for range in ranges {
+        // Lanes past the range are loaded but never kept.
+        for i in range.clone().step_by(8) {
+            // SAFETY (loads here and in `store`): i + 8 ≤ the arrays' length (see `gather`).
+            let at = |k: usize| unsafe { _mm256_loadu_ps(xyz.as_ptr().add(3 * i + 8 * k)) };
+            let p = deinterleave(at(0), at(1), at(2));
+            let own = reach
+                .own
+                .map(|c| unsafe { _mm256_loadu_ps(channels[c].as_ptr().add(i)) });
+            let valid = (1usize << (range.end - i).min(8)) - 1;
+            let mask = lanes.kept(&p, own) & valid;
+            let shifted: [__m256; 3] = std::array::from_fn(|k| _mm256_sub_ps(p[k], lanes.lo[k]));
+            unsafe { store(&shifted, channels, i, mask, &mut out) };
+        }
     }
-    i.min(range.end)
 }

@@ -1,6 +1,8 @@
 //! Particles gathered once around a small region and reused by every query point in it: the
 //! "neighbour lists reused across nearby vertices" that keep the hot loops branch-free.
 
+use std::ops::Range;
+
 use glam::{IVec3, Vec3};
 use rayon::prelude::*;
 
@@ -28,6 +30,8 @@ pub struct Neighbourhood {
     pub channels: Vec<Vec<f32>>,
     /// Scratch of [`Neighbourhood::filter_box`]: indices of the particles it keeps.
     kept: Vec<u32>,
+    /// Scratch of the gathers: the handler-order ranges of the cells they visit.
+    ranges: Vec<Range<usize>>,
 }
 
 impl Neighbourhood {
@@ -65,41 +69,63 @@ impl Neighbourhood {
         own_reach: Option<usize>,
     ) {
         self.clear(lo);
-        let reach = reach(&handlers.channels, radius, own_reach);
         self.channels.resize_with(handlers.channels.len(), Vec::new);
-        handlers.for_each_in_cells(cells.0, cells.1, |mut range| {
+        let mut ranges = std::mem::take(&mut self.ranges);
+        ranges.clear();
+        handlers.for_each_in_cells(cells.0, cells.1, |range| ranges.push(range));
+        let within = box_filter::Reach {
+            lo,
+            hi,
+            radius,
+            own: own_reach,
+        };
+        let mut rest = &ranges[..];
+        while let Some(first) = rest.first() {
             #[cfg(target_arch = "x86_64")]
             if simd() {
-                self.reserve(range.len() + LANES);
-                let within = box_filter::Reach {
-                    lo,
-                    hi,
-                    radius,
-                    own: own_reach,
-                };
+                self.reserve(rest.iter().map(|r| r.len()).sum::<usize>() + LANES);
                 let out = box_filter::Out {
                     xyz: [&mut self.x, &mut self.y, &mut self.z],
                     channels: &mut self.channels,
                 };
                 let positions = &handlers.positions;
-                if let Some(stop) =
-                    box_filter::gather(positions, &handlers.channels, range.clone(), within, out)
+                if let Some(done) =
+                    box_filter::gather(positions, &handlers.channels, rest, within, out)
                 {
-                    range.start = stop;
+                    rest = &rest[done..];
+                    let Some(first) = rest.first() else { break };
+                    // A cell among the arrays' last particles, which the SIMD path leaves.
+                    self.gather_range(handlers, first.clone(), within);
+                    rest = &rest[1..];
+                    continue;
                 }
             }
-            let start = self.x.len();
-            self.grow(start + range.len());
-            let mut n = start;
-            for i in range {
-                let p = handlers.positions[i];
-                let r = reach(i);
-                let kept = (p - p.clamp(lo, hi)).length_squared() <= r * r;
-                n = self.put(n, p - lo, kept, |c| handlers.channels[c][i]);
-            }
-            self.truncate(n);
-        });
+            self.gather_range(handlers, first.clone(), within);
+            rest = &rest[1..];
+        }
+        self.ranges = ranges;
         self.pad();
+    }
+
+    /// Appends the particles `range` of `handlers` within reach, relative to `within.lo`.
+    fn gather_range(
+        &mut self,
+        handlers: &HandlerArray,
+        range: Range<usize>,
+        within: box_filter::Reach,
+    ) {
+        let (lo, hi) = (within.lo, within.hi);
+        let reach = reach(&handlers.channels, within.radius, within.own);
+        let start = self.x.len();
+        self.grow(start + range.len());
+        let mut n = start;
+        for i in range {
+            let p = handlers.positions[i];
+            let r = reach(i);
+            let kept = (p - p.clamp(lo, hi)).length_squared() <= r * r;
+            n = self.put(n, p - lo, kept, |c| handlers.channels[c][i]);
+        }
+        self.truncate(n);
     }
 
     /// Keeps from `from` the particles within `radius` of the box `[lo, hi]`, relative to `lo`;
