@@ -232,6 +232,32 @@ impl HandlerArray {
         }
     }
 
+    /// Whether the Morton blocks of 4³ cells that overlap `[lo, hi]` hold more than `limit`
+    /// particles (whole blocks are counted: an upper bound of the particles in the box).
+    pub fn more_near_than(&self, lo: Vec3, hi: Vec3, limit: usize) -> bool {
+        let (a, b) = self.occupied_part(self.cell_of(lo), self.cell_of(hi));
+        if a.cmpgt(b).any() {
+            return false;
+        }
+        let (a, b) = ((a - self.origin) >> 2i32, (b - self.origin) >> 2i32);
+        let mut count = 0;
+        for z in a.z..=b.z {
+            for y in a.y..=b.y {
+                for x in a.x..=b.x {
+                    if let Some(block) = self.blocks.get(&morton(IVec3::new(x, y, z))) {
+                        let first = block.first as usize;
+                        let end = first + block.occupied.count_ones() as usize;
+                        count += (self.starts[end] - self.starts[first]) as usize;
+                        if count > limit {
+                            return true;
+                        }
+                    }
+                }
+            }
+        }
+        false
+    }
+
     /// The part of the box of cells `[a, b]` that holds particles (empty when `a > b` on an
     /// axis). A query box can reach far beyond the particles, up to i32's saturated limits for
     /// cells far larger than the lookup cells, and looping over all of it would never end.

@@ -55,21 +55,22 @@ impl Band {
     /// Marks every vertex in the box of half-width `half_width` around each surface particle.
     #[cfg(test)]
     pub fn around(surface: &[Vec3], cell: f32, half_width: f32) -> Result<Band> {
-        Band::around_within(surface, cell, half_width, |_| Ok(()))
+        Band::around_within(surface, cell, &vec![half_width; surface.len()], |_| Ok(()))
     }
 
-    /// [`Band::around`], calling `budget` with the number of (brick, particle) pairs that
-    /// building it takes (16 bytes each, twice while they are gathered) before allocating
-    /// them: a cell far smaller than the band makes billions.
+    /// [`Band::around`] with a half-width per particle, calling `budget` with the number of
+    /// (brick, particle) pairs that building it takes (16 bytes each, twice while they are
+    /// gathered) before allocating them: a cell far smaller than the band makes billions.
     pub fn around_within(
         surface: &[Vec3],
         cell: f32,
-        half_width: f32,
+        half_widths: &[f32],
         budget: impl FnOnce(u64) -> Result<()>,
     ) -> Result<Band> {
         let boxes: Vec<(IVec3, IVec3)> = surface
             .par_iter()
-            .map(|&p| vertex_box(p, cell, half_width))
+            .zip(half_widths)
+            .map(|(&p, &w)| vertex_box(p, cell, w))
             .collect::<Result<_>>()?;
         let bricks_of = |&(lo, hi): &(IVec3, IVec3)| -> u64 {
             let n = brick_of(hi) - brick_of(lo) + 1;

@@ -9,6 +9,7 @@ pub(crate) mod budget;
 pub(crate) mod field_sampling;
 pub(crate) mod full_grid;
 pub(crate) mod halo;
+pub(crate) mod lone_particles;
 pub(crate) mod marching_slices;
 pub(crate) mod narrow_band;
 pub(crate) mod normals;

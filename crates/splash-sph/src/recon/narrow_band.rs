@@ -10,6 +10,7 @@ use super::band_closure::close_band;
 use super::budget::{self, PER_BRICK, mul};
 use super::field_sampling::sample_field;
 use super::full_grid;
+use super::lone_particles::band_half_widths;
 use super::prepared::{finish, prepare, triangles_and_normals};
 use super::surface_particles::{SurfaceCriteria, surface_particles};
 use super::triangulation::triangulate;
@@ -42,7 +43,8 @@ pub(crate) fn gather(
         surface_count = Some(surface.len() as u64);
         let n = surface.len();
         stages.run(Stage::Band, || {
-            Band::around_within(&surface, params.cell, params.band_half_width, |pairs| {
+            let widths = band_half_widths(&surface, &prepared.handlers, field, params)?;
+            Band::around_within(&surface, params.cell, &widths, |pairs| {
                 // The pairs, twice while gathered, beside the particles' boxes.
                 let need = held
                     .saturating_add(mul(pairs, 32))
