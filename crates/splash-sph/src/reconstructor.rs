@@ -134,7 +134,7 @@ impl Reconstructor {
                 figure(r)
             ));
         }
-        if let Some(estimate) = crate::estimate_spacing(positions) {
+        if let Some(estimate) = crate::spacing::rough_spacing(positions) {
             let ratio = r / estimate;
             if !(0.5..=2.0).contains(&ratio) {
                 warnings.push(format!(
