@@ -39,11 +39,11 @@ pub fn local_index(l: IVec3) -> usize {
     (l.x + BRICK * (l.y + BRICK * l.z)) as usize
 }
 
-/// The local coordinates of a brick's vertices, in [`local_index`] order (x fastest).
+/// The local coordinates of the vertex with [`local_index`] `i`.
 #[inline]
-pub fn local_vertices() -> impl Iterator<Item = IVec3> {
-    (0..BRICK * BRICK * BRICK)
-        .map(|i| IVec3::new(i % BRICK, i / BRICK % BRICK, i / (BRICK * BRICK)))
+pub fn local_vertex(i: usize) -> IVec3 {
+    let i = i as i32;
+    IVec3::new(i % BRICK, i / BRICK % BRICK, i / (BRICK * BRICK))
 }
 
 #[inline]

@@ -11,10 +11,11 @@ use glam::IVec3;
 use rayon::prelude::*;
 
 use super::band::{BRICK, Band};
+use super::brick_signs::Signs;
 use super::field_sampling::BrickValues;
-use super::halo::{Halo, offset, owns_inside_corner};
+use super::halo::offset;
+use super::surface_cells::BrickCells;
 use crate::error::Result;
-use crate::mesh::marching_cubes::{case_index, cases};
 
 /// Grows the band until no surface cell has an open face; `sample` gives the field on a band
 /// of new vertices, told how many bricks the band will have at most with them (to check the
@@ -50,20 +51,14 @@ pub fn close_band(
 /// Grid vertices that must join the band, found in the bricks `scan`, sorted and without
 /// repeats.
 fn missing_vertices(band: &Band, values: &BrickValues, scan: &[IVec3]) -> Vec<IVec3> {
-    let lows = values.inside_lows(band);
+    let signs = Signs::of(band, values);
     let mut missing: Vec<IVec3> = scan
         .par_iter()
-        .filter(|&&brick| owns_inside_corner(band, &lows, brick))
-        .map_init(Halo::new, |halo, &brick| {
-            halo.fill(band, values, brick);
+        .filter(|&&brick| signs.owns_inside_corner(band, brick))
+        .map_init(BrickCells::new, |cells, &brick| {
+            cells.fill(band, &signs, brick);
             let mut out = Vec::new();
-            for z in 0..BRICK {
-                for y in 0..BRICK {
-                    for x in 0..BRICK {
-                        open_faces(halo, IVec3::new(x, y, z), brick * BRICK, &mut out);
-                    }
-                }
-            }
+            open_faces(cells, brick * BRICK, &mut out);
             out
         })
         .flatten()
@@ -73,33 +68,25 @@ fn missing_vertices(band: &Band, values: &BrickValues, scan: &[IVec3]) -> Vec<IV
     missing
 }
 
-/// Appends the missing corners of the incomplete cells across the crossed faces of cell `l`.
-fn open_faces(halo: &Halo, l: IVec3, base: IVec3, out: &mut Vec<IVec3>) {
-    if !halo.complete(l) {
-        return;
-    }
-    let corners = halo.corners(l);
-    let case = case_index(&corners);
-    if cases()[case].triangles().is_empty() {
-        return;
-    }
-    for axis in 0..3 {
-        for side in 0..2 {
-            let on_face = |c: usize| (c >> axis & 1) == side;
-            let inside = (0..8).filter(|&c| on_face(c)).map(|c| case >> c & 1);
-            let (lo, hi) = inside.fold((1, 0), |(lo, hi), s| (lo.min(s), hi.max(s)));
-            if lo == hi {
-                continue;
-            }
-            let step = if side == 1 { 1 } else { -1 };
-            let beyond = l + IVec3::AXES[axis] * step;
-            if halo.complete(beyond) {
-                continue;
-            }
-            for c in 0..8 {
-                let v = beyond + offset(c);
-                if halo.at(v).is_nan() {
-                    out.push(base + v);
+/// Appends the missing corners of the incomplete cells across the crossed faces of the
+/// brick's crossed cells.
+fn open_faces(cells: &BrickCells, base: IVec3, out: &mut Vec<IVec3>) {
+    for (l, case) in cells.crossed() {
+        for axis in 0..3 {
+            for side in 0..2 {
+                if !BrickCells::face_crossed(case, axis, side) {
+                    continue;
+                }
+                let step = if side == 1 { 1 } else { -1 };
+                let beyond = l + IVec3::AXES[axis] * step;
+                if cells.complete(beyond) {
+                    continue;
+                }
+                for c in 0..8 {
+                    let v = beyond + offset(c);
+                    if !cells.present(v) {
+                        out.push(base + v);
+                    }
                 }
             }
         }

@@ -12,15 +12,15 @@ use std::ops::Range;
 use glam::{IVec3, Vec3};
 use rayon::prelude::*;
 
-use super::band::{BRICK, Band, brick_of, local_index, local_vertices};
+use super::band::{BRICK, Band, brick_of, local_index, local_vertex};
+use super::brick_signs::Signs;
 use super::budget;
 use super::field_sampling::{BrickValues, vertex_position};
-use super::halo::{Halo, neighbour_slot, offset, owns_inside_corner};
+use super::halo::{Halo, neighbour_slot, offset};
+use super::surface_cells::BrickCells;
 use crate::error::{Error, Result};
 use crate::mesh::TriMesh;
-use crate::mesh::marching_cubes::{
-    case_index, cases, crossing_normal, edge_axis, edge_corners, edge_crossing,
-};
+use crate::mesh::marching_cubes::{cases, crossing_normal, edge_axis, edge_corners, edge_crossing};
 
 /// The edge vertices owned by one brick: bit `3 * local_index + axis` marks an edge that holds
 /// one, numbered in bit order from `first`; and where the brick's triangles start.
@@ -54,26 +54,27 @@ pub struct Triangulation {
 /// Bytes the triangulation holds per brick besides its vertices: the edge table.
 pub const PER_BRICK_EDGES: u64 = size_of::<BrickEdges>() as u64;
 
-/// Triangulates the band; `budget` is given the mesh's bytes ([`mesh_bytes`]) once its
-/// vertices and triangles are counted, before the mesh is allocated. Each brick's vertices and
-/// triangles are written straight into their places in the mesh, counted by a first pass.
+/// Triangulates the band; `budget` is given the bytes of the mesh ([`mesh_bytes`]) and of the
+/// sign planes once its vertices and triangles are counted, before the mesh is allocated. Each
+/// brick's vertices and triangles are written straight into their places in the mesh, counted
+/// by a first pass.
 pub fn triangulate(
     band: &Band,
     values: &BrickValues,
     budget: impl FnOnce(u64) -> Result<()>,
 ) -> Result<Triangulation> {
     let cell = band.cell;
-    let lows = values.inside_lows(band);
+    let signs = Signs::of(band, values);
     // Only bricks with edge vertices or triangles keep an edge table.
     let counted: Vec<(Option<Box<BrickEdges>>, usize)> = band
         .bricks
         .par_iter()
-        .map_init(Halo::new, |halo, &brick| {
-            if !owns_inside_corner(band, &lows, brick) {
+        .map_init(BrickCells::new, |cells, &brick| {
+            if !signs.owns_inside_corner(band, brick) {
                 return (None, 0);
             }
-            halo.fill(band, values, brick);
-            let (e, cells) = count_brick(halo);
+            cells.fill(band, &signs, brick);
+            let (e, cells) = count_brick(cells);
             let keep = e.vertices > 0 || e.triangles > 0;
             (keep.then(|| Box::new(e)), cells)
         })
@@ -96,11 +97,14 @@ pub fn triangulate(
             brick_vertices.push(e.first as usize..next as usize);
         }
     }
-    budget(mesh_bytes(
-        next.into(),
-        triangles as u64,
-        edges.iter().flatten().count() as u64,
-    ))?;
+    budget(
+        mesh_bytes(
+            next.into(),
+            triangles as u64,
+            edges.iter().flatten().count() as u64,
+        )
+        .saturating_add(signs.heap_bytes() as u64),
+    )?;
     let what = || format!("a mesh of {next} vertices and {triangles} triangles");
     let mut mesh = TriMesh {
         vertices: budget::try_filled(next as usize, Vec3::ZERO, what)?,
@@ -123,14 +127,18 @@ pub fn triangulate(
         parts.push((b, vh, nh, th));
         (v, n, t) = (vt, nt, tt);
     }
-    parts
-        .into_par_iter()
-        .for_each_init(Halo::new, |halo, (b, positions, normals, tris)| {
+    parts.into_par_iter().for_each_init(
+        || (BrickCells::new(), Halo::new()),
+        |(cells, halo), (b, positions, normals, tris)| {
             let brick = band.bricks[b];
-            halo.fill(band, values, brick);
-            edge_vertices(halo, brick, cell, positions, normals);
-            brick_triangles(halo, &edges, tris);
-        });
+            cells.fill(band, &signs, brick);
+            if !positions.is_empty() {
+                halo.fill(band, values, &cells.neighbours);
+                edge_vertices(halo, &edges[b], brick, cell, positions, normals);
+            }
+            brick_triangles(cells, &edges, tris);
+        },
+    );
     Ok(Triangulation {
         mesh,
         brick_vertices,
@@ -152,8 +160,8 @@ pub fn mesh_bytes(vertices: u64, triangles: u64, bricks: u64) -> u64 {
 
 /// The edge table of a brick (which of the sign-changing edges leaving its vertices in +x,
 /// +y, +z have a vertex: those where at least one of the four cells around the edge is
-/// triangulated), the number of its triangles and of its surface cells.
-fn count_brick(halo: &Halo) -> (BrickEdges, usize) {
+/// complete), the number of its triangles and of its surface cells.
+fn count_brick(cells: &BrickCells) -> (BrickEdges, usize) {
     let mut edges = BrickEdges {
         bits: [0; 24],
         ranks: [0; 24],
@@ -162,17 +170,25 @@ fn count_brick(halo: &Halo) -> (BrickEdges, usize) {
         triangles: 0,
         first_triangle: 0,
     };
-    let mut cells = 0;
-    for l in local_vertices() {
-        for (axis, _, _) in vertex_edges(halo, l) {
-            let bit = 3 * local_index(l) + axis;
-            edges.bits[bit / 64] |= 1 << (bit % 64);
+    for z in 0..BRICK as usize {
+        for y in 0..BRICK as usize {
+            // The row's 8 vertices × 3 axes, at bit 3 * local_index + axis.
+            let row = (0..3).fold(0u64, |row, axis| {
+                row | u64::from(SPREAD[cells.edge_row(axis, y, z) as usize]) << axis
+            });
+            let bit = 3 * BRICK as usize * (y + BRICK as usize * z);
+            let (w, b) = (bit / 64, bit % 64);
+            edges.bits[w] |= row << b;
+            if b + 24 > 64 {
+                edges.bits[w + 1] |= row >> (64 - b);
+            }
         }
-        if halo.complete(l) {
-            let n = cases()[case_index(&halo.corners(l))].triangles().len();
-            edges.triangles += n;
-            cells += usize::from(n > 0);
-        }
+    }
+    let mut surface = 0;
+    for (_, case) in cells.crossed() {
+        let n = cases()[case].triangles().len();
+        edges.triangles += n;
+        surface += usize::from(n > 0);
     }
     let mut count = 0;
     for (rank, bits) in edges.ranks.iter_mut().zip(&edges.bits) {
@@ -180,21 +196,46 @@ fn count_brick(halo: &Halo) -> (BrickEdges, usize) {
         count += bits.count_ones();
     }
     edges.vertices = count;
-    (edges, cells)
+    (edges, surface)
 }
 
-/// The positions and grid normals of the vertices [`count_brick`] marked, in bit order.
+/// Bit `i` of a byte moved to bit `3i`.
+const SPREAD: [u32; 256] = {
+    let mut table = [0; 256];
+    let mut byte = 0;
+    while byte < 256 {
+        let mut i = 0;
+        while i < 8 {
+            table[byte] |= ((byte as u32 >> i) & 1) << (3 * i);
+            i += 1;
+        }
+        byte += 1;
+    }
+    table
+};
+
+/// The positions and grid normals of the vertices of `edges`, in bit order.
 fn edge_vertices(
     halo: &Halo,
+    edges: &Option<Box<BrickEdges>>,
     brick: IVec3,
     cell: f32,
     positions: &mut [Vec3],
     normals: &mut [Vec3],
 ) {
+    let edges = edges
+        .as_ref()
+        .expect("a brick with vertices has an edge table");
     let mut k = 0;
-    for l in local_vertices() {
-        for (axis, v0, v1) in vertex_edges(halo, l) {
+    for (w, &word) in edges.bits.iter().enumerate() {
+        let mut bits = word;
+        while bits != 0 {
+            let bit = 64 * w + bits.trailing_zeros() as usize;
+            bits &= bits - 1;
+            let (local, axis) = (bit / 3, bit % 3);
+            let l = local_vertex(local);
             let e = IVec3::AXES[axis];
+            let (v0, v1) = (halo.at(l), halo.at(l + e));
             let p0 = vertex_position(brick * BRICK + l, cell);
             let (p, t) = edge_crossing(p0, axis, cell, v0, v1);
             let (g0, g1) = (halo.gradient(l, cell), halo.gradient(l + e, cell));
@@ -206,41 +247,19 @@ fn edge_vertices(
     debug_assert_eq!(k, positions.len(), "the vertices counted");
 }
 
-/// The edges leaving vertex `l` in +x, +y, +z that carry a mesh vertex: the field changes sign
-/// along them and one of the four cells around them is triangulated. Yields (axis, value at
-/// `l`, value at the other end).
-fn vertex_edges(halo: &Halo, l: IVec3) -> impl Iterator<Item = (usize, f32, f32)> + '_ {
-    let v0 = halo.at(l);
-    (0..3).filter_map(move |axis| {
-        let v1 = halo.at(l + IVec3::AXES[axis]);
-        let crossed = !v0.is_nan() && !v1.is_nan() && (v0 < 0.0) != (v1 < 0.0);
-        (crossed && edge_in_surface_cell(halo, l, axis)).then_some((axis, v0, v1))
-    })
-}
-
-fn edge_in_surface_cell(halo: &Halo, l: IVec3, axis: usize) -> bool {
-    let (u, v) = (IVec3::AXES[(axis + 1) % 3], IVec3::AXES[(axis + 2) % 3]);
-    [l, l - u, l - v, l - u - v]
-        .into_iter()
-        .any(|c| halo.complete(c))
-}
-
 /// The triangles of the brick's surface cells, into `out` (as many as [`count_brick`] found).
-fn brick_triangles(halo: &Halo, edges: &[Option<Box<BrickEdges>>], out: &mut [[u32; 3]]) {
+fn brick_triangles(cells: &BrickCells, edges: &[Option<Box<BrickEdges>>], out: &mut [[u32; 3]]) {
+    let owners: [Option<&BrickEdges>; 27] = cells
+        .neighbours
+        .map(|n| n.and_then(|b| edges[b].as_deref()));
     let mut k = 0;
-    for l in local_vertices() {
-        if !halo.complete(l) {
-            continue;
-        }
-        let case = case_index(&halo.corners(l));
+    for (l, case) in cells.crossed() {
         for t in cases()[case].triangles() {
             out[k] = t.map(|e| {
                 let e = e as usize;
                 let owner = l + offset(edge_corners(e).0);
                 let d = brick_of(owner);
-                let b = halo.neighbours[neighbour_slot(d)]
-                    .expect("a complete cell's corners lie in existing bricks");
-                let owned = edges[b].as_ref().expect("a crossed edge has a vertex");
+                let owned = owners[neighbour_slot(d)].expect("a crossed edge has a vertex");
                 owned.id(local_index(owner - d * BRICK), edge_axis(e))
             });
             k += 1;
