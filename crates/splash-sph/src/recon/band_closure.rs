@@ -11,6 +11,7 @@ use glam::IVec3;
 use rayon::prelude::*;
 
 use super::band::{BRICK, Band};
+use super::brick_neighbours::NeighbourWalk;
 use super::brick_signs::Signs;
 use super::field_sampling::BrickValues;
 use super::halo::offset;
@@ -54,13 +55,18 @@ fn missing_vertices(band: &Band, values: &BrickValues, scan: &[IVec3]) -> Vec<IV
     let signs = Signs::of(band, values);
     let mut missing: Vec<IVec3> = scan
         .par_iter()
-        .filter(|&&brick| signs.owns_inside_corner(band, brick))
-        .map_init(BrickCells::new, |cells, &brick| {
-            cells.fill(band, &signs, brick);
-            let mut out = Vec::new();
-            open_faces(cells, brick * BRICK, &mut out);
-            out
-        })
+        .map_init(
+            || (BrickCells::new(), NeighbourWalk::new(&band.bricks)),
+            |(cells, walk), &brick| {
+                let mut out = Vec::new();
+                let neighbours = walk.around(brick);
+                if signs.owns_inside_corner(&neighbours) {
+                    cells.fill(band, &signs, neighbours);
+                    open_faces(cells, brick * BRICK, &mut out);
+                }
+                out
+            },
+        )
         .flatten()
         .collect();
     missing.par_sort_unstable_by_key(|v| (v.z, v.y, v.x));

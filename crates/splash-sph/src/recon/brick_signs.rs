@@ -3,12 +3,11 @@
 //! a cell's eight corners in the band, its case, an edge's sign change) need only these, so
 //! they run on rows of vertices at once instead of on the values.
 
-use glam::IVec3;
 use rayon::prelude::*;
 
 use super::band::Band;
 use super::brick_values::BrickValues;
-use super::halo::offset;
+use super::halo::{neighbour_slot, offset};
 
 /// Set in a brick's slot when some vertex of its mask has a NaN value: the plane after its
 /// inside plane then holds the vertices with a value.
@@ -87,13 +86,14 @@ impl Signs {
         }
     }
 
-    /// Whether brick `brick` owns a cell (lowest corner in it) with an inside corner: only
-    /// those bricks can own crossed cells and the edges of their vertices; the rest (most of
-    /// the band around a droplet) are skipped.
-    pub fn owns_inside_corner(&self, band: &Band, brick: IVec3) -> bool {
+    /// Whether the brick whose neighbours (by [`neighbour_slot`]) are `neighbours` owns a
+    /// cell (lowest corner in it) with an inside corner: only those bricks can own crossed
+    /// cells and the edges of their vertices; the rest (most of the band around a droplet)
+    /// are skipped.
+    pub fn owns_inside_corner(&self, neighbours: &[Option<usize>; 27]) -> bool {
         (0..8).any(|c| {
             let d = offset(c);
-            band.brick_index(brick + d).is_some_and(|n| {
+            neighbours[neighbour_slot(d)].is_some_and(|n| {
                 // The corners in a neighbour lie on its side facing this brick.
                 let plane = if d.x == 1 {
                     0x0101_0101_0101_0101

@@ -4,6 +4,7 @@
 
 pub(crate) mod band;
 pub(crate) mod band_closure;
+pub(crate) mod brick_neighbours;
 pub(crate) mod brick_signs;
 pub(crate) mod brick_values;
 pub(crate) mod budget;

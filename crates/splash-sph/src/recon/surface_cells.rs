@@ -8,6 +8,8 @@ use glam::IVec3;
 
 use super::band::{BRICK, Band};
 use super::brick_signs::Signs;
+#[cfg(doc)]
+use super::halo::neighbour_slot;
 
 /// Rows cover local coordinates −1..=9, as the halo does: bit `x + 1` of a row is vertex `x`.
 const SIDE: usize = BRICK as usize + 3;
@@ -44,13 +46,14 @@ impl BrickCells {
         }
     }
 
-    pub fn fill(&mut self, band: &Band, signs: &Signs, brick: IVec3) {
+    /// The cells of the brick whose neighbours (by [`neighbour_slot`]) are `neighbours`.
+    pub fn fill(&mut self, band: &Band, signs: &Signs, neighbours: [Option<usize>; 27]) {
         self.present = [[0; SIDE]; SIDE];
         self.inside = [[0; SIDE]; SIDE];
-        for (n, slot) in self.neighbours.iter_mut().enumerate() {
+        self.neighbours = neighbours;
+        for (n, slot) in neighbours.into_iter().enumerate() {
             let d = IVec3::new(n as i32 % 3, n as i32 / 3 % 3, n as i32 / 9) - 1;
-            *slot = band.brick_index(brick + d);
-            let Some(b) = *slot else { continue };
+            let Some(b) = slot else { continue };
             let (present, inside) = signs.planes(&band.masks[b], b);
             // A neighbour's row of 8 bits lands at halo bit 0 (its x = 7), 1..=8 or 9..=10.
             let place = |row: u64| -> u16 {
@@ -181,6 +184,7 @@ mod tests {
     use super::*;
     use crate::mesh::marching_cubes::case_index;
     use crate::recon::band::BRICK_VERTICES;
+    use crate::recon::brick_neighbours::NeighbourWalk;
     use crate::recon::brick_values::BrickValues;
     use crate::recon::halo::{Halo, offset};
     use glam::Vec3;
@@ -207,9 +211,10 @@ mod tests {
         let values = BrickValues::sample(&band, || (), |_, b| dense[b]).unwrap();
         let signs = Signs::of(&band, &values);
         let (mut cells, mut halo) = (BrickCells::new(), Halo::new());
+        let mut walk = NeighbourWalk::new(&band.bricks);
         let mut crossed = 0;
         for &brick in &band.bricks {
-            cells.fill(&band, &signs, brick);
+            cells.fill(&band, &signs, walk.around(brick));
             halo.fill(&band, &values, &cells.neighbours);
             let range = |a, b| {
                 (a..=b).flat_map(move |z| {

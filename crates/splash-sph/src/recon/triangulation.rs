@@ -13,6 +13,7 @@ use glam::{IVec3, Vec3};
 use rayon::prelude::*;
 
 use super::band::{BRICK, Band, brick_of, local_index, local_vertex};
+use super::brick_neighbours::NeighbourWalk;
 use super::brick_signs::Signs;
 use super::budget;
 use super::field_sampling::{BrickValues, vertex_position};
@@ -69,15 +70,19 @@ pub fn triangulate(
     let counted: Vec<(Option<Box<BrickEdges>>, usize)> = band
         .bricks
         .par_iter()
-        .map_init(BrickCells::new, |cells, &brick| {
-            if !signs.owns_inside_corner(band, brick) {
-                return (None, 0);
-            }
-            cells.fill(band, &signs, brick);
-            let (e, cells) = count_brick(cells);
-            let keep = e.vertices > 0 || e.triangles > 0;
-            (keep.then(|| Box::new(e)), cells)
-        })
+        .map_init(
+            || (BrickCells::new(), NeighbourWalk::new(&band.bricks)),
+            |(cells, walk), &brick| {
+                let neighbours = walk.around(brick);
+                if !signs.owns_inside_corner(&neighbours) {
+                    return (None, 0);
+                }
+                cells.fill(band, &signs, neighbours);
+                let (e, cells) = count_brick(cells);
+                let keep = e.vertices > 0 || e.triangles > 0;
+                (keep.then(|| Box::new(e)), cells)
+            },
+        )
         .collect();
     let surface_cells = counted.iter().map(|(_, n)| n).sum();
     let mut edges: Vec<Option<Box<BrickEdges>>> = counted.into_iter().map(|(e, _)| e).collect();
@@ -128,10 +133,16 @@ pub fn triangulate(
         (v, n, t) = (vt, nt, tt);
     }
     parts.into_par_iter().for_each_init(
-        || (BrickCells::new(), Halo::new()),
-        |(cells, halo), (b, positions, normals, tris)| {
+        || {
+            (
+                BrickCells::new(),
+                Halo::new(),
+                NeighbourWalk::new(&band.bricks),
+            )
+        },
+        |(cells, halo, walk), (b, positions, normals, tris)| {
             let brick = band.bricks[b];
-            cells.fill(band, &signs, brick);
+            cells.fill(band, &signs, walk.around(brick));
             if !positions.is_empty() {
                 halo.fill(band, values, &cells.neighbours);
                 edge_vertices(halo, &edges[b], brick, cell, positions, normals);
