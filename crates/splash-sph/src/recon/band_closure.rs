@@ -20,19 +20,22 @@ use crate::error::Result;
 
 /// Grows the band until no surface cell has an open face; `sample` gives the field on a band
 /// of new vertices, told how many bricks the band will have at most with them (to check the
-/// memory limit as the band grows). Returns the number of vertices added.
+/// memory limit as the band grows). Returns the number of vertices added, and the sign planes
+/// of the closed band.
 pub fn close_band(
     band: &mut Band,
     values: &mut BrickValues,
     mut sample: impl FnMut(&Band, usize) -> Result<BrickValues>,
-) -> Result<usize> {
+) -> Result<(usize, Signs)> {
     let mut added = 0;
     let mut scan = band.bricks.clone();
     loop {
-        let missing = missing_vertices(band, values, &scan);
+        let signs = Signs::of(band, values);
+        let missing = missing_vertices(band, &signs, &scan);
         if missing.is_empty() {
-            return Ok(added);
+            return Ok((added, signs));
         }
+        drop(signs);
         added += missing.len();
         let grown = Band::from_vertices(&missing, band.cell);
         // Only cells near the new vertices can have new open faces.
@@ -51,8 +54,7 @@ pub fn close_band(
 
 /// Grid vertices that must join the band, found in the bricks `scan`, sorted and without
 /// repeats.
-fn missing_vertices(band: &Band, values: &BrickValues, scan: &[IVec3]) -> Vec<IVec3> {
-    let signs = Signs::of(band, values);
+fn missing_vertices(band: &Band, signs: &Signs, scan: &[IVec3]) -> Vec<IVec3> {
     let mut missing: Vec<IVec3> = scan
         .par_iter()
         .map_init(
@@ -61,7 +63,7 @@ fn missing_vertices(band: &Band, values: &BrickValues, scan: &[IVec3]) -> Vec<IV
                 let mut out = Vec::new();
                 let neighbours = walk.around(brick);
                 if signs.owns_inside_corner(&neighbours) {
-                    cells.fill(band, &signs, neighbours);
+                    cells.fill(band, signs, neighbours);
                     open_faces(cells, brick * BRICK, &mut out);
                 }
                 out
@@ -77,7 +79,7 @@ fn missing_vertices(band: &Band, values: &BrickValues, scan: &[IVec3]) -> Vec<IV
 /// Appends the missing corners of the incomplete cells across the crossed faces of the
 /// brick's crossed cells.
 fn open_faces(cells: &BrickCells, base: IVec3, out: &mut Vec<IVec3>) {
-    for (l, case) in cells.crossed() {
+    cells.crossed(|l, case| {
         for axis in 0..3 {
             for side in 0..2 {
                 if !BrickCells::face_crossed(case, axis, side) {
@@ -96,5 +98,5 @@ fn open_faces(cells: &BrickCells, base: IVec3, out: &mut Vec<IVec3>) {
                 }
             }
         }
-    }
+    });
 }

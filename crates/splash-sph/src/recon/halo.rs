@@ -29,37 +29,50 @@ impl Halo {
         }
     }
 
-    /// The values around the brick whose neighbours (by [`neighbour_slot`]) are `neighbours`.
-    pub fn fill(&mut self, band: &Band, values: &BrickValues, neighbours: &[Option<usize>; 27]) {
-        self.values.fill(f32::NAN);
-        for (n, slot) in neighbours.iter().enumerate() {
-            let Some(b) = *slot else { continue };
-            let d = IVec3::new(n as i32 % 3, n as i32 / 3 % 3, n as i32 / 9) - 1;
-            let lo = (d * BRICK).max(IVec3::splat(-1));
-            let hi = (d * BRICK + BRICK - 1).min(IVec3::splat(BRICK + 1));
-            // The neighbour's x range, as bits of its rows.
-            let x0 = (lo.x - d.x * BRICK) as u32;
-            let width = (hi.x - lo.x + 1) as usize;
-            let take = (1u32 << width) - 1;
-            let mask = &band.masks[b];
-            for z in lo.z..=hi.z {
-                let lz = (z - d.z * BRICK) as usize;
-                let (word, plane) = (mask[lz], values.plane(mask, b, lz));
-                for y in lo.y..=hi.y {
-                    let first = x0 + (BRICK * (y - d.y * BRICK)) as u32;
-                    let row = (word >> first) as u32 & take;
-                    if row == 0 {
+    /// The values in the box `lo..=hi` (local coordinates −1..=9) around the brick whose
+    /// neighbours (by [`neighbour_slot`]) are `neighbours`; the rest of the halo keeps what an
+    /// earlier brick left there.
+    pub fn fill(
+        &mut self,
+        band: &Band,
+        values: &BrickValues,
+        neighbours: &[Option<usize>; 27],
+        lo: IVec3,
+        hi: IVec3,
+    ) {
+        let width = (hi.x - lo.x + 1) as usize;
+        for z in lo.z..=hi.z {
+            let (dz, lz) = split(z);
+            for y in lo.y..=hi.y {
+                let (dy, ly) = split(y);
+                let at = halo_index(IVec3::new(lo.x, y, z));
+                let row = &mut self.values[at..at + width];
+                row.fill(f32::NAN);
+                for dx in -1..=1 {
+                    // The part of the row in the neighbour at dx.
+                    let (xa, xb) = (lo.x.max(dx * BRICK), hi.x.min(dx * BRICK + BRICK - 1));
+                    let Some(b) = neighbours[neighbour_slot(IVec3::new(dx, dy, dz))] else {
+                        continue;
+                    };
+                    if xa > xb {
                         continue;
                     }
+                    let mask = &band.masks[b];
+                    let word = mask[lz as usize];
+                    let first = (xa - dx * BRICK + BRICK * ly) as u32;
+                    let take = (1u32 << (xb - xa + 1)) - 1;
+                    let bits = (word >> first) as u32 & take;
+                    if bits == 0 {
+                        continue;
+                    }
+                    let plane = values.plane(mask, b, lz as usize);
                     let rank = (word & ((1u64 << first) - 1)).count_ones() as usize;
-                    let at = halo_index(IVec3::new(lo.x, y, z));
-                    let out = &mut self.values[at..at + width];
-                    if row == take {
-                        out.copy_from_slice(&plane[rank..rank + width]);
+                    let out = &mut row[(xa - lo.x) as usize..=(xb - lo.x) as usize];
+                    if bits == take {
+                        out.copy_from_slice(&plane[rank..rank + out.len()]);
                         continue;
                     }
-                    let mut bits = row;
-                    let mut k = rank;
+                    let (mut bits, mut k) = (bits, rank);
                     while bits != 0 {
                         out[bits.trailing_zeros() as usize] = plane[k];
                         k += 1;
@@ -89,6 +102,12 @@ impl Halo {
             }
         }))
     }
+}
+
+/// The brick offset (−1, 0 or 1) and local coordinate of halo coordinate `h` on one axis.
+fn split(h: i32) -> (i32, i32) {
+    let d = h.div_euclid(BRICK);
+    (d, h - d * BRICK)
 }
 
 fn halo_index(l: IVec3) -> usize {

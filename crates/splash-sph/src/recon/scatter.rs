@@ -11,6 +11,7 @@ use glam::{IVec3, Vec3};
 
 use super::Reconstruction;
 use super::band::{BRICK, BRICK_VERTICES, Band, local_index};
+use super::brick_signs::Signs;
 use super::budget;
 use super::field_sampling::BrickValues;
 use super::full_grid::{self, Grid};
@@ -42,7 +43,7 @@ pub fn reconstruct(
         params,
         field,
         || {
-            triangulate(&band, &values, |mesh| {
+            triangulate(&band, &values, Signs::of(&band, &values), |mesh| {
                 let held = (band.heap_bytes() + values.heap_bytes()) as u64;
                 budget::check(params, held.saturating_add(mesh), || {
                     "the mesh of the full grid's surface".into()

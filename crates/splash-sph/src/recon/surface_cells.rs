@@ -95,22 +95,20 @@ impl BrickCells {
         self.present[s.z as usize][s.y as usize] >> s.x & 1 == 1
     }
 
-    /// The brick's own cells (lowest corner in it) that the surface crosses, complete with
-    /// inside and outside corners, with their case, in local index order.
-    pub fn crossed(&self) -> impl Iterator<Item = (IVec3, usize)> + '_ {
-        (0..BRICK * BRICK).flat_map(move |row| {
-            let (y, z) = (row % BRICK, row / BRICK);
-            let mut bits = self.crossed_row(y as usize + 1, z as usize + 1);
-            std::iter::from_fn(move || {
-                if bits == 0 {
-                    return None;
+    /// Calls `f` with each of the brick's own cells (lowest corner in it) that the surface
+    /// crosses, complete with inside and outside corners, and its case, in local index order.
+    #[inline]
+    pub fn crossed(&self, mut f: impl FnMut(IVec3, usize)) {
+        for z in 0..BRICK {
+            for y in 0..BRICK {
+                let mut bits = self.crossed_row(y as usize + 1, z as usize + 1);
+                while bits != 0 {
+                    let l = IVec3::new(bits.trailing_zeros() as i32 - 1, y, z);
+                    bits &= bits - 1;
+                    f(l, self.case(l));
                 }
-                let x = bits.trailing_zeros() as i32 - 1;
-                bits &= bits - 1;
-                let l = IVec3::new(x, y, z);
-                Some((l, self.case(l)))
-            })
-        })
+            }
+        }
     }
 
     /// Crossed cells of halo row (`hy`, `hz`) among the brick's own, bit `x + 1`.
@@ -215,7 +213,13 @@ mod tests {
         let mut crossed = 0;
         for &brick in &band.bricks {
             cells.fill(&band, &signs, walk.around(brick));
-            halo.fill(&band, &values, &cells.neighbours);
+            halo.fill(
+                &band,
+                &values,
+                &cells.neighbours,
+                IVec3::splat(-1),
+                IVec3::splat(9),
+            );
             let range = |a, b| {
                 (a..=b).flat_map(move |z| {
                     (a..=b).flat_map(move |y| (a..=b).map(move |x| IVec3::new(x, y, z)))
@@ -237,7 +241,8 @@ mod tests {
                 }
             }
             expected.sort_by_key(|(l, _)| (l.z, l.y, l.x));
-            let got: Vec<_> = cells.crossed().collect();
+            let mut got = Vec::new();
+            cells.crossed(|l, case| got.push((l, case)));
             assert_eq!(got, expected, "{brick}");
             crossed += got.len();
             for l in range(0, 7) {

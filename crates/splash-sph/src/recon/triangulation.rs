@@ -8,6 +8,7 @@
 //! vertices, a prefix sum numbers them, the second emits triangles.
 
 use std::ops::Range;
+use std::sync::LazyLock;
 
 use glam::{IVec3, Vec3};
 use rayon::prelude::*;
@@ -42,6 +43,20 @@ impl BrickEdges {
         debug_assert!(self.bits[w] >> b & 1 == 1, "edge without a vertex");
         self.first + self.ranks[w] + (self.bits[w] & ((1u64 << b) - 1)).count_ones()
     }
+
+    /// The lowest and highest local coordinates of the vertices whose edges hold one.
+    fn extent(&self) -> (IVec3, IVec3) {
+        let (mut lo, mut hi) = (IVec3::splat(BRICK), IVec3::splat(-1));
+        for (w, &word) in self.bits.iter().enumerate() {
+            let mut bits = word;
+            while bits != 0 {
+                let l = local_vertex((64 * w + bits.trailing_zeros() as usize) / 3);
+                (lo, hi) = (lo.min(l), hi.max(l));
+                bits &= bits - 1;
+            }
+        }
+        (lo, hi)
+    }
 }
 
 pub struct Triangulation {
@@ -55,17 +70,17 @@ pub struct Triangulation {
 /// Bytes the triangulation holds per brick besides its vertices: the edge table.
 pub const PER_BRICK_EDGES: u64 = size_of::<BrickEdges>() as u64;
 
-/// Triangulates the band; `budget` is given the bytes of the mesh ([`mesh_bytes`]) and of the
-/// sign planes once its vertices and triangles are counted, before the mesh is allocated. Each
-/// brick's vertices and triangles are written straight into their places in the mesh, counted
-/// by a first pass.
+/// Triangulates the band whose values have the sign planes `signs`; `budget` is given the bytes
+/// of the mesh ([`mesh_bytes`]) and of the sign planes once its vertices and triangles are
+/// counted, before the mesh is allocated. Each brick's vertices and triangles are written
+/// straight into their places in the mesh, counted by a first pass.
 pub fn triangulate(
     band: &Band,
     values: &BrickValues,
+    signs: Signs,
     budget: impl FnOnce(u64) -> Result<()>,
 ) -> Result<Triangulation> {
     let cell = band.cell;
-    let signs = Signs::of(band, values);
     // Only bricks with edge vertices or triangles keep an edge table.
     let counted: Vec<(Option<Box<BrickEdges>>, usize)> = band
         .bricks
@@ -144,8 +159,13 @@ pub fn triangulate(
             let brick = band.bricks[b];
             cells.fill(band, &signs, walk.around(brick));
             if !positions.is_empty() {
-                halo.fill(band, values, &cells.neighbours);
-                edge_vertices(halo, &edges[b], brick, cell, positions, normals);
+                let e = edges[b]
+                    .as_deref()
+                    .expect("a brick with vertices has edges");
+                // Vertices' ends and the central differences at them.
+                let (lo, hi) = e.extent();
+                halo.fill(band, values, &cells.neighbours, lo - 1, hi + 2);
+                edge_vertices(halo, e, brick, cell, positions, normals);
             }
             brick_triangles(cells, &edges, tris);
         },
@@ -195,12 +215,12 @@ fn count_brick(cells: &BrickCells) -> (BrickEdges, usize) {
             }
         }
     }
-    let mut surface = 0;
-    for (_, case) in cells.crossed() {
-        let n = cases()[case].triangles().len();
+    let (table, mut surface) = (cases(), 0);
+    cells.crossed(|_, case| {
+        let n = table[case].triangles().len();
         edges.triangles += n;
         surface += usize::from(n > 0);
-    }
+    });
     let mut count = 0;
     for (rank, bits) in edges.ranks.iter_mut().zip(&edges.bits) {
         *rank = count;
@@ -228,15 +248,12 @@ const SPREAD: [u32; 256] = {
 /// The positions and grid normals of the vertices of `edges`, in bit order.
 fn edge_vertices(
     halo: &Halo,
-    edges: &Option<Box<BrickEdges>>,
+    edges: &BrickEdges,
     brick: IVec3,
     cell: f32,
     positions: &mut [Vec3],
     normals: &mut [Vec3],
 ) {
-    let edges = edges
-        .as_ref()
-        .expect("a brick with vertices has an edge table");
     let mut k = 0;
     for (w, &word) in edges.bits.iter().enumerate() {
         let mut bits = word;
@@ -263,18 +280,28 @@ fn brick_triangles(cells: &BrickCells, edges: &[Option<Box<BrickEdges>>], out: &
     let owners: [Option<&BrickEdges>; 27] = cells
         .neighbours
         .map(|n| n.and_then(|b| edges[b].as_deref()));
-    let mut k = 0;
-    for (l, case) in cells.crossed() {
-        for t in cases()[case].triangles() {
+    let own = owners[neighbour_slot(IVec3::ZERO)].expect("a brick with triangles has edges");
+    let (table, mut k) = (cases(), 0);
+    cells.crossed(|l, case| {
+        // Cells off the brick's upper faces own all their edges' vertices in this brick.
+        let inner = l.max_element() < BRICK - 1;
+        for t in table[case].triangles() {
             out[k] = t.map(|e| {
-                let e = e as usize;
-                let owner = l + offset(edge_corners(e).0);
+                let (corner, axis) = EDGE_OWNERS[e as usize];
+                let owner = l + corner;
+                if inner {
+                    return own.id(local_index(owner), axis);
+                }
                 let d = brick_of(owner);
                 let owned = owners[neighbour_slot(d)].expect("a crossed edge has a vertex");
-                owned.id(local_index(owner - d * BRICK), edge_axis(e))
+                owned.id(local_index(owner - d * BRICK), axis)
             });
             k += 1;
         }
-    }
+    });
     debug_assert_eq!(k, out.len(), "the triangles counted");
 }
+
+/// Each cell edge's lower corner (which owns its vertex) and axis.
+static EDGE_OWNERS: LazyLock<[(IVec3, usize); 12]> =
+    LazyLock::new(|| std::array::from_fn(|e| (offset(edge_corners(e).0), edge_axis(e))));
