@@ -17,47 +17,13 @@ use super::band::{BRICK, Band, brick_of, local_index, local_vertex};
 use super::brick_neighbours::NeighbourWalk;
 use super::brick_signs::Signs;
 use super::budget;
+use super::edge_tables::{BrickEdges, EdgeTables, PER_BRICK_EDGES};
 use super::field_sampling::{BrickValues, vertex_position};
 use super::halo::{Halo, neighbour_slot, offset};
 use super::surface_cells::BrickCells;
 use crate::error::{Error, Result};
 use crate::mesh::TriMesh;
 use crate::mesh::marching_cubes::{cases, crossing_normal, edge_axis, edge_corners, edge_crossing};
-
-/// The edge vertices owned by one brick: bit `3 * local_index + axis` marks an edge that holds
-/// one, numbered in bit order from `first`; and where the brick's triangles start.
-struct BrickEdges {
-    bits: [u64; 24],
-    /// Vertices in the words before each word.
-    ranks: [u32; 24],
-    first: u32,
-    vertices: u32,
-    triangles: usize,
-    first_triangle: usize,
-}
-
-impl BrickEdges {
-    fn id(&self, local: usize, axis: usize) -> u32 {
-        let bit = 3 * local + axis;
-        let (w, b) = (bit / 64, bit % 64);
-        debug_assert!(self.bits[w] >> b & 1 == 1, "edge without a vertex");
-        self.first + self.ranks[w] + (self.bits[w] & ((1u64 << b) - 1)).count_ones()
-    }
-
-    /// The lowest and highest local coordinates of the vertices whose edges hold one.
-    fn extent(&self) -> (IVec3, IVec3) {
-        let (mut lo, mut hi) = (IVec3::splat(BRICK), IVec3::splat(-1));
-        for (w, &word) in self.bits.iter().enumerate() {
-            let mut bits = word;
-            while bits != 0 {
-                let l = local_vertex((64 * w + bits.trailing_zeros() as usize) / 3);
-                (lo, hi) = (lo.min(l), hi.max(l));
-                bits &= bits - 1;
-            }
-        }
-        (lo, hi)
-    }
-}
 
 pub struct Triangulation {
     pub mesh: TriMesh,
@@ -67,40 +33,20 @@ pub struct Triangulation {
     pub surface_cells: usize,
 }
 
-/// Bytes the triangulation holds per brick besides its vertices: the edge table.
-pub const PER_BRICK_EDGES: u64 = size_of::<BrickEdges>() as u64;
-
-/// Triangulates the band whose values have the sign planes `signs`; `budget` is given the bytes
-/// of the mesh ([`mesh_bytes`]) and of the sign planes once its vertices and triangles are
-/// counted, before the mesh is allocated. Each brick's vertices and triangles are written
-/// straight into their places in the mesh, counted by a first pass.
+/// Triangulates the band whose values have the sign planes `signs` and whose bricks have the
+/// edge tables `tables`; `budget` is given the bytes of the mesh ([`mesh_bytes`]) and of the
+/// sign planes once its vertices and triangles are counted, before the mesh is allocated.
+/// Each brick's vertices and triangles are written straight into their places in the mesh.
 pub fn triangulate(
     band: &Band,
     values: &BrickValues,
     signs: Signs,
+    tables: EdgeTables,
     budget: impl FnOnce(u64) -> Result<()>,
 ) -> Result<Triangulation> {
     let cell = band.cell;
-    // Only bricks with edge vertices or triangles keep an edge table.
-    let counted: Vec<(Option<Box<BrickEdges>>, usize)> = band
-        .bricks
-        .par_iter()
-        .map_init(
-            || (BrickCells::new(), NeighbourWalk::new(&band.bricks)),
-            |(cells, walk), &brick| {
-                let neighbours = walk.around(brick);
-                if !signs.owns_inside_corner(&neighbours) {
-                    return (None, 0);
-                }
-                cells.fill(band, &signs, neighbours);
-                let (e, cells) = count_brick(cells);
-                let keep = e.vertices > 0 || e.triangles > 0;
-                (keep.then(|| Box::new(e)), cells)
-            },
-        )
-        .collect();
-    let surface_cells = counted.iter().map(|(_, n)| n).sum();
-    let mut edges: Vec<Option<Box<BrickEdges>>> = counted.into_iter().map(|(e, _)| e).collect();
+    let mut edges = tables.0;
+    let surface_cells = edges.iter().flatten().map(|e| e.cells as usize).sum();
     let (mut next, mut triangles) = (0u32, 0usize);
     let mut brick_vertices = Vec::with_capacity(edges.len());
     for e in edges.iter_mut().flatten() {
@@ -189,62 +135,6 @@ pub fn mesh_bytes(vertices: u64, triangles: u64, bricks: u64) -> u64 {
         .saturating_add(bricks.saturating_mul(PER_BRICK_EDGES))
 }
 
-/// The edge table of a brick (which of the sign-changing edges leaving its vertices in +x,
-/// +y, +z have a vertex: those where at least one of the four cells around the edge is
-/// complete), the number of its triangles and of its surface cells.
-fn count_brick(cells: &BrickCells) -> (BrickEdges, usize) {
-    let mut edges = BrickEdges {
-        bits: [0; 24],
-        ranks: [0; 24],
-        first: 0,
-        vertices: 0,
-        triangles: 0,
-        first_triangle: 0,
-    };
-    for z in 0..BRICK as usize {
-        for y in 0..BRICK as usize {
-            // The row's 8 vertices × 3 axes, at bit 3 * local_index + axis.
-            let row = (0..3).fold(0u64, |row, axis| {
-                row | u64::from(SPREAD[cells.edge_row(axis, y, z) as usize]) << axis
-            });
-            let bit = 3 * BRICK as usize * (y + BRICK as usize * z);
-            let (w, b) = (bit / 64, bit % 64);
-            edges.bits[w] |= row << b;
-            if b + 24 > 64 {
-                edges.bits[w + 1] |= row >> (64 - b);
-            }
-        }
-    }
-    let (table, mut surface) = (cases(), 0);
-    cells.crossed(|_, case| {
-        let n = table[case].triangles().len();
-        edges.triangles += n;
-        surface += usize::from(n > 0);
-    });
-    let mut count = 0;
-    for (rank, bits) in edges.ranks.iter_mut().zip(&edges.bits) {
-        *rank = count;
-        count += bits.count_ones();
-    }
-    edges.vertices = count;
-    (edges, surface)
-}
-
-/// Bit `i` of a byte moved to bit `3i`.
-const SPREAD: [u32; 256] = {
-    let mut table = [0; 256];
-    let mut byte = 0;
-    while byte < 256 {
-        let mut i = 0;
-        while i < 8 {
-            table[byte] |= ((byte as u32 >> i) & 1) << (3 * i);
-            i += 1;
-        }
-        byte += 1;
-    }
-    table
-};
-
 /// The positions and grid normals of the vertices of `edges`, in bit order.
 fn edge_vertices(
     halo: &Halo,
@@ -255,27 +145,21 @@ fn edge_vertices(
     normals: &mut [Vec3],
 ) {
     let mut k = 0;
-    for (w, &word) in edges.bits.iter().enumerate() {
-        let mut bits = word;
-        while bits != 0 {
-            let bit = 64 * w + bits.trailing_zeros() as usize;
-            bits &= bits - 1;
-            let (local, axis) = (bit / 3, bit % 3);
-            let l = local_vertex(local);
-            let e = IVec3::AXES[axis];
-            let (v0, v1) = (halo.at(l), halo.at(l + e));
-            let p0 = vertex_position(brick * BRICK + l, cell);
-            let (p, t) = edge_crossing(p0, axis, cell, v0, v1);
-            let (g0, g1) = (halo.gradient(l, cell), halo.gradient(l + e, cell));
-            positions[k] = p;
-            normals[k] = crossing_normal(g0, g1, t, axis, v0, v1);
-            k += 1;
-        }
-    }
+    edges.each(|local, axis| {
+        let l = local_vertex(local);
+        let e = IVec3::AXES[axis];
+        let (v0, v1) = (halo.at(l), halo.at(l + e));
+        let p0 = vertex_position(brick * BRICK + l, cell);
+        let (p, t) = edge_crossing(p0, axis, cell, v0, v1);
+        let (g0, g1) = (halo.gradient(l, cell), halo.gradient(l + e, cell));
+        positions[k] = p;
+        normals[k] = crossing_normal(g0, g1, t, axis, v0, v1);
+        k += 1;
+    });
     debug_assert_eq!(k, positions.len(), "the vertices counted");
 }
 
-/// The triangles of the brick's surface cells, into `out` (as many as [`count_brick`] found).
+/// The triangles of the brick's surface cells, into `out` (as many as its edge table counts).
 fn brick_triangles(cells: &BrickCells, edges: &[Option<Box<BrickEdges>>], out: &mut [[u32; 3]]) {
     let owners: [Option<&BrickEdges>; 27] = cells
         .neighbours
