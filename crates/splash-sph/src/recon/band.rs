@@ -403,7 +403,10 @@ mod tests {
         // 3 bits for x, none for y (always 0), 10 for z, 17 for the particle.
         assert_eq!(layout.bits, 30);
         let key = u64::pack([4, 0, 999, 65_432], &layout);
-        assert_eq!([0, 1, 2, 3].map(|f| key.field(f, &layout)), [4, 0, 999, 65_432]);
+        assert_eq!(
+            [0, 1, 2, 3].map(|f| key.field(f, &layout)),
+            [4, 0, 999, 65_432]
+        );
         let wide = u128::pack([4, 0, 999, 65_432], &layout);
         assert_eq!(wide, u128::from(key));
     }

@@ -1,6 +1,7 @@
-//! The 26 neighbours of bricks visited in (z, y, x) order, found by walking the band's sorted
-//! brick list with one cursor per row of three neighbours instead of 27 hash lookups: a large
-//! band's index does not fit in cache, while the walk reads the list in order.
+//! The 26 neighbours of the band's bricks (Sec. 4.1's band, stored as bricks), for bricks
+//! visited in (z, y, x) order: found by walking the sorted brick list with one cursor per row
+//! of three neighbours instead of 27 hash lookups, as a large band's index does not fit in
+//! cache while the walk reads the list in order.
 
 use glam::IVec3;
 
