@@ -18,9 +18,6 @@ use rustc_hash::FxHashMap;
 pub const BRICK: i32 = 8;
 pub const BRICK_VERTICES: usize = 512;
 
-/// A surface particle's index with a brick its box touches, keyed by (z, y, x).
-type BrickParticle = ((i32, i32, i32), u32);
-
 /// Vertex coordinates must stay far from i32 overflow, also after adding halos.
 const MAX_VERTEX_COORD: f64 = (1 << 29) as f64;
 
@@ -39,11 +36,11 @@ pub fn local_index(l: IVec3) -> usize {
     (l.x + BRICK * (l.y + BRICK * l.z)) as usize
 }
 
-/// The local coordinates of a brick's vertices, in [`local_index`] order (x fastest).
+/// The local coordinates of the vertex with [`local_index`] `i`.
 #[inline]
-pub fn local_vertices() -> impl Iterator<Item = IVec3> {
-    (0..BRICK * BRICK * BRICK)
-        .map(|i| IVec3::new(i % BRICK, i / BRICK % BRICK, i / (BRICK * BRICK)))
+pub fn local_vertex(i: usize) -> IVec3 {
+    let i = i as i32;
+    IVec3::new(i % BRICK, i / BRICK % BRICK, i / (BRICK * BRICK))
 }
 
 #[inline]
@@ -59,8 +56,8 @@ impl Band {
     }
 
     /// [`Band::around`] with a half-width per particle, calling `budget` with the number of
-    /// (brick, particle) pairs that building it takes (16 bytes each, twice while they are
-    /// gathered) before allocating them: a cell far smaller than the band makes billions.
+    /// (brick, particle) pairs that building it takes (at most 16 bytes each, twice while they
+    /// are gathered) before allocating them: a cell far smaller than the band makes billions.
     pub fn around_within(
         surface: &[Vec3],
         cell: f32,
@@ -84,38 +81,28 @@ impl Band {
             .reduce(|| 0, u64::saturating_add);
         budget(count)?;
         let len = usize::try_from(count).unwrap_or(usize::MAX);
-        // One (brick, particle) pair per brick a particle's box touches, grouped by brick.
-        let mut pairs: Vec<BrickParticle> = budget::try_vec(len, || {
-            format!("the band's {count} (brick, particle) pairs")
-        })?;
-        pairs.par_extend(
-            boxes
-                .par_iter()
-                .enumerate()
-                .flat_map_iter(|(i, &(lo, hi))| {
-                    let (a, b) = (brick_of(lo), brick_of(hi));
-                    (a.z..=b.z).flat_map(move |z| {
-                        (a.y..=b.y)
-                            .flat_map(move |y| (a.x..=b.x).map(move |x| ((z, y, x), i as u32)))
-                    })
-                }),
-        );
-        pairs.par_sort_unstable();
-        let groups: Vec<&[BrickParticle]> = pairs.chunk_by(|a, b| a.0 == b.0).collect();
-        let (bricks, masks) = groups
+        if len == 0 {
+            return Ok(Band::from_parts(cell, Vec::new(), Vec::new()));
+        }
+        // Brick coordinates from the lowest brick, in as few bits as the band's extent needs:
+        // most bands sort 8-byte keys instead of 16-byte ones.
+        let lo = boxes
             .par_iter()
-            .map(|group| {
-                let (z, y, x) = group[0].0;
-                let brick = IVec3::new(x, y, z);
-                let mut mask = [0u64; 8];
-                for &(_, i) in group.iter() {
-                    let (lo, hi) = boxes[i as usize];
-                    mark_box(&mut mask, brick, lo, hi);
-                }
-                (brick, mask)
-            })
-            .unzip();
-        Ok(Band::from_parts(cell, bricks, masks))
+            .map(|b| brick_of(b.0))
+            .reduce(|| IVec3::MAX, IVec3::min);
+        let hi = boxes
+            .par_iter()
+            .map(|b| brick_of(b.1))
+            .reduce(|| IVec3::MIN, IVec3::max);
+        let span = (hi.as_i64vec3() - lo.as_i64vec3())
+            .to_array()
+            .map(|n| n as u64);
+        let layout = Layout::new([span[0], span[1], span[2], surface.len() as u64 - 1]);
+        if layout.bits <= u64::BITS {
+            band_of_pairs::<u64>(&boxes, cell, lo, &layout, len)
+        } else {
+            band_of_pairs::<u128>(&boxes, cell, lo, &layout, len)
+        }
     }
 
     /// Every vertex of the box `[lo, hi]` widened by `margin`: the full grid, for engines and
@@ -257,6 +244,97 @@ impl Band {
     }
 }
 
+/// Where the fields of a packed (brick, particle) pair sit: brick x, y, z (from the lowest
+/// brick) and the particle index, so that keys sort as (z, y, x, particle).
+struct Layout {
+    shifts: [u32; 4],
+    masks: [u64; 4],
+    bits: u32,
+}
+
+impl Layout {
+    /// The layout of fields up to `max` each.
+    fn new(max: [u64; 4]) -> Layout {
+        let widths = max.map(|m| u64::BITS - m.leading_zeros());
+        let mut shifts = [0; 4];
+        let mut bits = 0;
+        for field in [3, 0, 1, 2] {
+            shifts[field] = bits;
+            bits += widths[field];
+        }
+        let masks = widths.map(|w| u64::MAX.checked_shr(u64::BITS - w).unwrap_or(0));
+        Layout {
+            shifts,
+            masks,
+            bits,
+        }
+    }
+}
+
+/// An integer holding a (brick, particle) pair by a [`Layout`].
+trait PairKey: Copy + Ord + Send + Sync {
+    fn pack(fields: [u64; 4], layout: &Layout) -> Self;
+    fn field(self, field: usize, layout: &Layout) -> u64;
+}
+
+macro_rules! pair_key {
+    ($t:ty) => {
+        impl PairKey for $t {
+            fn pack(fields: [u64; 4], layout: &Layout) -> $t {
+                (0..4).fold(0, |key, f| {
+                    key | <$t>::from(fields[f])
+                        .checked_shl(layout.shifts[f])
+                        .unwrap_or(0)
+                })
+            }
+
+            fn field(self, field: usize, layout: &Layout) -> u64 {
+                self.checked_shr(layout.shifts[field]).unwrap_or(0) as u64 & layout.masks[field]
+            }
+        }
+    };
+}
+pair_key!(u64);
+pair_key!(u128);
+
+/// The band of the particles' vertex boxes `boxes`, from their `len` (brick, particle) pairs
+/// packed as `K` by `layout`, bricks counted from `lo`.
+fn band_of_pairs<K: PairKey>(
+    boxes: &[(IVec3, IVec3)],
+    cell: f32,
+    lo: IVec3,
+    layout: &Layout,
+    len: usize,
+) -> Result<Band> {
+    // One pair per brick a particle's box touches, grouped by brick.
+    let mut pairs: Vec<K> =
+        budget::try_vec(len, || format!("the band's {len} (brick, particle) pairs"))?;
+    pairs.par_extend(boxes.par_iter().enumerate().flat_map_iter(|(i, &(a, b))| {
+        let (a, b) = (brick_of(a) - lo, brick_of(b) - lo);
+        (a.z..=b.z).flat_map(move |z| {
+            (a.y..=b.y).flat_map(move |y| {
+                (a.x..=b.x).map(move |x| K::pack([x as u64, y as u64, z as u64, i as u64], layout))
+            })
+        })
+    }));
+    pairs.par_sort_unstable();
+    let brick = |k: K| [0, 1, 2].map(|f| k.field(f, layout) as i32);
+    let groups: Vec<&[K]> = pairs.chunk_by(|&a, &b| brick(a) == brick(b)).collect();
+    let (bricks, masks) = groups
+        .par_iter()
+        .map(|group| {
+            let brick = lo + IVec3::from_array(brick(group[0]));
+            let mut mask = [0u64; 8];
+            for &k in group.iter() {
+                let (lo, hi) = boxes[k.field(3, layout) as usize];
+                mark_box(&mut mask, brick, lo, hi);
+            }
+            (brick, mask)
+        })
+        .unzip();
+    Ok(Band::from_parts(cell, bricks, masks))
+}
+
 /// Grid vertices in the box of half-width `w` around `p`.
 fn vertex_box(p: Vec3, cell: f32, w: f32) -> Result<(IVec3, IVec3)> {
     let (c, w) = (f64::from(cell), f64::from(w));
@@ -304,6 +382,34 @@ mod tests {
         // Vertices −1..=2 on each axis: 4³, spread over the bricks at −1 and 0.
         assert_eq!(band.surface_vertices(), 64);
         assert_eq!(band.bricks.len(), 8);
+    }
+
+    #[test]
+    fn wide_bands_sort_wide_keys_to_the_same_band() {
+        // 10⁸ cells apart: the pairs need more than 64 bits, so they sort as u128.
+        let near: Vec<Vec3> = (0..50).map(|i| Vec3::splat(i as f32 * 0.013)).collect();
+        let far: Vec<Vec3> = near.iter().map(|&p| p + Vec3::splat(1.0e6)).collect();
+        let both: Vec<Vec3> = near.iter().chain(&far).copied().collect();
+        let [a, b, ab] = [&near, &far, &both].map(|p| Band::around(p, 0.01, 0.02).unwrap());
+        let span = ab.bricks.last().unwrap() - ab.bricks[0];
+        let layout = Layout::new([span.x, span.y, span.z, 99].map(|n| n as u64));
+        assert!(layout.bits > u64::BITS, "{}", layout.bits);
+        assert_eq!(ab.bricks, [a.bricks, b.bricks].concat());
+        assert_eq!(ab.masks, [a.masks, b.masks].concat());
+    }
+
+    #[test]
+    fn pair_keys_keep_their_fields() {
+        let layout = Layout::new([5, 0, 1000, 70_000]);
+        // 3 bits for x, none for y (always 0), 10 for z, 17 for the particle.
+        assert_eq!(layout.bits, 30);
+        let key = u64::pack([4, 0, 999, 65_432], &layout);
+        assert_eq!(
+            [0, 1, 2, 3].map(|f| key.field(f, &layout)),
+            [4, 0, 999, 65_432]
+        );
+        let wide = u128::pack([4, 0, 999, 65_432], &layout);
+        assert_eq!(wide, u128::from(key));
     }
 
     #[test]

@@ -11,61 +11,87 @@ use glam::IVec3;
 use rayon::prelude::*;
 
 use super::band::{BRICK, Band};
+use super::brick_neighbours::NeighbourWalk;
+use super::brick_signs::Signs;
+use super::edge_tables::{self, EdgeTables};
 use super::field_sampling::BrickValues;
-use super::halo::{Halo, offset, owns_inside_corner};
+use super::halo::offset;
+use super::surface_cells::BrickCells;
 use crate::error::Result;
-use crate::mesh::marching_cubes::{case_index, cases};
+
+/// The band once closed: the vertices closure added, the sign planes of its values and the
+/// edge tables of its bricks.
+pub struct Closed {
+    pub added: usize,
+    pub signs: Signs,
+    pub tables: EdgeTables,
+}
 
 /// Grows the band until no surface cell has an open face; `sample` gives the field on a band
 /// of new vertices, told how many bricks the band will have at most with them (to check the
-/// memory limit as the band grows). Returns the number of vertices added.
+/// memory limit as the band grows).
 pub fn close_band(
     band: &mut Band,
     values: &mut BrickValues,
     mut sample: impl FnMut(&Band, usize) -> Result<BrickValues>,
-) -> Result<usize> {
+) -> Result<Closed> {
     let mut added = 0;
-    let mut scan = band.bricks.clone();
+    let mut tables = EdgeTables((0..band.bricks.len()).map(|_| None).collect());
+    let mut scan = vec![true; band.bricks.len()];
     loop {
-        let missing = missing_vertices(band, values, &scan);
+        let signs = Signs::of(band, values);
+        let missing = scan_bricks(band, &signs, &scan, &mut tables);
         if missing.is_empty() {
-            return Ok(added);
+            return Ok(Closed {
+                added,
+                signs,
+                tables,
+            });
         }
+        drop(signs);
         added += missing.len();
         let grown = Band::from_vertices(&missing, band.cell);
-        // Only cells near the new vertices can have new open faces.
-        scan = grown
-            .bricks
-            .iter()
-            .flat_map(|&b| (0..27).map(move |n| b + IVec3::new(n % 3, n / 3 % 3, n / 9) - 1))
-            .collect();
+        let grown_bricks = grown.bricks.clone();
         let grown_values = sample(&grown, band.bricks.len() + grown.bricks.len())?;
+        let old = band.bricks.clone();
         band.merge(values, grown, grown_values)?;
-        scan.sort_unstable_by_key(|b| (b.z, b.y, b.x));
-        scan.dedup();
-        scan.retain(|&b| band.brick_index(b).is_some());
+        tables = tables.regrid(&old, &band.bricks);
+        // Only cells near the new vertices can have new open faces, or new edge tables.
+        scan = vec![false; band.bricks.len()];
+        for b in grown_bricks {
+            for n in 0..27 {
+                if let Some(i) = band.brick_index(b + IVec3::new(n % 3, n / 3 % 3, n / 9) - 1) {
+                    scan[i] = true;
+                }
+            }
+        }
     }
 }
 
-/// Grid vertices that must join the band, found in the bricks `scan`, sorted and without
-/// repeats.
-fn missing_vertices(band: &Band, values: &BrickValues, scan: &[IVec3]) -> Vec<IVec3> {
-    let lows = values.inside_lows(band);
-    let mut missing: Vec<IVec3> = scan
-        .par_iter()
-        .filter(|&&brick| owns_inside_corner(band, &lows, brick))
-        .map_init(Halo::new, |halo, &brick| {
-            halo.fill(band, values, brick);
-            let mut out = Vec::new();
-            for z in 0..BRICK {
-                for y in 0..BRICK {
-                    for x in 0..BRICK {
-                        open_faces(halo, IVec3::new(x, y, z), brick * BRICK, &mut out);
-                    }
+/// Scans the bricks that `scan` flags: sets their edge tables in `tables`, and returns the
+/// grid vertices that must join the band, sorted and without repeats.
+fn scan_bricks(band: &Band, signs: &Signs, scan: &[bool], tables: &mut EdgeTables) -> Vec<IVec3> {
+    let mut missing: Vec<IVec3> = tables
+        .0
+        .par_iter_mut()
+        .zip(scan)
+        .enumerate()
+        .filter(|(_, (_, scan))| **scan)
+        .map_init(
+            || (BrickCells::new(), NeighbourWalk::new(&band.bricks)),
+            |(cells, walk), (b, (table, _))| {
+                let mut out = Vec::new();
+                let brick = band.bricks[b];
+                let neighbours = walk.around(brick);
+                *table = None;
+                if signs.owns_inside_corner(&neighbours) {
+                    cells.fill(band, signs, neighbours);
+                    open_faces(cells, brick * BRICK, &mut out);
+                    *table = edge_tables::table(cells);
                 }
-            }
-            out
-        })
+                out
+            },
+        )
         .flatten()
         .collect();
     missing.par_sort_unstable_by_key(|v| (v.z, v.y, v.x));
@@ -73,35 +99,27 @@ fn missing_vertices(band: &Band, values: &BrickValues, scan: &[IVec3]) -> Vec<IV
     missing
 }
 
-/// Appends the missing corners of the incomplete cells across the crossed faces of cell `l`.
-fn open_faces(halo: &Halo, l: IVec3, base: IVec3, out: &mut Vec<IVec3>) {
-    if !halo.complete(l) {
-        return;
-    }
-    let corners = halo.corners(l);
-    let case = case_index(&corners);
-    if cases()[case].triangles().is_empty() {
-        return;
-    }
-    for axis in 0..3 {
-        for side in 0..2 {
-            let on_face = |c: usize| (c >> axis & 1) == side;
-            let inside = (0..8).filter(|&c| on_face(c)).map(|c| case >> c & 1);
-            let (lo, hi) = inside.fold((1, 0), |(lo, hi), s| (lo.min(s), hi.max(s)));
-            if lo == hi {
-                continue;
-            }
-            let step = if side == 1 { 1 } else { -1 };
-            let beyond = l + IVec3::AXES[axis] * step;
-            if halo.complete(beyond) {
-                continue;
-            }
-            for c in 0..8 {
-                let v = beyond + offset(c);
-                if halo.at(v).is_nan() {
-                    out.push(base + v);
+/// Appends the missing corners of the incomplete cells across the crossed faces of the
+/// brick's crossed cells.
+fn open_faces(cells: &BrickCells, base: IVec3, out: &mut Vec<IVec3>) {
+    cells.crossed(|l, case| {
+        for axis in 0..3 {
+            for side in 0..2 {
+                if !BrickCells::face_crossed(case, axis, side) {
+                    continue;
+                }
+                let step = if side == 1 { 1 } else { -1 };
+                let beyond = l + IVec3::AXES[axis] * step;
+                if cells.complete(beyond) {
+                    continue;
+                }
+                for c in 0..8 {
+                    let v = beyond + offset(c);
+                    if !cells.present(v) {
+                        out.push(base + v);
+                    }
                 }
             }
         }
-    }
+    });
 }

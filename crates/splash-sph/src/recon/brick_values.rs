@@ -5,7 +5,7 @@
 
 use rayon::prelude::*;
 
-use super::band::{BRICK, BRICK_VERTICES, Band};
+use super::band::{BRICK_VERTICES, Band};
 use super::budget;
 use crate::error::Result;
 
@@ -72,32 +72,10 @@ impl BrickValues {
         &self.values[start..start + mask[z].count_ones() as usize]
     }
 
-    /// For each brick, the lowest local coordinate on each axis of its inside (negative)
-    /// vertices, [`BRICK`] where it has none.
-    pub fn inside_lows(&self, band: &Band) -> Vec<[u8; 3]> {
-        band.masks
-            .par_iter()
-            .enumerate()
-            .map(|(b, mask)| {
-                let mut low = [BRICK as u8; 3];
-                let mut k = self.starts[b];
-                for (z, &word) in mask.iter().enumerate() {
-                    let mut bits = word;
-                    while bits != 0 {
-                        let bit = bits.trailing_zeros() as u8;
-                        if self.values[k] < 0.0 {
-                            let l = [bit % 8, bit / 8, z as u8];
-                            for (a, c) in low.iter_mut().zip(l) {
-                                *a = (*a).min(c);
-                            }
-                        }
-                        k += 1;
-                        bits &= bits - 1;
-                    }
-                }
-                low
-            })
-            .collect()
+    /// Brick `b`'s values, in bit order of its mask.
+    #[inline]
+    pub fn brick(&self, b: usize) -> &[f32] {
+        &self.values[self.starts[b]..self.starts[b + 1]]
     }
 
     /// All 8³ values of brick `b` (mask `mask`), NaN outside the band.

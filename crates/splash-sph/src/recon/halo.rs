@@ -14,8 +14,6 @@ const SIDE: i32 = BRICK + 3;
 /// Field values around one brick.
 pub struct Halo {
     values: Vec<f32>,
-    /// Index of the brick at offset (dx, dy, dz) ∈ {−1, 0, 1}³, if it exists.
-    pub neighbours: [Option<usize>; 27],
 }
 
 impl Default for Halo {
@@ -28,34 +26,57 @@ impl Halo {
     pub fn new() -> Halo {
         Halo {
             values: vec![f32::NAN; (SIDE * SIDE * SIDE) as usize],
-            neighbours: [None; 27],
         }
     }
 
-    pub fn fill(&mut self, band: &Band, values: &BrickValues, brick: IVec3) {
-        self.values.fill(f32::NAN);
-        for (n, slot) in self.neighbours.iter_mut().enumerate() {
-            let d = IVec3::new(n as i32 % 3, n as i32 / 3 % 3, n as i32 / 9) - 1;
-            *slot = band.brick_index(brick + d);
-            let Some(b) = *slot else { continue };
-            let lo = (d * BRICK).max(IVec3::splat(-1));
-            let hi = (d * BRICK + BRICK - 1).min(IVec3::splat(BRICK + 1));
-            let mask = &band.masks[b];
-            for z in lo.z..=hi.z {
-                let lz = (z - d.z * BRICK) as usize;
-                let (word, plane) = (mask[lz], values.plane(mask, b, lz));
-                for y in lo.y..=hi.y {
-                    for x in lo.x..=hi.x {
-                        let bit = (x - d.x * BRICK + BRICK * (y - d.y * BRICK)) as u32;
-                        // A full plane (inside the fluid's band, most of them) needs no count.
-                        let rank = if word == u64::MAX {
-                            bit as usize
-                        } else if word >> bit & 1 == 1 {
-                            (word & ((1u64 << bit) - 1)).count_ones() as usize
-                        } else {
-                            continue;
-                        };
-                        self.values[halo_index(IVec3::new(x, y, z))] = plane[rank];
+    /// The values in the box `lo..=hi` (local coordinates −1..=9) around the brick whose
+    /// neighbours (by [`neighbour_slot`]) are `neighbours`; the rest of the halo keeps what an
+    /// earlier brick left there.
+    pub fn fill(
+        &mut self,
+        band: &Band,
+        values: &BrickValues,
+        neighbours: &[Option<usize>; 27],
+        lo: IVec3,
+        hi: IVec3,
+    ) {
+        let width = (hi.x - lo.x + 1) as usize;
+        for z in lo.z..=hi.z {
+            let (dz, lz) = split(z);
+            for y in lo.y..=hi.y {
+                let (dy, ly) = split(y);
+                let at = halo_index(IVec3::new(lo.x, y, z));
+                let row = &mut self.values[at..at + width];
+                row.fill(f32::NAN);
+                for dx in -1..=1 {
+                    // The part of the row in the neighbour at dx.
+                    let (xa, xb) = (lo.x.max(dx * BRICK), hi.x.min(dx * BRICK + BRICK - 1));
+                    let Some(b) = neighbours[neighbour_slot(IVec3::new(dx, dy, dz))] else {
+                        continue;
+                    };
+                    if xa > xb {
+                        continue;
+                    }
+                    let mask = &band.masks[b];
+                    let word = mask[lz as usize];
+                    let first = (xa - dx * BRICK + BRICK * ly) as u32;
+                    let take = (1u32 << (xb - xa + 1)) - 1;
+                    let bits = (word >> first) as u32 & take;
+                    if bits == 0 {
+                        continue;
+                    }
+                    let plane = values.plane(mask, b, lz as usize);
+                    let rank = (word & ((1u64 << first) - 1)).count_ones() as usize;
+                    let out = &mut row[(xa - lo.x) as usize..=(xb - lo.x) as usize];
+                    if bits == take {
+                        out.copy_from_slice(&plane[rank..rank + out.len()]);
+                        continue;
+                    }
+                    let (mut bits, mut k) = (bits, rank);
+                    while bits != 0 {
+                        out[bits.trailing_zeros() as usize] = plane[k];
+                        k += 1;
+                        bits &= bits - 1;
                     }
                 }
             }
@@ -65,15 +86,6 @@ impl Halo {
     #[inline]
     pub fn at(&self, l: IVec3) -> f32 {
         self.values[halo_index(l)]
-    }
-
-    /// Whether all eight corners of the cell with lowest corner `l` are surface vertices.
-    pub fn complete(&self, l: IVec3) -> bool {
-        (0..8).all(|c| !self.at(l + offset(c)).is_nan())
-    }
-
-    pub fn corners(&self, l: IVec3) -> [f32; 8] {
-        std::array::from_fn(|c| self.at(l + offset(c)))
     }
 
     /// Central differences of the field, one-sided where a neighbour is outside the band.
@@ -92,6 +104,12 @@ impl Halo {
     }
 }
 
+/// The brick offset (−1, 0 or 1) and local coordinate of halo coordinate `h` on one axis.
+fn split(h: i32) -> (i32, i32) {
+    let d = h.div_euclid(BRICK);
+    (d, h - d * BRICK)
+}
+
 fn halo_index(l: IVec3) -> usize {
     let s = l + 1;
     (s.x + SIDE * (s.y + SIDE * s.z)) as usize
@@ -104,24 +122,4 @@ pub fn offset(c: usize) -> IVec3 {
 pub fn neighbour_slot(d: IVec3) -> usize {
     let s = d + 1;
     (s.x + 3 * s.y + 9 * s.z) as usize
-}
-
-/// Whether brick `brick` owns a cell (lowest corner in it) with an inside corner, given each
-/// brick's [`BrickValues::inside_lows`]: only those bricks can own crossed cells and the
-/// edges of their vertices; the rest (most of the band around a droplet) are skipped.
-pub fn owns_inside_corner(band: &Band, lows: &[[u8; 3]], brick: IVec3) -> bool {
-    (0..8).any(|c| {
-        let d = offset(c);
-        band.brick_index(brick + d).is_some_and(|n| {
-            let low = lows[n];
-            // The neighbour's inside vertices must reach its side facing this brick.
-            (0..3).all(|a| {
-                if d[a] == 1 {
-                    low[a] == 0
-                } else {
-                    low[a] < BRICK as u8
-                }
-            })
-        })
-    })
 }

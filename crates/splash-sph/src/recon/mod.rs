@@ -4,8 +4,11 @@
 
 pub(crate) mod band;
 pub(crate) mod band_closure;
+pub(crate) mod brick_neighbours;
+pub(crate) mod brick_signs;
 pub(crate) mod brick_values;
 pub(crate) mod budget;
+pub(crate) mod edge_tables;
 pub(crate) mod field_sampling;
 pub(crate) mod full_grid;
 pub(crate) mod halo;
@@ -15,6 +18,7 @@ pub(crate) mod narrow_band;
 pub(crate) mod normals;
 pub(crate) mod prepared;
 pub(crate) mod scatter;
+pub(crate) mod surface_cells;
 pub(crate) mod surface_particles;
 pub(crate) mod triangulation;
 pub(crate) mod vertex_correction;

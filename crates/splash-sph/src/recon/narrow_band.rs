@@ -86,19 +86,20 @@ pub(crate) fn gather(
         stages.stats.planned_bytes = planned;
     }
     let mut values = stages.run(Stage::ScalarField, || sample_field(&band, samples, field))?;
-    stages.stats.closure_vertices = stages.run(Stage::Band, || {
+    let closed = stages.run(Stage::Band, || {
         close_band(&mut band, &mut values, |grown, bricks| {
             budget::check(params, need_for(bricks), bricks_what(bricks))?;
             sample_field(grown, samples, field)
         })
     })?;
+    stages.stats.closure_vertices = closed.added;
     let held = held + (band.heap_bytes() + values.heap_bytes()) as u64;
     let triangulation = triangles_and_normals(
         &mut stages,
         params,
         field,
         || {
-            triangulate(&band, &values, |mesh| {
+            triangulate(&band, &values, closed.signs, closed.tables, |mesh| {
                 budget::check(params, held.saturating_add(mesh), || {
                     "the mesh of the band's surface".into()
                 })

@@ -11,7 +11,9 @@ use glam::{IVec3, Vec3};
 
 use super::Reconstruction;
 use super::band::{BRICK, BRICK_VERTICES, Band, local_index};
+use super::brick_signs::Signs;
 use super::budget;
+use super::edge_tables::EdgeTables;
 use super::field_sampling::BrickValues;
 use super::full_grid::{self, Grid};
 use super::prepared::{finish, triangles_and_normals};
@@ -42,7 +44,9 @@ pub fn reconstruct(
         params,
         field,
         || {
-            triangulate(&band, &values, |mesh| {
+            let signs = Signs::of(&band, &values);
+            let tables = EdgeTables::of(&band, &signs);
+            triangulate(&band, &values, signs, tables, |mesh| {
                 let held = (band.heap_bytes() + values.heap_bytes()) as u64;
                 budget::check(params, held.saturating_add(mesh), || {
                     "the mesh of the full grid's surface".into()

@@ -3,7 +3,9 @@
 
 use crate::mesh::topology::{signed_volume, topology};
 use crate::recon::band::{BRICK, BRICK_VERTICES, Band, local_index};
+use crate::recon::brick_signs::Signs;
 use crate::recon::brick_values::BrickValues;
+use crate::recon::edge_tables::EdgeTables;
 use crate::recon::triangulation::triangulate;
 use glam::{IVec3, Vec3};
 
@@ -44,7 +46,9 @@ fn random_field(n: i32, seed: u64) -> (Band, BrickValues) {
 fn random_fields_give_closed_oriented_surfaces() {
     for (n, seed) in [(5, 1), (10, 2), (14, 3), (20, 4), (9, 5)] {
         let (band, values) = random_field(n, seed);
-        let t = triangulate(&band, &values, |_| Ok(())).unwrap();
+        let signs = Signs::of(&band, &values);
+        let tables = EdgeTables::of(&band, &signs);
+        let t = triangulate(&band, &values, signs, tables, |_| Ok(())).unwrap();
         let topo = topology(&t.mesh);
         assert!(topo.triangles > 100, "n {n}: {topo:?}");
         assert!(topo.is_closed_manifold(), "n {n}: {topo:?}");
