@@ -440,13 +440,7 @@ pub(super) mod tests {
     /// A cloud with a per-particle reach channel and a second channel, some particles exactly
     /// on box faces, and cells of all sizes (the last cell of the array included).
     fn cloud() -> HandlerArray {
-        let mut state = 0x9e37_79b9_7f4a_7c15u64;
-        let mut next = move || {
-            state = state
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (state >> 40) as f32 / (1u64 << 24) as f32
-        };
+        let mut next = crate::tests::common::uniform(0x9e37_79b9_7f4a_7c15u64);
         let mut points: Vec<Vec3> = (0..20000)
             .map(|_| Vec3::new(next(), next(), next()) * 2.0 - 0.5)
             .collect();

@@ -77,13 +77,7 @@ mod tests {
     #[test]
     fn walk_finds_what_the_index_finds() {
         // Scattered particles: bricks in runs, gaps, and lone ones.
-        let mut state = 3u64;
-        let mut next = move || {
-            state = state
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1_442_695_040_888_963_407);
-            (state >> 40) as f32 / (1u64 << 24) as f32
-        };
+        let mut next = crate::tests::common::uniform(3u64);
         let points: Vec<Vec3> = (0..300)
             .map(|_| Vec3::new(next(), next(), next()) * 6.0)
             .collect();

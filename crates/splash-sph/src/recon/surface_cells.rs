@@ -191,13 +191,8 @@ mod tests {
     #[test]
     fn bits_agree_with_the_values() {
         let band = Band::full(Vec3::ZERO, Vec3::splat(2.25), 0.1, 0.0).unwrap();
-        let mut state = 7u64;
-        let mut next = move || {
-            state = state
-                .wrapping_mul(6_364_136_223_846_793_005)
-                .wrapping_add(1_442_695_040_888_963_407);
-            (state >> 40) as f32 / (1u64 << 24) as f32 - 0.5
-        };
+        let mut uniform = crate::tests::common::uniform(7u64);
+        let mut next = move || uniform() - 0.5;
         let dense: Vec<[f32; BRICK_VERTICES]> = (0..band.bricks.len())
             .map(|_| {
                 std::array::from_fn(|_| {

@@ -35,3 +35,15 @@ pub fn reconstruct(
     };
     crate::recon::reconstruct(particles, &params, None)
 }
+
+/// A fixed stream of pseudo-random numbers in [0, 1) from `seed` (an LCG: the tests need
+/// repeatable scatter, not quality).
+pub fn uniform(seed: u64) -> impl FnMut() -> f32 {
+    let mut state = seed;
+    move || {
+        state = state
+            .wrapping_mul(6_364_136_223_846_793_005)
+            .wrapping_add(1_442_695_040_888_963_407);
+        (state >> 40) as f32 / (1u64 << 24) as f32
+    }
+}

@@ -19,13 +19,8 @@ fn random_field(n: i32, seed: u64) -> (Band, BrickValues) {
         0.0,
     )
     .unwrap();
-    let mut state = seed;
-    let mut next = move || {
-        state = state
-            .wrapping_mul(6_364_136_223_846_793_005)
-            .wrapping_add(1_442_695_040_888_963_407);
-        (state >> 40) as f32 / (1u64 << 24) as f32 - 0.5
-    };
+    let mut uniform = crate::tests::common::uniform(seed);
+    let mut next = move || uniform() - 0.5;
     let mut dense = vec![[f32::NAN; BRICK_VERTICES]; band.bricks.len()];
     for (b, &brick) in band.bricks.iter().enumerate() {
         for i in 0..BRICK_VERTICES as i32 {
