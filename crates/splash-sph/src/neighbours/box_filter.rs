@@ -13,6 +13,8 @@ use std::ops::Range;
 
 use glam::Vec3;
 
+use super::neighbourhood::Reach;
+
 /// Lane permutations: entry `m` moves the lanes set in the 8-bit mask `m` to the front, in
 /// order.
 static FRONT: [[i32; 8]; 256] = {
@@ -50,16 +52,6 @@ impl Out<'_> {
             .chain(self.channels.iter())
             .all(|v| v.len() == len && v.capacity() >= len + more)
     }
-}
-
-/// The test both entry points share: within `radius` of `[lo, hi]`, or with `own`, within the
-/// smaller of `radius` and the particle's value in channel `own`.
-#[derive(Clone, Copy)]
-pub struct Reach {
-    pub lo: Vec3,
-    pub hi: Vec3,
-    pub radius: f32,
-    pub own: Option<usize>,
 }
 
 /// Appends the particles of `from` (padded to whole lanes) within reach, each shifted by

@@ -73,14 +73,14 @@ impl Neighbourhood {
         let mut ranges = std::mem::take(&mut self.ranges);
         ranges.clear();
         handlers.for_each_in_cells(cells.0, cells.1, |range| ranges.push(range));
-        let within = box_filter::Reach {
+        let within = Reach {
             lo,
             hi,
             radius,
             own: own_reach,
         };
         let mut rest = &ranges[..];
-        while let Some(first) = rest.first() {
+        while !rest.is_empty() {
             #[cfg(target_arch = "x86_64")]
             if simd() {
                 self.reserve(rest.iter().map(|r| r.len()).sum::<usize>() + LANES);
@@ -93,14 +93,14 @@ impl Neighbourhood {
                     box_filter::gather(positions, &handlers.channels, rest, within, out)
                 {
                     rest = &rest[done..];
-                    let Some(first) = rest.first() else { break };
-                    // A cell among the arrays' last particles, which the SIMD path leaves.
-                    self.gather_range(handlers, first.clone(), within);
-                    rest = &rest[1..];
-                    continue;
+                    if rest.is_empty() {
+                        break;
+                    }
                 }
             }
-            self.gather_range(handlers, first.clone(), within);
+            // A cell among the arrays' last particles, which the SIMD path leaves (without it,
+            // every cell).
+            self.gather_range(handlers, rest[0].clone(), within);
             rest = &rest[1..];
         }
         self.ranges = ranges;
@@ -108,12 +108,7 @@ impl Neighbourhood {
     }
 
     /// Appends the particles `range` of `handlers` within reach, relative to `within.lo`.
-    fn gather_range(
-        &mut self,
-        handlers: &HandlerArray,
-        range: Range<usize>,
-        within: box_filter::Reach,
-    ) {
+    fn gather_range(&mut self, handlers: &HandlerArray, range: Range<usize>, within: Reach) {
         let (lo, hi) = (within.lo, within.hi);
         let reach = reach(&handlers.channels, within.radius, within.own);
         let start = self.x.len();
@@ -146,7 +141,7 @@ impl Neighbourhood {
         #[cfg(target_arch = "x86_64")]
         if simd() {
             self.reserve(from.len() + LANES);
-            let within = box_filter::Reach {
+            let within = Reach {
                 lo: blo,
                 hi: bhi,
                 radius,
@@ -298,6 +293,16 @@ impl Neighbourhood {
     pub fn len(&self) -> usize {
         self.x.len()
     }
+}
+
+/// Which particles a gather or a narrowing keeps: those within `radius` of `[lo, hi]`, or with
+/// `own`, within the smaller of `radius` and the particle's value in channel `own`.
+#[derive(Clone, Copy)]
+pub(super) struct Reach {
+    pub lo: Vec3,
+    pub hi: Vec3,
+    pub radius: f32,
+    pub own: Option<usize>,
 }
 
 /// Whether the AVX2 paths may run (where the CPU has AVX2); tests turn them off to compare the
