@@ -8,6 +8,7 @@ use rayon::prelude::*;
 
 #[cfg(target_arch = "x86_64")]
 use super::box_filter;
+use super::box_filter::Reach;
 use super::handler_array::HandlerArray;
 
 /// Width of the lane-parallel accumulators; the gathered arrays are padded to a multiple of it.
@@ -293,16 +294,6 @@ impl Neighbourhood {
     pub fn len(&self) -> usize {
         self.x.len()
     }
-}
-
-/// Which particles a gather or a narrowing keeps: those within `radius` of `[lo, hi]`, or with
-/// `own`, within the smaller of `radius` and the particle's value in channel `own`.
-#[derive(Clone, Copy)]
-pub(super) struct Reach {
-    pub lo: Vec3,
-    pub hi: Vec3,
-    pub radius: f32,
-    pub own: Option<usize>,
 }
 
 /// Whether the AVX2 paths may run (where the CPU has AVX2); tests turn them off to compare the
