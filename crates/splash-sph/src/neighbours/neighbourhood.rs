@@ -341,6 +341,36 @@ pub fn map_particles<T: Send>(
         .collect()
 }
 
+/// The widest code [`lane_sums!`] is compiled for that the CPU runs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Lanes {
+    Scalar,
+    #[cfg(target_arch = "x86_64")]
+    Avx2,
+    #[cfg(target_arch = "x86_64")]
+    Avx512,
+}
+
+/// Which of the [`lane_sums!`] paths runs: the widest the CPU has, or the one a test chose.
+#[inline]
+pub fn lanes_path() -> Lanes {
+    #[cfg(test)]
+    if let Some(path) = tests::LANES.get() {
+        return path;
+    }
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::is_x86_feature_detected as has;
+        if has!("avx512f") && has!("avx512vl") {
+            return Lanes::Avx512;
+        }
+        if has!("avx2") {
+            return Lanes::Avx2;
+        }
+    }
+    Lanes::Scalar
+}
+
 /// Defines `fn NAME(near: &Neighbourhood, x: Vec3, PARAM: TYPE) -> [f32; N]`, returning
 /// Σ_j TERM over the particles of `near`, where TERM sees `dx, dy, dz` = x_j − x (and, when a
 /// fourth name is given, the particle's channel 0, e.g. its volume) and gives N values. The sums run in `LANES` independent lanes so that the loop vectorises, compiled
@@ -398,23 +428,39 @@ macro_rules! lane_sums {
             ) -> [f32; $n] {
                 lanes(near, x, $p)
             }
+            // With AVX-512's 32 vector registers the accumulators of many sums (SSP07's 13)
+            // stay in registers instead of going through the stack every step.
             #[cfg(target_arch = "x86_64")]
-            if std::arch::is_x86_feature_detected!("avx2") {
-                // SAFETY: the CPU has AVX2, checked just above.
-                return unsafe { lanes_avx2(near, x, $p) };
+            #[target_feature(enable = "avx512f,avx512vl")]
+            unsafe fn lanes_avx512(
+                near: &$crate::neighbours::neighbourhood::Neighbourhood,
+                x: glam::Vec3,
+                $p: $ty,
+            ) -> [f32; $n] {
+                lanes(near, x, $p)
             }
-            lanes(near, x, $p)
+            use $crate::neighbours::neighbourhood::{Lanes, lanes_path};
+            match lanes_path() {
+                // SAFETY: the CPU has AVX-512 F and VL, as `lanes_path` checked.
+                #[cfg(target_arch = "x86_64")]
+                Lanes::Avx512 => unsafe { lanes_avx512(near, x, $p) },
+                // SAFETY: the CPU has AVX2, as `lanes_path` checked.
+                #[cfg(target_arch = "x86_64")]
+                Lanes::Avx2 => unsafe { lanes_avx2(near, x, $p) },
+                Lanes::Scalar => lanes(near, x, $p),
+            }
         }
     };
 }
 
 #[cfg(test)]
-pub(super) mod tests {
+pub(crate) mod tests {
     use std::cell::Cell;
 
     use super::*;
 
     thread_local!(pub static SCALAR: Cell<bool> = const { Cell::new(false) });
+    thread_local!(pub static LANES: Cell<Option<Lanes>> = const { Cell::new(None) });
 
     /// Runs `f` on the scalar paths, then on the AVX2 ones where the CPU has them.
     fn both<T>(mut f: impl FnMut() -> T) -> (T, T) {
