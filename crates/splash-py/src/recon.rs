@@ -207,6 +207,7 @@ fn report<'py>(
     report.set_item("triangles", s.triangles)?;
     report.set_item("surface_vertices", s.surface_vertices)?;
     report.set_item("closure_vertices", s.closure_vertices)?;
+    report.set_item("deferred_values", s.deferred_values)?;
     report.set_item("surface_cells", s.surface_cells)?;
     report.set_item("bricks", s.bricks)?;
     report.set_item("grid", s.grid)?;

@@ -171,6 +171,9 @@ pub struct FrameStats {
     pub surface_vertices: usize,
     /// Vertices added to close the band where the surface left it (included above).
     pub closure_vertices: usize,
+    /// Vertices whose sign the field settled far from its surface and whose value no
+    /// triangle read, so it was never computed (included above; SSP07 only).
+    pub deferred_values: usize,
     /// Cells triangulated (the surface crosses them).
     pub surface_cells: usize,
     /// Triangles of the mesh.

@@ -67,6 +67,30 @@ pub(crate) trait ScalarField: Send + Sync {
     fn scattering(&self) -> Option<&dyn Scattering> {
         None
     }
+
+    /// For fields whose sign often costs far less than their value (SSP07: bounds on its
+    /// eigenvalue settle the sign without it): that form, so that the sampling can leave out
+    /// the values no triangle reads. `None` for the others.
+    fn sign_first(&self) -> Option<&dyn SignFirst> {
+        None
+    }
+}
+
+/// What [`SignFirst::value_or_sign`] found at a point.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum Sampled {
+    /// The field's value, as [`ScalarField::value`] gives it, to the bit.
+    Value(f32),
+    /// The field is below −margin (inside) or above margin (outside) there.
+    Beyond { inside: bool },
+}
+
+/// A field whose sign at a point can be settled from cheap bounds, where the point lies far
+/// enough from the surface.
+pub(crate) trait SignFirst: Sync {
+    /// The value at `x` (as [`ScalarField::value`] takes it), unless bounds show that the
+    /// field lies more than `margin` from zero there; then only which side it lies on.
+    fn value_or_sign(&self, near: &Neighbourhood, x: Vec3, margin: f32) -> Sampled;
 }
 
 /// A field as per-vertex kernel sums that particles add to one at a time (SSP07's sums of

@@ -6,7 +6,7 @@ use glam::{DMat3, DVec3, Vec3};
 use serde::{Deserialize, Serialize};
 
 use super::radial_kernel::RadialKernel;
-use super::{ScalarField, Scattering};
+use super::{Sampled, ScalarField, Scattering, SignFirst};
 use crate::length::Length;
 use crate::neighbours::neighbourhood::Neighbourhood;
 
@@ -85,6 +85,10 @@ impl ScalarField for Ssp07 {
         Some(self)
     }
 
+    fn sign_first(&self) -> Option<&dyn SignFirst> {
+        Some(self)
+    }
+
     fn value(&self, near: &Neighbourhood, x: Vec3) -> f32 {
         self.value_of(&Sums::over(near, x, 1.0 / (self.support * self.support)))
     }
@@ -125,19 +129,57 @@ impl Scattering for Ssp07 {
     }
 }
 
+/// The sign of eq. 1 before its eigenvalue: f falls with EV_max (eqs. 2–3) and lies in
+/// [0, 1], and the largest real part of ∇x̄'s eigenvalues lies between their mean (tr/3) and
+/// the largest eigenvalue of its symmetric part (Bendixson), which Gershgorin's discs bound.
+/// So φ ≥ |m| − r̄ and φ ≥ |m| − r̄ f(tr/3), and φ ≤ |m| − r̄ f(that bound): far from the
+/// surface one of them settles the sign, and the eigenvalue (a third of the sampling's time
+/// at cell r/2) is needed only near it.
+impl SignFirst for Ssp07 {
+    fn value_or_sign(&self, near: &Neighbourhood, x: Vec3, margin: f32) -> Sampled {
+        let s = Sums::over(near, x, 1.0 / (self.support * self.support));
+        let Some(m) = s.mean_offset() else {
+            return Sampled::Value(self.value_of(&s));
+        };
+        let (d, r) = (m.length(), f64::from(self.radius));
+        // The bounds' rounding, and the cubic's near a triple eigenvalue, stay far below this.
+        let margin = f64::from(margin).max(1e-4 * r);
+        if d - r > margin {
+            return Sampled::Beyond { inside: false };
+        }
+        let jacobian = s.jacobian(m, self.support);
+        let j = jacobian.to_cols_array_2d();
+        let trace = j[0][0] + j[1][1] + j[2][2];
+        if d - r * self.f(trace / 3.0) > margin {
+            return Sampled::Beyond { inside: false };
+        }
+        let disc = |a: usize| {
+            let (b, c) = ((a + 1) % 3, (a + 2) % 3);
+            j[a][a] + 0.5 * ((j[a][b] + j[b][a]).abs() + (j[a][c] + j[c][a]).abs())
+        };
+        let upper = disc(0).max(disc(1)).max(disc(2));
+        if d - r * self.f(upper) < -margin {
+            return Sampled::Beyond { inside: true };
+        }
+        Sampled::Value(self.value_at(m, &jacobian))
+    }
+}
+
 impl Ssp07 {
     /// eq. 1 from the kernel sums at a point, however they were accumulated (the gather above,
     /// or the scatter engine adding one particle at a time with [`Sums::add`]).
     fn value_of(&self, s: &Sums) -> f32 {
-        if s.k <= 0.0 {
+        match s.mean_offset() {
+            Some(m) => self.value_at(m, &s.jacobian(m, self.support)),
             // No particle in reach: the limit of eq. 1 as the last particle leaves the support
             // (x̄ at distance R, ∇x̄ = 0, f = 1).
-            return self.support - self.radius;
+            None => self.support - self.radius,
         }
-        let k = f64::from(s.k);
-        // x̄ − x, with particle offsets d_j = x_j − x.
-        let m = DVec3::new(s.kd[0].into(), s.kd[1].into(), s.kd[2].into()) / k;
-        let f = self.f(largest_eigenvalue(&s.jacobian(m, self.support)).re);
+    }
+
+    /// eq. 1 from m = x̄ − x and ∇x̄.
+    fn value_at(&self, m: DVec3, jacobian: &DMat3) -> f32 {
+        let f = self.f(largest_eigenvalue(jacobian).re);
         (m.length() - f64::from(self.radius) * f) as f32
     }
 
@@ -240,6 +282,17 @@ impl Sums {
         }
     }
 
+    /// m = x̄ − x (eq. 4, with particle offsets d_j = x_j − x); `None` where no particle is in
+    /// reach.
+    fn mean_offset(&self) -> Option<DVec3> {
+        if self.k <= 0.0 {
+            return None;
+        }
+        Some(
+            DVec3::new(self.kd[0].into(), self.kd[1].into(), self.kd[2].into()) / f64::from(self.k),
+        )
+    }
+
     /// ∇x̄ of eq. 4, analytically. With d_j = x_j − x and k_j = (1 − |d_j|²/R²)³,
     /// ∇k_j = 6 w_j d_j / R², so
     ///   ∂x̄_a/∂x_b = Σ_j (x_j − x̄)_a ∂_b k_j / Σ_j k_j
@@ -272,10 +325,7 @@ pub(super) struct MeanDistance {
 impl MeanDistance {
     /// `None` where no particle is in reach (the field is constant there).
     pub fn of(s: &Sums, support: f32) -> Option<MeanDistance> {
-        if s.k <= 0.0 {
-            return None;
-        }
-        let m = DVec3::new(s.kd[0].into(), s.kd[1].into(), s.kd[2].into()) / f64::from(s.k);
+        let m = s.mean_offset()?;
         let jacobian = s.jacobian(m, support);
         let gradient = (jacobian - DMat3::IDENTITY).transpose() * m.normalize_or_zero();
         Some(MeanDistance {
@@ -315,6 +365,45 @@ crate::lane_sums! {
     }
 }
 
+/// The slot of T_abc in [`GradientSums::t`], for every order of the indices.
+const T_INDEX: [[[usize; 3]; 3]; 3] = {
+    // Slots by sorted indices: xxx yyy zzz xxy xxz xyy yyz xzz yzz xyz.
+    const SORTED: [[usize; 3]; 10] = [
+        [0, 0, 0],
+        [1, 1, 1],
+        [2, 2, 2],
+        [0, 0, 1],
+        [0, 0, 2],
+        [0, 1, 1],
+        [1, 1, 2],
+        [0, 2, 2],
+        [1, 2, 2],
+        [0, 1, 2],
+    ];
+    let mut table = [[[0; 3]; 3]; 3];
+    let mut slot = 0;
+    while slot < 10 {
+        let [a, b, c] = SORTED[slot];
+        // Every permutation of (a, b, c).
+        let perms = [
+            [a, b, c],
+            [a, c, b],
+            [b, a, c],
+            [b, c, a],
+            [c, a, b],
+            [c, b, a],
+        ];
+        let mut p = 0;
+        while p < 6 {
+            let [i, j, k] = perms[p];
+            table[i][j][k] = slot;
+            p += 1;
+        }
+        slot += 1;
+    }
+    table
+};
+
 impl GradientSums {
     fn over(near: &Neighbourhood, x: Vec3, inv_r2: f32) -> GradientSums {
         let s = ssp07_gradient_sums(near, x, inv_r2);
@@ -337,21 +426,7 @@ impl GradientSums {
     }
 
     fn t(&self, a: usize, b: usize, c: usize) -> f64 {
-        let mut i = [a, b, c];
-        i.sort_unstable();
-        let slot = match i {
-            [0, 0, 0] => 0,
-            [1, 1, 1] => 1,
-            [2, 2, 2] => 2,
-            [0, 0, 1] => 3,
-            [0, 0, 2] => 4,
-            [0, 1, 1] => 5,
-            [1, 1, 2] => 6,
-            [0, 2, 2] => 7,
-            [1, 2, 2] => 8,
-            _ => 9,
-        };
-        f64::from(self.t[slot])
+        f64::from(self.t[T_INDEX[a][b][c]])
     }
 
     /// ∂(∇x̄)/∂x_c, by the formula above.
@@ -375,43 +450,68 @@ impl GradientSums {
 
     /// ∇ of the largest real part of ∇x̄'s eigenvalues, at the eigenvalue `ev`.
     fn eigenvalue_gradient(&self, mean: &MeanDistance, ev: Complex, support: f32) -> DVec3 {
+        let Some(slope) = EigenvalueSlope::at(&mean.jacobian, ev) else {
+            return DVec3::ZERO;
+        };
         DVec3::from_array(std::array::from_fn(|c| {
-            let d = self.jacobian_derivative(mean, support, c);
-            eigenvalue_derivative(&mean.jacobian, ev, &d)
+            slope.derivative(&self.jacobian_derivative(mean, support, c))
         }))
     }
 }
 
 /// d Re λ for the eigenvalue `ev` of `j` when `j` changes by `d`: differentiating the
 /// characteristic polynomial p(λ) = λ³ − tr λ² + M λ − det at fixed λ gives
-/// dλ = −(∂p/∂J : dJ) / p'(λ), with ∂p/∂J = (λ tr − λ²) I − λ Jᵀ − cof J. 0 at a repeated
-/// eigenvalue, where λ has no derivative.
-fn eigenvalue_derivative(j: &DMat3, ev: Complex, d: &DMat3) -> f64 {
-    let (trace, minors) = trace_and_minors(j);
-    let slope = ev
-        .mul(ev)
-        .scale(3.0)
-        .add(ev.scale(-2.0 * trace))
-        .add(Complex::real(minors));
-    if slope.norm2() < 1e-24 {
-        return 0.0;
+/// dλ = −(∂p/∂J : dJ) / p'(λ), with ∂p/∂J = (λ tr − λ²) I − λ Jᵀ − cof J. What does not
+/// depend on `d` is computed once for the three directions of a gradient.
+struct EigenvalueSlope<'a> {
+    j: &'a DMat3,
+    ev: Complex,
+    trace: f64,
+    /// p'(λ).
+    slope: Complex,
+    cof: DMat3,
+}
+
+impl<'a> EigenvalueSlope<'a> {
+    /// `None` at a repeated eigenvalue, where λ has no derivative.
+    fn at(j: &'a DMat3, ev: Complex) -> Option<EigenvalueSlope<'a>> {
+        let (trace, minors) = trace_and_minors(j);
+        let slope = ev
+            .mul(ev)
+            .scale(3.0)
+            .add(ev.scale(-2.0 * trace))
+            .add(Complex::real(minors));
+        if slope.norm2() < 1e-24 {
+            return None;
+        }
+        let cof = DMat3::from_cols(
+            j.y_axis.cross(j.z_axis),
+            j.z_axis.cross(j.x_axis),
+            j.x_axis.cross(j.y_axis),
+        );
+        Some(EigenvalueSlope {
+            j,
+            ev,
+            trace,
+            slope,
+            cof,
+        })
     }
-    let cof = DMat3::from_cols(
-        j.y_axis.cross(j.z_axis),
-        j.z_axis.cross(j.x_axis),
-        j.x_axis.cross(j.y_axis),
-    );
-    let trace_d = d.x_axis.x + d.y_axis.y + d.z_axis.z;
-    let jd = *j * *d;
-    let trace_jd = jd.x_axis.x + jd.y_axis.y + jd.z_axis.z;
-    let cof_d = (0..3).map(|k| cof.col(k).dot(d.col(k))).sum::<f64>();
-    let dp = ev
-        .scale(trace)
-        .sub(ev.mul(ev))
-        .scale(trace_d)
-        .sub(ev.scale(trace_jd))
-        .sub(Complex::real(cof_d));
-    -dp.div(slope).re
+
+    fn derivative(&self, d: &DMat3) -> f64 {
+        let (ev, trace) = (self.ev, self.trace);
+        let trace_d = d.x_axis.x + d.y_axis.y + d.z_axis.z;
+        let jd = *self.j * *d;
+        let trace_jd = jd.x_axis.x + jd.y_axis.y + jd.z_axis.z;
+        let cof_d = (0..3).map(|k| self.cof.col(k).dot(d.col(k))).sum::<f64>();
+        let dp = ev
+            .scale(trace)
+            .sub(ev.mul(ev))
+            .scale(trace_d)
+            .sub(ev.scale(trace_jd))
+            .sub(Complex::real(cof_d));
+        -dp.div(self.slope).re
+    }
 }
 
 /// Just enough complex arithmetic for an eigenvalue of a real 3×3 matrix.
@@ -569,7 +669,7 @@ mod tests {
             let h = 1e-6;
             let fd = (largest_eigenvalue(&(j + d * h)).re - largest_eigenvalue(&(j - d * h)).re)
                 / (2.0 * h);
-            let exact = eigenvalue_derivative(&j, ev, &d);
+            let exact = EigenvalueSlope::at(&j, ev).unwrap().derivative(&d);
             assert!((exact - fd).abs() < 1e-6, "{exact} vs {fd}");
         }
     }
@@ -583,6 +683,63 @@ mod tests {
             assert!((v - (d - 1.0)).abs() < 1e-5, "d {d}: {v}");
         }
         assert_eq!(f.value(&n, Vec3::new(5.0, 0.0, 0.0)), 3.0);
+    }
+
+    #[test]
+    fn lane_sums_are_the_same_on_every_path() {
+        use crate::neighbours::neighbourhood::{Lanes, lanes_path, tests::LANES};
+        let widest = lanes_path();
+        let mut paths = vec![Lanes::Scalar];
+        #[cfg(target_arch = "x86_64")]
+        paths.extend(match widest {
+            Lanes::Avx512 => vec![Lanes::Avx2, Lanes::Avx512],
+            Lanes::Avx2 => vec![Lanes::Avx2],
+            Lanes::Scalar => vec![],
+        });
+        let n = near(&spiral(203, Vec3::new(2.3, 2.1, 2.5)));
+        let sums = |path| {
+            LANES.set(Some(path));
+            let x = Vec3::new(0.7, -0.4, 1.1);
+            let s = (
+                ssp07_sums(&n, x, 1.0 / 16.0),
+                ssp07_gradient_sums(&n, x, 1.0 / 16.0),
+            );
+            LANES.set(None);
+            (s.0.map(f32::to_bits), s.1.map(f32::to_bits))
+        };
+        let scalar = sums(Lanes::Scalar);
+        for path in paths {
+            assert_eq!(sums(path), scalar, "{path:?}");
+        }
+    }
+
+    #[test]
+    fn settled_signs_are_the_values_signs_beyond_the_margin() {
+        let f = field();
+        let mut next = crate::tests::common::uniform(3);
+        let mut settled = [0; 2];
+        for (n, radii) in [
+            (60, Vec3::new(2.3, 2.1, 2.5)),
+            (200, Vec3::new(3.0, 3.0, 1.0)),
+            (12, Vec3::splat(1.5)),
+        ] {
+            let n = near(&spiral(n, radii));
+            for _ in 0..3000 {
+                let x = (Vec3::new(next(), next(), next()) * 2.0 - 1.0) * (radii + 2.0);
+                let margin = next() * 0.5;
+                let v = f.value(&n, x);
+                match f.value_or_sign(&n, x, margin) {
+                    Sampled::Value(s) => assert_eq!(s.to_bits(), v.to_bits(), "at {x}"),
+                    Sampled::Beyond { inside } => {
+                        assert_eq!(inside, v < 0.0, "at {x}: {v}");
+                        assert!(v.abs() > margin, "at {x}: {v} within {margin}");
+                        settled[usize::from(inside)] += 1;
+                    }
+                }
+            }
+        }
+        // Both sides get settled, and often.
+        assert!(settled.iter().all(|&k| k > 300), "{settled:?}");
     }
 
     #[test]

@@ -25,6 +25,17 @@ impl BrickValues {
         init: impl Fn() -> S + Sync + Send,
         dense: impl Fn(&mut S, usize) -> [f32; BRICK_VERTICES] + Sync + Send,
     ) -> Result<BrickValues> {
+        let (values, _) = Self::sample_with(band, init, |s, b| (dense(s, b), ()))?;
+        Ok(values)
+    }
+
+    /// [`sample`](Self::sample) where `dense` also gives something else per brick: those, in
+    /// brick order.
+    pub fn sample_with<S, T: Send>(
+        band: &Band,
+        init: impl Fn() -> S + Sync + Send,
+        dense: impl Fn(&mut S, usize) -> ([f32; BRICK_VERTICES], T) + Sync + Send,
+    ) -> Result<(BrickValues, Vec<T>)> {
         let what = || format!("the field values of {} bricks", band.bricks.len());
         let mut starts = budget::try_vec(band.bricks.len() + 1, what)?;
         let mut total = 0usize;
@@ -43,25 +54,28 @@ impl BrickValues {
             slices.push(head);
             rest = tail;
         }
-        slices
+        let extras = slices
             .into_par_iter()
             .enumerate()
-            .for_each_init(init, |state, (b, out)| {
-                pack(&band.masks[b], &dense(state, b), out);
-            });
-        Ok(BrickValues { starts, values })
+            .map_init(init, |state, (b, out)| {
+                let (dense, extra) = dense(state, b);
+                pack(&band.masks[b], &dense, out);
+                extra
+            })
+            .collect();
+        Ok((BrickValues { starts, values }, extras))
     }
 
     /// The value of vertex `local` of brick `b`, whose mask is `mask`; NaN outside the band.
     #[cfg(test)]
     pub fn get(&self, mask: &[u64; 8], b: usize, local: usize) -> f32 {
-        let (w, bit) = (local / 64, local % 64);
-        if mask[w] >> bit & 1 == 0 {
-            return f32::NAN;
-        }
-        let before: u32 = mask[..w].iter().map(|m| m.count_ones()).sum();
-        let rank = before + (mask[w] & ((1u64 << bit) - 1)).count_ones();
-        self.values[self.starts[b] + rank as usize]
+        slot(mask, local).map_or(f32::NAN, |k| self.values[self.starts[b] + k])
+    }
+
+    /// Sets the value of vertex `local` of brick `b`, whose mask `mask` holds it.
+    pub fn set(&mut self, mask: &[u64; 8], b: usize, local: usize, value: f32) {
+        let k = slot(mask, local).expect("a band vertex");
+        self.values[self.starts[b] + k] = value;
     }
 
     /// Brick `b`'s values in word `z` of its mask `mask` (the plane of local z), by bit.
@@ -97,6 +111,16 @@ impl BrickValues {
     pub fn heap_bytes(&self) -> usize {
         self.starts.capacity() * size_of::<usize>() + self.values.capacity() * size_of::<f32>()
     }
+}
+
+/// The place of vertex `local` among its brick's values, if `mask` holds it.
+fn slot(mask: &[u64; 8], local: usize) -> Option<usize> {
+    let (w, bit) = (local / 64, local % 64);
+    if mask[w] >> bit & 1 == 0 {
+        return None;
+    }
+    let before: u32 = mask[..w].iter().map(|m| m.count_ones()).sum();
+    Some((before + (mask[w] & ((1u64 << bit) - 1)).count_ones()) as usize)
 }
 
 /// Writes the values of `dense` whose bits `mask` sets into `out`, in bit order.

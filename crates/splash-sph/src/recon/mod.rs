@@ -8,6 +8,7 @@ pub(crate) mod brick_neighbours;
 pub(crate) mod brick_signs;
 pub(crate) mod brick_values;
 pub(crate) mod budget;
+pub(crate) mod deferred_values;
 pub(crate) mod edge_tables;
 pub(crate) mod field_sampling;
 pub(crate) mod full_grid;

@@ -8,7 +8,7 @@ use super::Reconstruction;
 use super::band::Band;
 use super::band_closure::close_band;
 use super::budget::{self, PER_BRICK, mul};
-use super::field_sampling::sample_field;
+use super::field_sampling::{sample_field, sample_field_deferring};
 use super::full_grid;
 use super::lone_particles::band_half_widths;
 use super::prepared::{finish, prepare, triangles_and_normals};
@@ -85,7 +85,10 @@ pub(crate) fn gather(
     if params.engine == Engine::NarrowBand {
         stages.stats.planned_bytes = planned;
     }
-    let mut values = stages.run(Stage::ScalarField, || sample_field(&band, samples, field))?;
+    let (mut values, deferred) = stages.run(Stage::ScalarField, || {
+        sample_field_deferring(&band, samples, field)
+    })?;
+    stages.stats.deferred_values = deferred.len();
     let closed = stages.run(Stage::Band, || {
         close_band(&mut band, &mut values, |grown, bricks| {
             budget::check(params, need_for(bricks), bricks_what(bricks))?;
@@ -93,6 +96,9 @@ pub(crate) fn gather(
         })
     })?;
     stages.stats.closure_vertices = closed.added;
+    stages.stats.deferred_values -= stages.run(Stage::ScalarField, || {
+        deferred.resolve(&band, &mut values, &closed.tables, samples, field)
+    })?;
     let held = held + (band.heap_bytes() + values.heap_bytes()) as u64;
     let triangulation = triangles_and_normals(
         &mut stages,
