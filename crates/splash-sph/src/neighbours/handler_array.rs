@@ -67,21 +67,24 @@ impl HandlerArray {
             .into_iter()
             .map(|c| {
                 assert_eq!(c.len(), particles.len(), "one value per particle");
-                order.par_iter().map(|&(_, i)| c[i as usize]).collect()
+                (0..order.len())
+                    .into_par_iter()
+                    .map(|k| c[order.get(k).1 as usize])
+                    .collect()
             })
             .collect();
         Ok(handlers)
     }
 
     /// The handler array and its handlers (cell id, index into `particles`), in handler order.
-    fn sorted(particles: &[Vec3], cell_size: f32) -> Result<(HandlerArray, Vec<(u64, u32)>)> {
+    fn sorted(particles: &[Vec3], cell_size: f32) -> Result<(HandlerArray, Handlers)> {
         if particles.len() >= u32::MAX as usize {
             bail_limit!(
                 "{} particles are more than one frame can hold",
                 particles.len()
             );
         }
-        let cell_of = |p: Vec3| (p / cell_size).floor().as_ivec3();
+        let cell_of = |p: Vec3| cell_of(p, cell_size);
         let (lo, hi) = particles
             .par_iter()
             .map(|&p| (cell_of(p), cell_of(p)))
@@ -112,29 +115,27 @@ impl HandlerArray {
                 1u64 << AXIS_BITS
             );
         }
-        // eq. 8: handler = (cell id, particle id), sorted by cell id.
-        let mut handlers: Vec<(u64, u32)> = particles
-            .par_iter()
-            .enumerate()
-            .map(|(i, &p)| (morton(cell_of(p) - origin), i as u32))
-            .collect();
-        handlers.par_sort_unstable();
-        let positions = handlers
-            .par_iter()
-            .map(|&(_, i)| particles[i as usize])
+        let id = |p: Vec3| morton(cell_of(p) - origin);
+        let handlers = Handlers::sorted(particles, id, morton(last - origin));
+        let positions = (0..handlers.len())
+            .into_par_iter()
+            .map(|k| particles[handlers.get(k).1 as usize])
             .collect();
         let mut blocks = FxHashMap::<u64, CellBlock>::default();
         let mut starts = Vec::new();
-        for (i, h) in handlers.iter().enumerate() {
-            if i > 0 && handlers[i - 1].0 == h.0 {
+        let mut previous = None;
+        for k in 0..handlers.len() {
+            let id = handlers.get(k).0;
+            if previous == Some(id) {
                 continue;
             }
-            let block = blocks.entry(h.0 >> 6).or_insert(CellBlock {
+            previous = Some(id);
+            let block = blocks.entry(id >> 6).or_insert(CellBlock {
                 occupied: 0,
                 first: starts.len() as u32,
             });
-            block.occupied |= 1 << (h.0 & 63);
-            starts.push(i as u32);
+            block.occupied |= 1 << (id & 63);
+            starts.push(k as u32);
         }
         starts.push(handlers.len() as u32);
         let handlers_array = HandlerArray {
@@ -154,7 +155,7 @@ impl HandlerArray {
     }
 
     pub fn cell_of(&self, p: Vec3) -> IVec3 {
-        (p / self.cell_size).floor().as_ivec3()
+        cell_of(p, self.cell_size)
     }
 
     /// The handler-order range of one cell's particles.
@@ -277,6 +278,68 @@ impl HandlerArray {
     }
 }
 
+/// The handlers of eq. 8, (cell id, particle index), sorted by cell id and then by index: the
+/// order of a stable sort by cell id, so the same whichever sort made it.
+enum Handlers {
+    /// Each handler as `id << bits | index`, where ids and indices fit in 64 bits together (all
+    /// but frames with particles far apart): sorted by a stable radix sort on the ids, in half
+    /// the memory of pairs, so with its buffer in no more than the pairs sorted in place.
+    Packed { handlers: Vec<u64>, bits: u32 },
+    /// Pairs sorted in place, where the ids leave no room for the index.
+    Pairs(Vec<(u64, u32)>),
+}
+
+impl Handlers {
+    /// The handlers of `particles`, whose cell ids `id` gives, none above `max_id`.
+    fn sorted(particles: &[Vec3], id: impl Fn(Vec3) -> u64 + Sync, max_id: u64) -> Handlers {
+        let indexed = particles.par_iter().enumerate();
+        // Indices below the particle count fit in `bits`.
+        let bits = u32::BITS - (particles.len() as u32).leading_zeros();
+        if max_id.leading_zeros() >= bits {
+            let mut handlers: Vec<u64> = indexed.map(|(i, &p)| id(p) << bits | i as u64).collect();
+            radsort::sort_by_key(&mut handlers, |&h| h >> bits);
+            Handlers::Packed { handlers, bits }
+        } else {
+            let mut handlers: Vec<(u64, u32)> = indexed.map(|(i, &p)| (id(p), i as u32)).collect();
+            handlers.par_sort_unstable();
+            Handlers::Pairs(handlers)
+        }
+    }
+
+    fn len(&self) -> usize {
+        match self {
+            Handlers::Packed { handlers, .. } => handlers.len(),
+            Handlers::Pairs(handlers) => handlers.len(),
+        }
+    }
+
+    /// Handler `k`: its cell id and particle index.
+    #[inline]
+    fn get(&self, k: usize) -> (u64, u32) {
+        match self {
+            Handlers::Packed { handlers, bits } => {
+                let h = handlers[k];
+                (h >> bits, (h & ((1 << bits) - 1)) as u32)
+            }
+            Handlers::Pairs(handlers) => handlers[k],
+        }
+    }
+}
+
+/// The cell of size `size` holding `p`, ⌊p / size⌋ on each axis saturated at i32's range, as
+/// `(p / size).floor().as_ivec3()` gives it, but without a call to libm's `floorf` per
+/// coordinate (x86-64 has no inline floor before SSE4.1): truncated, then one less where that
+/// rounded up (a negative fraction).
+#[inline]
+fn cell_of(p: Vec3, size: f32) -> IVec3 {
+    let floor = |v: f32| {
+        let t = v as i32;
+        t.saturating_sub(i32::from(t as f32 > v))
+    };
+    let q = p / size;
+    IVec3::new(floor(q.x), floor(q.y), floor(q.z))
+}
+
 /// Z-order id of a non-negative cell coordinate (eq. 8), by bit spreading instead of the
 /// paper's lookup table.
 fn morton(c: IVec3) -> u64 {
@@ -305,6 +368,70 @@ mod tests {
         assert_eq!(morton(IVec3::new(3, 3, 3)), 63);
         let m = (1 << AXIS_BITS) - 1;
         assert_eq!(morton(IVec3::new(m, m, m)), u64::MAX >> 1);
+    }
+
+    #[test]
+    fn packed_and_paired_handlers_are_in_one_order() {
+        let mut next = crate::tests::common::uniform(0x1405_7b7e_f767_814f);
+        // Many particles per cell, duplicates among them, so that ties are broken by index.
+        let mut ps: Vec<Vec3> = (0..30000)
+            .map(|_| Vec3::new(next(), next(), next()) * 3.0 - 1.0)
+            .collect();
+        ps.extend_from_within(100..2000);
+        let (origin, size) = (IVec3::splat(-9), 0.125);
+        let id = |p: Vec3| morton(cell_of(p, size) - origin);
+        let mut expected: Vec<(u64, u32)> = (0..ps.len()).map(|i| (id(ps[i]), i as u32)).collect();
+        expected.sort();
+        let max_id = expected.last().unwrap().0;
+        let packed = Handlers::sorted(&ps, id, max_id);
+        assert!(matches!(packed, Handlers::Packed { .. }));
+        // An id bound too large to pack leaves the pairs.
+        let pairs = Handlers::sorted(&ps, id, u64::MAX);
+        assert!(matches!(pairs, Handlers::Pairs(_)));
+        for handlers in [packed, pairs] {
+            let order: Vec<(u64, u32)> = (0..handlers.len()).map(|k| handlers.get(k)).collect();
+            assert_eq!(order, expected);
+        }
+    }
+
+    #[test]
+    fn cells_are_the_floor_of_the_scaled_coordinates() {
+        let mut next = crate::tests::common::uniform(0x5851_f42d_4c95_7f2d);
+        let edges = [
+            0.0,
+            -0.0,
+            0.5,
+            -0.5,
+            1.0,
+            -1.0,
+            -1.0e-30,
+            8_388_607.5,
+            -8_388_607.5,
+            8_388_608.0,
+            -8_388_609.0,
+            2_147_483_520.0,
+            -2_147_483_520.0,
+            2_147_483_648.0,
+            -2_147_483_648.0,
+            -2_147_483_904.0,
+            1.0e30,
+            -1.0e30,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+        ];
+        let random = (0..20000).map(|i| (next() - 0.5) * 10f32.powi(i % 12));
+        let values: Vec<f32> = edges.into_iter().chain(random).collect();
+        for (i, &v) in values.iter().enumerate() {
+            let p = Vec3::new(v, values[(i + 7) % values.len()], -v);
+            for size in [1.0, 0.25, 0.013] {
+                assert_eq!(
+                    cell_of(p, size),
+                    (p / size).floor().as_ivec3(),
+                    "{p} / {size}"
+                );
+            }
+        }
     }
 
     #[test]
