@@ -44,7 +44,7 @@ impl BrickValues {
             total += mask.iter().map(|w| w.count_ones() as usize).sum::<usize>();
             starts.push(total);
         }
-        let mut values = budget::try_filled(total, 0.0f32, || {
+        let mut values = budget::try_zeroed::<f32>(total, || {
             format!("the field values of {total} band vertices")
         })?;
         let mut slices: Vec<&mut [f32]> = budget::try_vec(band.bricks.len(), what)?;
@@ -54,8 +54,10 @@ impl BrickValues {
             slices.push(head);
             rest = tail;
         }
+        // Bricks differ in cost a hundredfold: small tasks keep both threads busy to the end.
         let extras = slices
             .into_par_iter()
+            .with_max_len(TASK_BRICKS)
             .enumerate()
             .map_init(init, |state, (b, out)| {
                 let (dense, extra) = dense(state, b);
@@ -112,6 +114,9 @@ impl BrickValues {
         self.starts.capacity() * size_of::<usize>() + self.values.capacity() * size_of::<f32>()
     }
 }
+
+/// Bricks per task at most.
+pub const TASK_BRICKS: usize = 16;
 
 /// The place of vertex `local` among its brick's values, if `mask` holds it.
 fn slot(mask: &[u64; 8], local: usize) -> Option<usize> {

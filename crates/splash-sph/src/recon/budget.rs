@@ -103,15 +103,43 @@ pub fn try_reserve<T>(
     additional: usize,
     what: impl FnOnce() -> String,
 ) -> Result<()> {
-    v.try_reserve_exact(additional).map_err(|_| {
-        let bytes = (additional as u128 * size_of::<T>() as u128).min(u128::from(u64::MAX));
-        Error::limit(format!(
-            "cannot allocate {} for {}: the system refused the memory; use a larger cell or a \
-             smaller --max-memory (the limit is checked before allocating)",
-            human(bytes as u64),
-            what()
-        ))
-    })
+    v.try_reserve_exact(additional)
+        .map_err(|_| refused::<T>(additional, what))
+}
+
+/// The error of an allocation of `len` elements of `T` for `what` that the system refused.
+fn refused<T>(len: usize, what: impl FnOnce() -> String) -> Error {
+    let bytes = (len as u128 * size_of::<T>() as u128).min(u128::from(u64::MAX));
+    Error::limit(format!(
+        "cannot allocate {} for {}: the system refused the memory; use a larger cell or a \
+         smaller --max-memory (the limit is checked before allocating)",
+        human(bytes as u64),
+        what()
+    ))
+}
+
+/// `len` zeros, as [`try_filled`] gives them, in memory the system hands out zeroed: a large
+/// block comes as fresh pages, so that nothing is written here and the threads that fill the
+/// array touch its pages (a serial fill of the mesh and the band's values held the other
+/// threads up).
+pub fn try_zeroed<T: bytemuck::Zeroable + Clone>(
+    len: usize,
+    what: impl FnOnce() -> String,
+) -> Result<Vec<T>> {
+    if len == 0 || size_of::<T>() == 0 {
+        return try_filled(len, T::zeroed(), what);
+    }
+    let Ok(layout) = std::alloc::Layout::array::<T>(len) else {
+        return Err(refused::<T>(len, what));
+    };
+    // SAFETY: the layout is not zero-sized (checked above).
+    let ptr = unsafe { std::alloc::alloc_zeroed(layout) }.cast::<T>();
+    if ptr.is_null() {
+        return Err(refused::<T>(len, what));
+    }
+    // SAFETY: `ptr` holds `len` zeroed `T`s, a valid value of a `Zeroable` type, allocated by
+    // the global allocator with `T`'s array layout, as `Vec` expects.
+    Ok(unsafe { Vec::from_raw_parts(ptr, len, len) })
 }
 
 /// `len` copies of `value` in a vector allocated with [`try_vec`].
@@ -142,6 +170,9 @@ mod tests {
         assert!(matches!(e, Error::Limit(_)), "{e:?}");
         assert!(e.to_string().contains("for the field values"), "{e}");
         let v = try_filled(3, 7u8, || "x".into()).unwrap();
+        let z: Vec<glam::Vec3> = try_zeroed(1 << 20, || "x".into()).unwrap();
+        assert!(z.len() == 1 << 20 && z.iter().all(|&p| p == glam::Vec3::ZERO));
+        assert!(try_zeroed::<[u32; 3]>(usize::MAX / 4, || "x".into()).is_err());
         assert_eq!(v, [7, 7, 7]);
     }
 

@@ -13,6 +13,7 @@ use crate::error::Result;
 use glam::{IVec3, Vec3};
 use rayon::prelude::*;
 
+use super::brick_values::TASK_BRICKS;
 use crate::config::Normals;
 use crate::field::ScalarField;
 use crate::mesh::TriMesh;
@@ -55,6 +56,7 @@ fn field_normals<F: ScalarField + ?Sized>(
     let vertices = &mesh.vertices;
     let normals: Vec<(Range<usize>, Vec<Vec3>)> = bricks
         .par_iter()
+        .with_max_len(TASK_BRICKS)
         .map_init(
             || ([(); 3].map(|_| Neighbourhood::default()), Vec::new()),
             |([brick_near, block_near, cell_near], order), range| {

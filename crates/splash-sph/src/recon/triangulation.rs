@@ -16,6 +16,7 @@ use rayon::prelude::*;
 use super::band::{BRICK, Band, brick_of, local_index, local_vertex};
 use super::brick_neighbours::NeighbourWalk;
 use super::brick_signs::Signs;
+use super::brick_values::TASK_BRICKS;
 use super::budget;
 use super::edge_tables::{BrickEdges, EdgeTables, PER_BRICK_EDGES};
 use super::field_sampling::{BrickValues, vertex_position};
@@ -73,9 +74,9 @@ pub fn triangulate(
     )?;
     let what = || format!("a mesh of {next} vertices and {triangles} triangles");
     let mut mesh = TriMesh {
-        vertices: budget::try_filled(next as usize, Vec3::ZERO, what)?,
-        normals: budget::try_filled(next as usize, Vec3::ZERO, what)?,
-        triangles: budget::try_filled(triangles, [0; 3], what)?,
+        vertices: budget::try_zeroed(next as usize, what)?,
+        normals: budget::try_zeroed(next as usize, what)?,
+        triangles: budget::try_zeroed(triangles, what)?,
     };
     // Each brick's part of the three arrays, in brick order.
     let mut parts = Vec::with_capacity(edges.len());
@@ -93,29 +94,32 @@ pub fn triangulate(
         parts.push((b, vh, nh, th));
         (v, n, t) = (vt, nt, tt);
     }
-    parts.into_par_iter().for_each_init(
-        || {
-            (
-                BrickCells::new(),
-                Halo::new(),
-                NeighbourWalk::new(&band.bricks),
-            )
-        },
-        |(cells, halo, walk), (b, positions, normals, tris)| {
-            let brick = band.bricks[b];
-            cells.fill(band, &signs, walk.around(brick));
-            if !positions.is_empty() {
-                let e = edges[b]
-                    .as_deref()
-                    .expect("a brick with vertices has edges");
-                // Vertices' ends and the central differences at them.
-                let (lo, hi) = e.extent();
-                halo.fill(band, values, &cells.neighbours, lo - 1, hi + 2);
-                edge_vertices(halo, e, brick, cell, positions, normals);
-            }
-            brick_triangles(cells, &edges, tris);
-        },
-    );
+    parts
+        .into_par_iter()
+        .with_max_len(TASK_BRICKS)
+        .for_each_init(
+            || {
+                (
+                    BrickCells::new(),
+                    Halo::new(),
+                    NeighbourWalk::new(&band.bricks),
+                )
+            },
+            |(cells, halo, walk), (b, positions, normals, tris)| {
+                let brick = band.bricks[b];
+                cells.fill(band, &signs, walk.around(brick));
+                if !positions.is_empty() {
+                    let e = edges[b]
+                        .as_deref()
+                        .expect("a brick with vertices has edges");
+                    // Vertices' ends and the central differences at them.
+                    let (lo, hi) = e.extent();
+                    halo.fill(band, values, &cells.neighbours, lo - 1, hi + 2);
+                    edge_vertices(halo, e, brick, cell, positions, normals);
+                }
+                brick_triangles(cells, &edges, tris);
+            },
+        );
     Ok(Triangulation {
         mesh,
         brick_vertices,
