@@ -5,7 +5,6 @@
 use glam::{IVec3, Vec3};
 
 use super::band::{BRICK, BRICK_VERTICES, Band, local_index};
-use super::deferred_values::Deferred;
 use crate::error::Result;
 use crate::field::{Sampled, ScalarField};
 use crate::neighbours::handler_array::HandlerArray;
@@ -15,7 +14,7 @@ pub use super::brick_values::BrickValues;
 
 /// How far from zero, in cells, a field that can tell its sign first
 /// ([`ScalarField::sign_first`]) must be settled for a vertex's value to be deferred. Only
-/// performance depends on it: [`Deferred::resolve`] samples whatever the triangles read. At
+/// performance depends on it: `deferred_values` samples whatever the triangles read. At
 /// 1.5 cells 0.1 % of the deferred vertices were read on cbd-large at cell r/2 (2 % at 1
 /// cell), and half of the band's vertices were deferred.
 const DEFER_BEYOND_CELLS: f32 = 1.5;
@@ -30,31 +29,13 @@ pub fn sample_field<F: ScalarField + ?Sized>(
 }
 
 /// [`sample_field`], leaving out the values of vertices whose sign the field settles far from
-/// its surface (keeping a value of that sign): [`Deferred::resolve`] fills in those the
-/// triangulation reads.
+/// its surface (keeping a value of that sign); returns which, as bits per brick of `band`.
 pub fn sample_field_deferring<F: ScalarField + ?Sized>(
     band: &Band,
     handlers: &HandlerArray,
     field: &F,
-) -> Result<(BrickValues, Deferred)> {
-    let (values, masks) = sample(band, handlers, field, deferring_pays())?;
-    Ok((values, Deferred::new(band, masks)))
-}
-
-/// Deferring pays where the lane sums keep their accumulators in registers (AVX-512's 32):
-/// with AVX2's 16, SSP07's 13 sums spill to the stack, and run back to back, with no
-/// eigenvalue between them, the sampling took 1.4× as long on this project's AMD EPYC
-/// machines instead of 0.88×.
-fn deferring_pays() -> bool {
-    #[cfg(test)]
-    if let Some(defer) = super::deferred_values::tests::DEFER.get() {
-        return defer;
-    }
-    #[cfg(target_arch = "x86_64")]
-    return crate::neighbours::neighbourhood::lanes_path()
-        == crate::neighbours::neighbourhood::Lanes::Avx512;
-    #[cfg(not(target_arch = "x86_64"))]
-    return false;
+) -> Result<(BrickValues, Vec<[u64; 8]>)> {
+    sample(band, handlers, field, true)
 }
 
 fn sample<F: ScalarField + ?Sized>(
@@ -68,7 +49,7 @@ fn sample<F: ScalarField + ?Sized>(
     let own_reach = field.reach_channel();
     let margin = DEFER_BEYOND_CELLS * cell;
     #[cfg(test)]
-    let margin = super::deferred_values::tests::margin(margin, cell);
+    let margin = tests::MARGIN_CELLS.get().map_or(margin, |m| m * cell);
     let sign_first = field.sign_first().filter(|_| defer);
     BrickValues::sample_with(
         band,
@@ -150,4 +131,14 @@ fn has_vertices(mask: &[u64; 8], lo: IVec3, side: i32) -> bool {
 /// World position of grid vertex `v`.
 pub fn vertex_position(v: IVec3, cell: f32) -> Vec3 {
     (v.as_dvec3() * f64::from(cell)).as_vec3()
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use std::cell::Cell;
+
+    thread_local! {
+        /// The deferring margin in cells, where a test sets one.
+        pub static MARGIN_CELLS: Cell<Option<f32>> = const { Cell::new(None) };
+    }
 }

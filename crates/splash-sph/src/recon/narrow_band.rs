@@ -8,7 +8,8 @@ use super::Reconstruction;
 use super::band::Band;
 use super::band_closure::close_band;
 use super::budget::{self, PER_BRICK, mul};
-use super::field_sampling::{sample_field, sample_field_deferring};
+use super::deferred_values::Deferred;
+use super::field_sampling::sample_field;
 use super::full_grid;
 use super::lone_particles::band_half_widths;
 use super::prepared::{finish, prepare, triangles_and_normals};
@@ -86,7 +87,7 @@ pub(crate) fn gather(
         stages.stats.planned_bytes = planned;
     }
     let (mut values, deferred) = stages.run(Stage::ScalarField, || {
-        sample_field_deferring(&band, samples, field)
+        Deferred::sample(&band, samples, field)
     })?;
     stages.stats.deferred_values = deferred.len();
     let closed = stages.run(Stage::Band, || {
