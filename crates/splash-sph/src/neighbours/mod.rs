@@ -5,4 +5,5 @@
 mod box_filter;
 pub(crate) mod bucket_grid;
 pub(crate) mod handler_array;
+pub(crate) mod lane_totals;
 pub(crate) mod neighbourhood;

@@ -395,7 +395,7 @@ macro_rules! lane_sums {
                 near: &$crate::neighbours::neighbourhood::Neighbourhood,
                 x: glam::Vec3,
                 $p: $ty,
-            ) -> [f32; $n] {
+            ) -> [[f32; LANES]; $n] {
                 let mut acc = [[0.0f32; LANES]; $n];
                 let n = near.len() / LANES;
                 for i in 0..n {
@@ -417,8 +417,9 @@ macro_rules! lane_sums {
                         }
                     }
                 }
-                acc.map(|a| a.iter().sum::<f32>())
+                acc
             }
+            use $crate::neighbours::lane_totals::lane_totals;
             #[cfg(target_arch = "x86_64")]
             #[target_feature(enable = "avx2")]
             unsafe fn lanes_avx2(
@@ -426,7 +427,7 @@ macro_rules! lane_sums {
                 x: glam::Vec3,
                 $p: $ty,
             ) -> [f32; $n] {
-                lanes(near, x, $p)
+                lane_totals(&lanes(near, x, $p))
             }
             // With AVX-512's 32 vector registers the accumulators of many sums (SSP07's 13)
             // stay in registers instead of going through the stack every step.
@@ -437,7 +438,8 @@ macro_rules! lane_sums {
                 x: glam::Vec3,
                 $p: $ty,
             ) -> [f32; $n] {
-                lanes(near, x, $p)
+                // The totals transposed: with 32 registers the lane loop keeps its own.
+                $crate::neighbours::lane_totals::lane_totals_avx2(&lanes(near, x, $p))
             }
             use $crate::neighbours::neighbourhood::{Lanes, lanes_path};
             match lanes_path() {
@@ -447,7 +449,7 @@ macro_rules! lane_sums {
                 // SAFETY: the CPU has AVX2, as `lanes_path` checked.
                 #[cfg(target_arch = "x86_64")]
                 Lanes::Avx2 => unsafe { lanes_avx2(near, x, $p) },
-                Lanes::Scalar => lanes(near, x, $p),
+                Lanes::Scalar => lane_totals(&lanes(near, x, $p)),
             }
         }
     };
