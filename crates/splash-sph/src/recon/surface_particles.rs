@@ -8,7 +8,7 @@ use glam::Vec3;
 
 use crate::config::Params;
 use crate::neighbours::handler_array::HandlerArray;
-use crate::neighbours::neighbourhood::{LANES, Neighbourhood, map_particles};
+use crate::neighbours::neighbourhood::{LANES, Lanes, Neighbourhood, lanes_path, map_particles};
 
 pub struct SurfaceCriteria {
     /// Colour field support h; also the neighbour count radius.
@@ -58,22 +58,13 @@ pub fn surface_particles(handlers: &HandlerArray, criteria: &SurfaceCriteria) ->
 /// `x` itself are left out), summed in `LANES` lanes. Inlined into the per-particle closure.
 #[inline(always)]
 fn colour_gradient(near: &Neighbourhood, x: Vec3, inv_h2: f32) -> (Vec3, f32) {
-    #[cfg(target_arch = "x86_64")]
-    if avx2() {
-        // SAFETY: the CPU has AVX2, checked just above.
-        return unsafe { lanes_avx2(near, x, inv_h2) };
+    // The kernel sums' choice of path (and the tests' pin on it).
+    match lanes_path() {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: the CPU has AVX2 (AVX-512 implies it), as `lanes_path` checked.
+        Lanes::Avx2 | Lanes::Avx512 => unsafe { lanes_avx2(near, x, inv_h2) },
+        Lanes::Scalar => lanes(near, x, inv_h2),
     }
-    lanes(near, x, inv_h2)
-}
-
-/// Whether the AVX2 lanes may run; tests turn them off to compare them with the scalar ones.
-#[cfg(target_arch = "x86_64")]
-fn avx2() -> bool {
-    #[cfg(test)]
-    if tests::SCALAR.get() {
-        return false;
-    }
-    std::arch::is_x86_feature_detected!("avx2")
 }
 
 /// The lanes' sums in lane order, as both paths add them.
@@ -158,14 +149,11 @@ unsafe fn lanes_avx2(near: &Neighbourhood, x: Vec3, inv_h2: f32) -> (Vec3, f32) 
 
 #[cfg(test)]
 mod tests {
-    use std::cell::Cell;
-
     use glam::Vec3;
 
     use super::colour_gradient;
-    use crate::neighbours::neighbourhood::Neighbourhood;
-
-    thread_local!(pub static SCALAR: Cell<bool> = const { Cell::new(false) });
+    use crate::neighbours::neighbourhood::tests::LANES;
+    use crate::neighbours::neighbourhood::{Lanes, Neighbourhood};
 
     #[test]
     fn colour_lanes_are_the_same_on_every_path() {
@@ -179,9 +167,9 @@ mod tests {
         near.set(Vec3::ZERO, &points);
         for x in [Vec3::ZERO, Vec3::new(0.3, -0.2, 0.1), Vec3::splat(0.9)] {
             let run = |scalar: bool| {
-                SCALAR.set(scalar);
+                LANES.set(scalar.then_some(Lanes::Scalar));
                 let (g, n) = colour_gradient(&near, x, 1.0);
-                SCALAR.set(false);
+                LANES.set(None);
                 (g.to_array().map(f32::to_bits), n.to_bits())
             };
             let (simd, scalar) = (run(false), run(true));
