@@ -725,7 +725,8 @@ mod tests {
         ] {
             let n = near(&spiral(n, radii));
             for _ in 0..3000 {
-                let x = (Vec3::new(next(), next(), next()) * 2.0 - 1.0) * (radii + 2.0);
+                let x =
+                    (crate::tests::common::uniform_point(&mut next) * 2.0 - 1.0) * (radii + 2.0);
                 let margin = next() * 0.5;
                 let v = f.value(&n, x);
                 match f.value_or_sign(&n, x, margin) {

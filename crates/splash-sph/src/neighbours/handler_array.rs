@@ -375,7 +375,7 @@ mod tests {
         let mut next = crate::tests::common::uniform(0x1405_7b7e_f767_814f);
         // Many particles per cell, duplicates among them, so that ties are broken by index.
         let mut ps: Vec<Vec3> = (0..30000)
-            .map(|_| Vec3::new(next(), next(), next()) * 3.0 - 1.0)
+            .map(|_| crate::tests::common::uniform_point(&mut next) * 3.0 - 1.0)
             .collect();
         ps.extend_from_within(100..2000);
         let (origin, size) = (IVec3::splat(-9), 0.125);

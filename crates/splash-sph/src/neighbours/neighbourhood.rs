@@ -486,7 +486,7 @@ pub(crate) mod tests {
     fn cloud() -> HandlerArray {
         let mut next = crate::tests::common::uniform(0x9e37_79b9_7f4a_7c15u64);
         let mut points: Vec<Vec3> = (0..20000)
-            .map(|_| Vec3::new(next(), next(), next()) * 2.0 - 0.5)
+            .map(|_| crate::tests::common::uniform_point(&mut next) * 2.0 - 0.5)
             .collect();
         points.extend((0..40).map(|i| Vec3::new(0.25, i as f32 / 40.0, 0.5)));
         let reach: Vec<f32> = points.iter().map(|_| 0.05 + 0.3 * next()).collect();

@@ -79,7 +79,7 @@ mod tests {
         // Scattered particles: bricks in runs, gaps, and lone ones.
         let mut next = crate::tests::common::uniform(3u64);
         let points: Vec<Vec3> = (0..300)
-            .map(|_| Vec3::new(next(), next(), next()) * 6.0)
+            .map(|_| crate::tests::common::uniform_point(&mut next) * 6.0)
             .collect();
         let band = Band::around(&points, 0.1, 0.3).unwrap();
         let check = |walk: &mut NeighbourWalk, brick: IVec3| {

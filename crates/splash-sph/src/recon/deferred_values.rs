@@ -186,7 +186,7 @@ pub(crate) mod tests {
         let mut ps: Vec<Vec3> = lattice_ball(Vec3::ZERO, 6.0 * r, r)
             .into_iter()
             .filter(|p| p.x + 0.5 * (p.y * 40.0).sin() * r < 4.0 * r)
-            .map(|p| p + Vec3::new(next(), next(), next()) * 0.2 * r)
+            .map(|p| p + crate::tests::common::uniform_point(&mut next) * 0.2 * r)
             .collect();
         ps.extend((0..30).map(|i| {
             let a = i as f32 * 0.9;

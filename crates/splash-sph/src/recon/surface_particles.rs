@@ -159,7 +159,7 @@ mod tests {
     fn colour_lanes_are_the_same_on_every_path() {
         let mut next = crate::tests::common::uniform(11);
         let mut points: Vec<Vec3> = (0..203)
-            .map(|_| Vec3::new(next(), next(), next()) * 2.0 - 1.0)
+            .map(|_| crate::tests::common::uniform_point(&mut next) * 2.0 - 1.0)
             .collect();
         // A particle at the point itself and one at the support's edge.
         points.extend([Vec3::ZERO, Vec3::new(1.0, 0.0, 0.0)]);

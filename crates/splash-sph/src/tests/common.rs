@@ -36,6 +36,11 @@ pub fn reconstruct(
     crate::recon::reconstruct(particles, &params, None)
 }
 
+/// A point of the unit cube from three numbers of `next` (x, y, z in that order).
+pub fn uniform_point(next: &mut impl FnMut() -> f32) -> Vec3 {
+    Vec3::new(next(), next(), next())
+}
+
 /// A fixed stream of pseudo-random numbers in [0, 1) from `seed` (an LCG: the tests need
 /// repeatable scatter, not quality).
 pub fn uniform(seed: u64) -> impl FnMut() -> f32 {
