@@ -3,7 +3,8 @@
 //! one array, no hash map.
 
 use glam::Vec3;
-use rayon::prelude::*;
+
+use super::counting_sort::sort_by_bucket;
 
 /// Uniform grid over the bounding box, stored as a spatial hash: each cell maps to one of a
 /// power-of-two number of buckets, and the particles are counting-sorted by bucket into one
@@ -24,48 +25,33 @@ pub(crate) struct BucketGrid {
 
 impl BucketGrid {
     /// The grid of the finite ones of `particles` (`finite` of them) in the box from `min`
-    /// spanning `extent`, with cells of `cell`.
-    pub fn new(particles: &[Vec3], finite: usize, min: Vec3, extent: Vec3, cell: f32) -> Self {
+    /// spanning `extent`, with cells of `cell` and about `load` particles per bucket: 2 keeps
+    /// collisions rare (~8 particles per occupied cell) for many queries, more builds faster
+    /// (random writes into a table that fits the caches) where the queries are few.
+    pub fn new(
+        particles: &[Vec3],
+        finite: usize,
+        min: Vec3,
+        extent: Vec3,
+        cell: f32,
+        load: usize,
+    ) -> Self {
         assert!(finite < u32::MAX as usize, "offsets are u32");
-        // Half a bucket per particle: with ~8 particles per occupied cell collisions stay rare,
-        // and the table stays small enough for the caches (random access dominates the build).
-        let buckets = (finite / 2).next_power_of_two().max(8);
+        let buckets = (finite / load.max(1)).next_power_of_two().max(8);
         let mut grid = Self {
             min,
             cell,
             dims: (extent / cell).to_array().map(|e| e as i32 + 1),
             shift: 64 - buckets.trailing_zeros(),
-            points: vec![Vec3::ZERO; finite],
-            offsets: vec![0; buckets + 1],
+            points: Vec::new(),
+            offsets: Vec::new(),
             occupied: 0,
         };
-        let bucket_of: Vec<u32> = particles
-            .par_iter()
-            .map(|&p| {
-                if p.is_finite() {
-                    grid.bucket(grid.cell_of(p)) as u32
-                } else {
-                    u32::MAX
-                }
-            })
-            .collect();
-        // Counting sort: counts shifted by one, exclusive prefix sum, then scattering advances
-        // each bucket's start to its end, which is where the next bucket starts.
-        for &b in bucket_of.iter().filter(|&&b| b != u32::MAX) {
-            grid.offsets[b as usize + 1] += 1;
-        }
-        let mut start = 0;
-        for offset in &mut grid.offsets[1..] {
-            grid.occupied += usize::from(*offset > 0);
-            (*offset, start) = (start, start + *offset);
-        }
-        for (&b, &p) in bucket_of.iter().zip(particles) {
-            if b != u32::MAX {
-                let slot = &mut grid.offsets[b as usize + 1];
-                grid.points[*slot as usize] = p;
-                *slot += 1;
-            }
-        }
+        let place = |_, &p: &Vec3| p.is_finite().then(|| (grid.bucket(grid.cell_of(p)), p));
+        let (points, offsets) = sort_by_bucket(particles, buckets, place);
+        debug_assert_eq!(points.len(), finite);
+        grid.occupied = offsets.windows(2).filter(|w| w[0] < w[1]).count();
+        (grid.points, grid.offsets) = (points, offsets);
         grid
     }
 

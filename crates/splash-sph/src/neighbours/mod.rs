@@ -4,6 +4,7 @@
 
 mod box_filter;
 pub(crate) mod bucket_grid;
+mod counting_sort;
 pub(crate) mod handler_array;
 pub(crate) mod lane_totals;
 pub(crate) mod neighbourhood;
