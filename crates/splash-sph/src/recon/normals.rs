@@ -42,6 +42,11 @@ pub fn set_normals<F: ScalarField + ?Sized, H: Borrow<HandlerArray>>(
 /// Cells per side of the middle level of narrowing.
 const BLOCK: i32 = 4;
 
+/// Bits per coordinate of a cell within a brick's vertices in the sort keys (they span at
+/// most 9 cells), and of a vertex's index within its brick.
+const COORD_BITS: u32 = 8;
+const INDEX_BITS: u32 = 16;
+
 /// Replaces each vertex normal by the normalised field gradient there, where it is not zero
 /// (a vertex then keeps its grid normal).
 fn field_normals<F: ScalarField + ?Sized>(
@@ -53,51 +58,74 @@ fn field_normals<F: ScalarField + ?Sized>(
 ) {
     let reach = field.support();
     let own_reach = field.reach_channel();
-    let vertices = &mesh.vertices;
-    let normals: Vec<(Range<usize>, Vec<Vec3>)> = bricks
-        .par_iter()
+    let TriMesh {
+        vertices, normals, ..
+    } = mesh;
+    normals.resize(vertices.len(), Vec3::ZERO);
+    // Each brick's vertices with its normals, written in place: the ranges are in order.
+    let mut rest = &mut normals[..];
+    let mut done = 0;
+    let bricks: Vec<(&[Vec3], &mut [Vec3])> = bricks
+        .iter()
+        .map(|range| {
+            let (_, tail) = std::mem::take(&mut rest).split_at_mut(range.start - done);
+            let (own, tail) = tail.split_at_mut(range.len());
+            (rest, done) = (tail, range.end);
+            (&vertices[range.clone()], own)
+        })
+        .collect();
+    bricks
+        .into_par_iter()
         .with_max_len(TASK_BRICKS)
-        .map_init(
+        .for_each_init(
             || ([(); 3].map(|_| Neighbourhood::default()), Vec::new()),
-            |([brick_near, block_near, cell_near], order), range| {
-                let brick = &vertices[range.clone()];
+            |([brick_near, block_near, cell_near], order), (brick, normals)| {
                 let (lo, hi) = brick.iter().fold((Vec3::MAX, Vec3::MIN), |(lo, hi), &v| {
                     (lo.min(v), hi.max(v))
                 });
                 brick_near.gather_box(handlers, lo, hi, reach, own_reach);
-                // The brick's vertices by cell, cells by block of 4³: each block and each
-                // cell narrows the list once, as the field sampling does.
+                // The brick's vertices by cell, cells by block of 4³: each block and each cell
+                // narrows the list once, as the field sampling does. One u64 key per vertex
+                // sorts them: block, then cell (z, y, x each), then index.
                 let cell_of = |v: Vec3| ((v - lo) / cell).floor().as_ivec3();
-                let block_of = |c: IVec3| c.div_euclid(IVec3::splat(BLOCK));
+                let pack = |c: IVec3| {
+                    debug_assert!(c.cmpge(IVec3::ZERO).all() && c.max_element() < 1 << COORD_BITS);
+                    let c = c.as_uvec3().to_array().map(u64::from);
+                    (c[2] << COORD_BITS | c[1]) << COORD_BITS | c[0]
+                };
+                let key = |c: IVec3| {
+                    pack(c.div_euclid(IVec3::splat(BLOCK))) << (3 * COORD_BITS) | pack(c)
+                };
+                debug_assert!(brick.len() <= 1 << INDEX_BITS);
                 order.clear();
-                order.extend((0..brick.len()).map(|i| (cell_of(brick[i]), i)));
-                order.sort_unstable_by_key(|&(c, i)| {
-                    let b = block_of(c);
-                    (b.z, b.y, b.x, c.z, c.y, c.x, i)
-                });
-                let mut out = vec![Vec3::ZERO; brick.len()];
-                for block in order.chunk_by(|a, b| block_of(a.0) == block_of(b.0)) {
-                    let blo = lo + (block_of(block[0].0) * BLOCK).as_vec3() * cell;
+                order.extend(
+                    brick
+                        .iter()
+                        .enumerate()
+                        .map(|(i, &v)| key(cell_of(v)) << INDEX_BITS | i as u64),
+                );
+                order.sort_unstable();
+                let cell_bits = INDEX_BITS;
+                let block_bits = INDEX_BITS + 3 * COORD_BITS;
+                let index = |k: u64| (k & ((1 << INDEX_BITS) - 1)) as usize;
+                for block in order.chunk_by(|a, b| a >> block_bits == b >> block_bits) {
+                    let c = cell_of(brick[index(block[0])]);
+                    let blo = lo + (c.div_euclid(IVec3::splat(BLOCK)) * BLOCK).as_vec3() * cell;
                     let bhi = blo + BLOCK as f32 * cell;
                     block_near.filter_box(brick_near, blo, bhi, reach, own_reach);
-                    for run in block.chunk_by(|a, b| a.0 == b.0) {
-                        let clo = lo + run[0].0.as_vec3() * cell;
+                    for run in block.chunk_by(|a, b| a >> cell_bits == b >> cell_bits) {
+                        let clo = lo + cell_of(brick[index(run[0])]).as_vec3() * cell;
                         cell_near.filter_box(block_near, clo, clo + cell, reach, own_reach);
-                        for &(_, i) in run {
-                            out[i] = field.gradient(cell_near, brick[i] - clo);
+                        for &k in run {
+                            let i = index(k);
+                            if let Some(n) =
+                                field.gradient(cell_near, brick[i] - clo).try_normalize()
+                            {
+                                normals[i] = n;
+                            }
                         }
                     }
                 }
-                (range.clone(), out)
             },
-        )
-        .collect();
-    mesh.normals.resize(mesh.vertices.len(), Vec3::ZERO);
-    for (range, gradients) in normals {
-        for (n, g) in mesh.normals[range].iter_mut().zip(gradients) {
-            if let Some(g) = g.try_normalize() {
-                *n = g;
-            }
-        }
-    }
+        );
 }
