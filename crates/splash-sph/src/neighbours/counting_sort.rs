@@ -3,8 +3,6 @@
 //! order, and each chunk scatters its items to its own slots. Within a bucket the items keep
 //! their input order whatever the number of chunks, so the result is the serial one.
 
-use std::mem::MaybeUninit;
-
 use rayon::prelude::*;
 
 /// Items per chunk below which more chunks cost more than they save.
@@ -20,6 +18,24 @@ const MAX_CHUNKS: usize = 4;
 /// `place` runs twice per item (to count, then to place), and `items` must be fewer than
 /// `u32::MAX`.
 pub(crate) fn sort_by_bucket<T, U, P>(items: &[T], buckets: usize, place: P) -> (Vec<U>, Vec<u32>)
+where
+    T: Sync,
+    U: Send,
+    P: Fn(usize, &T) -> Option<(usize, U)> + Sync,
+{
+    let mut sorted = Vec::new();
+    let offsets = sort_by_bucket_into(items, buckets, place, &mut sorted);
+    (sorted, offsets)
+}
+
+/// [`sort_by_bucket`] into `sorted`, whose contents it replaces: a caller can allocate it
+/// before the items, so that the items, freed, leave no hole below it in the heap.
+pub(crate) fn sort_by_bucket_into<T, U, P>(
+    items: &[T],
+    buckets: usize,
+    place: P,
+    sorted: &mut Vec<U>,
+) -> Vec<u32>
 where
     T: Sync,
     U: Send,
@@ -55,9 +71,8 @@ where
     }
     offsets.push(start);
     let kept = start as usize;
-    let mut sorted: Vec<MaybeUninit<U>> = Vec::with_capacity(kept);
-    // SAFETY: MaybeUninit needs no initialisation.
-    unsafe { sorted.set_len(kept) };
+    sorted.clear();
+    sorted.reserve(kept);
     let out = SharedSlots(sorted.as_mut_ptr());
     counts
         .par_chunks_mut(buckets.max(1))
@@ -70,23 +85,20 @@ where
                     // SAFETY: chunk c's slots for bucket b run from its start to the next
                     // chunk's (or bucket's) start, and it places exactly as many values there
                     // as it counted (`place` is a function of its arguments): every slot
-                    // below `kept` is written once, by one chunk.
-                    unsafe { out.0.add(next[b] as usize).write(MaybeUninit::new(value)) };
+                    // below `kept`, within the capacity reserved, is written once, by one
+                    // chunk.
+                    unsafe { out.0.add(next[b] as usize).write(value) };
                     next[b] += 1;
                 }
             }
         });
-    // SAFETY: every one of the `kept` slots was written (see above); MaybeUninit<U> has U's
-    // layout.
-    let sorted = unsafe {
-        let mut sorted = std::mem::ManuallyDrop::new(sorted);
-        Vec::from_raw_parts(sorted.as_mut_ptr().cast::<U>(), kept, sorted.capacity())
-    };
-    (sorted, offsets)
+    // SAFETY: every one of the `kept` slots was written (see above).
+    unsafe { sorted.set_len(kept) };
+    offsets
 }
 
 /// The output's slots, written by several chunks at disjoint positions.
-struct SharedSlots<U>(*mut MaybeUninit<U>);
+struct SharedSlots<U>(*mut U);
 
 // SAFETY: the chunks write disjoint slots (see `sort_by_bucket`).
 unsafe impl<U: Send> Sync for SharedSlots<U> {}

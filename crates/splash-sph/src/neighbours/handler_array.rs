@@ -12,6 +12,8 @@ use glam::{DVec3, IVec3, Vec3};
 use rayon::prelude::*;
 use rustc_hash::FxHashMap;
 
+use super::counting_sort::sort_by_bucket_into;
+
 /// Morton codes interleave 21 bits per axis into a u64.
 const AXIS_BITS: u32 = 21;
 
@@ -121,7 +123,9 @@ impl HandlerArray {
             .into_par_iter()
             .map(|k| particles[handlers.get(k).1 as usize])
             .collect();
+        // The cells of a block follow each other in id order: one table entry per block.
         let mut blocks = FxHashMap::<u64, CellBlock>::default();
+        let mut block: Option<(u64, CellBlock)> = None;
         let mut starts = Vec::new();
         let mut previous = None;
         for k in 0..handlers.len() {
@@ -130,13 +134,20 @@ impl HandlerArray {
                 continue;
             }
             previous = Some(id);
-            let block = blocks.entry(id >> 6).or_insert(CellBlock {
-                occupied: 0,
-                first: starts.len() as u32,
-            });
-            block.occupied |= 1 << (id & 63);
+            match &mut block {
+                Some((b, cells)) if *b == id >> 6 => cells.occupied |= 1 << (id & 63),
+                _ => {
+                    blocks.extend(block);
+                    let cells = CellBlock {
+                        occupied: 1 << (id & 63),
+                        first: starts.len() as u32,
+                    };
+                    block = Some((id >> 6, cells));
+                }
+            }
             starts.push(k as u32);
         }
+        blocks.extend(block);
         starts.push(handlers.len() as u32);
         let handlers_array = HandlerArray {
             cell_size,
@@ -289,6 +300,11 @@ enum Handlers {
     Pairs(Vec<(u64, u32)>),
 }
 
+/// Handlers are split into at most 2^PART_BITS parts by their ids' top bits, and the parts
+/// sorted in parallel (on cbd-large, 4 096 parts sort in 21 ms on 2 threads, 256 in 24, one
+/// radix sort of the whole in 32).
+const PART_BITS: u32 = 12;
+
 impl Handlers {
     /// The handlers of `particles`, whose cell ids `id` gives, none above `max_id`.
     fn sorted(particles: &[Vec3], id: impl Fn(Vec3) -> u64 + Sync, max_id: u64) -> Handlers {
@@ -296,8 +312,20 @@ impl Handlers {
         // Indices below the particle count fit in `bits`.
         let bits = u32::BITS - (particles.len() as u32).leading_zeros();
         if max_id.leading_zeros() >= bits {
-            let mut handlers: Vec<u64> = indexed.map(|(i, &p)| id(p) << bits | i as u64).collect();
-            radsort::sort_by_key(&mut handlers, |&h| h >> bits);
+            // Allocated before the keys, which then leave no hole below it when freed.
+            let mut handlers = Vec::with_capacity(particles.len());
+            let keys: Vec<u64> = indexed.map(|(i, &p)| id(p) << bits | i as u64).collect();
+            // Split by the ids' top bits (a stable counting sort on all threads), then each
+            // part radix-sorted by id (stable) on its own: one stable sort by id.
+            let id_bits = u64::BITS - max_id.leading_zeros();
+            let shift = bits + id_bits.saturating_sub(PART_BITS);
+            let parts = (max_id << bits >> shift) as usize + 1;
+            let part = |_, &h: &u64| Some(((h >> shift) as usize, h));
+            sort_by_bucket_into(&keys, parts, part, &mut handlers);
+            drop(keys);
+            handlers
+                .par_chunk_by_mut(|a, b| a >> shift == b >> shift)
+                .for_each(|part| radsort::sort_by_key(part, |&h| h >> bits));
             Handlers::Packed { handlers, bits }
         } else {
             let mut handlers: Vec<(u64, u32)> = indexed.map(|(i, &p)| (id(p), i as u32)).collect();
