@@ -319,9 +319,8 @@ fn band_of_pairs<K: PairKey>(
     }));
     pairs.par_sort_unstable();
     let brick = |k: K| [0, 1, 2].map(|f| k.field(f, layout) as i32);
-    let groups: Vec<&[K]> = pairs.chunk_by(|&a, &b| brick(a) == brick(b)).collect();
-    let (bricks, masks) = groups
-        .par_iter()
+    let (bricks, masks) = pairs
+        .par_chunk_by(|&a, &b| brick(a) == brick(b))
         .map(|group| {
             let brick = lo + IVec3::from_array(brick(group[0]));
             let mut mask = [0u64; 8];
