@@ -48,7 +48,8 @@ impl BucketGrid {
             occupied: 0,
         };
         let place = |_, &p: &Vec3| p.is_finite().then(|| (grid.bucket(grid.cell_of(p)), p));
-        let (points, offsets) = sort_by_bucket(particles, buckets, place);
+        // SAFETY: `place` is a function of its arguments.
+        let (points, offsets) = unsafe { sort_by_bucket(particles, buckets, place) };
         debug_assert_eq!(points.len(), finite);
         grid.occupied = offsets.windows(2).filter(|w| w[0] < w[1]).count();
         (grid.points, grid.offsets) = (points, offsets);

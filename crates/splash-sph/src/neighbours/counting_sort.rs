@@ -17,20 +17,34 @@ const MAX_CHUNKS: usize = 4;
 ///
 /// `place` runs twice per item (to count, then to place), and `items` must be fewer than
 /// `u32::MAX`.
-pub(crate) fn sort_by_bucket<T, U, P>(items: &[T], buckets: usize, place: P) -> (Vec<U>, Vec<u32>)
+///
+/// # Safety
+///
+/// `place` must give the same answer both times it is asked about an item (a function of its
+/// arguments): the chunks write their slots unsynchronised, sized by the first answers.
+pub(crate) unsafe fn sort_by_bucket<T, U, P>(
+    items: &[T],
+    buckets: usize,
+    place: P,
+) -> (Vec<U>, Vec<u32>)
 where
     T: Sync,
     U: Send,
     P: Fn(usize, &T) -> Option<(usize, U)> + Sync,
 {
     let mut sorted = Vec::new();
-    let offsets = sort_by_bucket_into(items, buckets, place, &mut sorted);
+    // SAFETY: the caller's promise about `place`.
+    let offsets = unsafe { sort_by_bucket_into(items, buckets, place, &mut sorted) };
     (sorted, offsets)
 }
 
 /// [`sort_by_bucket`] into `sorted`, whose contents it replaces: a caller can allocate it
 /// before the items, so that the items, freed, leave no hole below it in the heap.
-pub(crate) fn sort_by_bucket_into<T, U, P>(
+///
+/// # Safety
+///
+/// As for [`sort_by_bucket`].
+pub(crate) unsafe fn sort_by_bucket_into<T, U, P>(
     items: &[T],
     buckets: usize,
     place: P,
@@ -84,9 +98,8 @@ where
                 if let Some((b, value)) = place(first + i, item) {
                     // SAFETY: chunk c's slots for bucket b run from its start to the next
                     // chunk's (or bucket's) start, and it places exactly as many values there
-                    // as it counted (`place` is a function of its arguments): every slot
-                    // below `kept`, within the capacity reserved, is written once, by one
-                    // chunk.
+                    // as it counted (the caller's promise about `place`): every slot below
+                    // `kept`, within the capacity reserved, is written once, by one chunk.
                     unsafe { out.0.add(next[b] as usize).write(value) };
                     next[b] += 1;
                 }
@@ -151,7 +164,8 @@ mod tests {
                     .num_threads(threads)
                     .build()
                     .unwrap();
-                let got = pool.install(|| sort_by_bucket(&items, buckets, place));
+                // SAFETY: `place` is a function of its arguments.
+                let got = pool.install(|| unsafe { sort_by_bucket(&items, buckets, place) });
                 assert_eq!(
                     got, expected,
                     "{n} items, {buckets} buckets, {threads} threads"

@@ -321,7 +321,8 @@ impl Handlers {
             let shift = bits + id_bits.saturating_sub(PART_BITS);
             let parts = (max_id << bits >> shift) as usize + 1;
             let part = |_, &h: &u64| Some(((h >> shift) as usize, h));
-            sort_by_bucket_into(&keys, parts, part, &mut handlers);
+            // SAFETY: `part` is a function of its arguments.
+            unsafe { sort_by_bucket_into(&keys, parts, part, &mut handlers) };
             drop(keys);
             handlers
                 .par_chunk_by_mut(|a, b| a >> shift == b >> shift)
