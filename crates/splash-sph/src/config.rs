@@ -51,7 +51,7 @@ pub struct Config {
     /// How meshes are written.
     pub output: OutputConfig,
     /// Isosurfaces of particle quantities (`splash iso`, Marching Correctors).
-    pub iso: crate::iso::IsoConfig,
+    pub iso: crate::iso::settings::IsoConfig,
     /// `[min x, min y, min z, max x, max y, max z]`: particles outside this box (bounds
     /// included in it) are dropped before the reconstruction, with their attributes. All are
     /// kept when absent.
@@ -276,7 +276,7 @@ impl Default for Config {
             threads: None,
             max_memory: None,
             output: OutputConfig::default(),
-            iso: crate::iso::IsoConfig::default(),
+            iso: crate::iso::settings::IsoConfig::default(),
             particle_aabb: None,
         }
     }

@@ -36,6 +36,7 @@ mod neighbours;
 mod overrides;
 mod reconstructor;
 mod spacing;
+mod worker_pool;
 
 pub mod bytes;
 pub mod field;

@@ -13,6 +13,7 @@ use crate::mesh::TriMesh;
 use crate::recon::full_grid::{self, Grid};
 use crate::recon::{self, Reconstruction};
 use crate::report::Observer;
+use crate::worker_pool::worker_pool;
 
 /// Reconstructs frames with one configuration: `Reconstructor::new(config)?.reconstruct(&positions)?`.
 ///
@@ -199,18 +200,5 @@ impl Reconstructor {
             Some(pool) => pool.install(f),
             None => f(),
         }
-    }
-}
-
-/// A pool of `threads` workers, or None for rayon's global pool (all cores).
-pub(crate) fn worker_pool(threads: Option<usize>) -> Result<Option<Arc<rayon::ThreadPool>>> {
-    match threads {
-        Some(0) => Err(Error::config("threads must be at least 1")),
-        Some(n) => rayon::ThreadPoolBuilder::new()
-            .num_threads(n)
-            .build()
-            .map(|pool| Some(Arc::new(pool)))
-            .map_err(|e| Error::config(format!("cannot start {n} worker threads: {e}"))),
-        None => Ok(None),
     }
 }

@@ -205,7 +205,7 @@ pub struct FrameStats {
     /// The vertex correction of `correct` (zeros when it is off).
     pub correction: CorrectionFigures,
     /// The figures of an isosurface (`splash iso`) instead of a reconstruction's.
-    pub iso: Option<crate::iso::IsoStats>,
+    pub iso: Option<crate::iso::stats::IsoStats>,
 }
 
 /// What the correction step (Marching Correctors, Sec. III-E) did to the mesh's vertices:

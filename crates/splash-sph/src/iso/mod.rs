@@ -7,10 +7,10 @@
 mod assembly;
 pub(crate) mod quantity;
 pub(crate) mod seed_cells;
-mod settings;
+pub(crate) mod settings;
 mod slice_cache;
 pub(crate) mod sph_interpolant;
-mod stats;
+pub(crate) mod stats;
 pub(crate) mod surface_following;
 mod trimming;
 pub(crate) mod virtual_grid;
@@ -58,7 +58,7 @@ pub fn extract(
         bail_config!("the level must be a finite number, got {}", request.level);
     }
     let iso = &config.iso;
-    let pool = crate::reconstructor::worker_pool(config.threads)?;
+    let pool = crate::worker_pool::worker_pool(config.threads)?;
     let mut run = move || -> Result<Isosurface> {
         let level = f64::from(request.level);
         let start = Instant::now();

@@ -111,7 +111,7 @@ impl Previewer {
         crate::length::positive("spacing", r)?;
         let metaball = metaball_config(config);
         metaball.validate()?;
-        let pool = crate::reconstructor::worker_pool(config.threads)?;
+        let pool = crate::worker_pool::worker_pool(config.threads)?;
         Ok(Previewer {
             field: Metaballs::new(&metaball, r),
             kind: BvhKind::Fitted,
