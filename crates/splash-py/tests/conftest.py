@@ -23,8 +23,15 @@ def frame():
 
 @pytest.fixture(scope="session")
 def splash_bin():
-    """The CLI: $SPLASH_BIN, else target/release/splash, built here when missing."""
-    path = Path(os.environ.get("SPLASH_BIN") or REPO / "target" / "release" / "splash")
+    """The CLI: $SPLASH_BIN, else release/splash in cargo's target directory (target/ unless
+    CARGO_TARGET_DIR or a cargo config says otherwise), built here when missing."""
+    path = os.environ.get("SPLASH_BIN")
+    if not path:
+        target = subprocess.run(
+            [REPO / "scripts" / "target-dir"], capture_output=True, text=True, check=True
+        ).stdout.strip()
+        path = Path(target) / "release" / "splash"
+    path = Path(path)
     if not path.is_absolute():
         path = REPO / path
     if not path.exists():
