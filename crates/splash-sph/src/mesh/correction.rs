@@ -1,4 +1,4 @@
-//! Marching Correctors' correction step (Sec. III-E): move a Marching Cubes vertex along its cube
+//! Marching Correctors' correction step (Sec. III-D2): move a Marching Cubes vertex along its cube
 //! edge onto the exact isosurface of the interpolant, by safeguarded Newton–Raphson.
 
 use glam::Vec3;

@@ -14,9 +14,10 @@
 //! anywhere else it sums a subset in the same order, which rounding keeps below the field, so
 //! it never calls an outside sample inside. Pass 2 collects exactly the metaballs along the
 //! last step before that sample (boxes of their spheres, not the fitted boxes) and refines the
-//! root between the previous sample and it: bracketed Newton on the analytic derivative, which
-//! converges on the bracket the samples give, unlike the paper's polynomial solver that needs
-//! the polynomial's degree to stay small. A ray that starts inside walks out with pass 2 first.
+//! root between the previous sample and it: Newton steps on the analytic derivative (the sums
+//! that give the field give it too) while they stay inside the bracket, bisection otherwise;
+//! the paper narrows its interval with the secant method instead. A ray that starts inside
+//! walks out with pass 2 first.
 
 use glam::Vec3;
 
