@@ -28,6 +28,14 @@ pub enum Error {
         /// What is wrong with it, with the line or byte where that helps.
         message: String,
     },
+    /// A mesh file whose content is not a mesh of its format (see [`crate::io::read_mesh`]).
+    #[error("cannot read a mesh from '{}': {message}", path.display())]
+    MeshFormat {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong with it, with the line or byte where that helps.
+        message: String,
+    },
     /// A configuration that cannot be used: unknown keys or names, values out of range.
     #[error("{0}")]
     Config(String),
@@ -69,6 +77,10 @@ impl Error {
                 io_error,
             },
             Error::Format { path, message } => Error::Format {
+                path,
+                message: format!("{context}: {message}"),
+            },
+            Error::MeshFormat { path, message } => Error::MeshFormat {
                 path,
                 message: format!("{context}: {message}"),
             },

@@ -1,5 +1,5 @@
-//! The readers' and writers' errors before the file's path is added: [`super::read_particles`]
-//! and [`super::write_mesh_file`] turn them into the library's [`Error`].
+//! The readers' and writers' errors before the file's path is added: [`super::read_particles`],
+//! [`super::read_mesh`] and [`super::write_mesh_file`] turn them into the library's [`Error`].
 
 use std::fmt::Display;
 use std::io;
@@ -40,7 +40,7 @@ impl IoFailure {
     }
 }
 
-/// Why a particle file cannot be read.
+/// Why a particle or mesh file cannot be read.
 pub(super) enum Failure {
     Io(IoFailure),
     /// The content is not a valid frame of its format.
@@ -67,6 +67,22 @@ impl Failure {
                 format_args!("cannot read particles from '{}'", path.display()),
             ),
             Self::Format(message) => Error::Format {
+                path: path.to_path_buf(),
+                message,
+            },
+        }
+    }
+}
+
+impl Failure {
+    /// As [`Failure::into_error`], for a mesh file: [`Error::MeshFormat`] for its content.
+    pub fn into_mesh_error(self, path: &Path) -> Error {
+        match self {
+            Self::Io(e) => e.into_error(
+                path,
+                format_args!("cannot read a mesh from '{}'", path.display()),
+            ),
+            Self::Format(message) => Error::MeshFormat {
                 path: path.to_path_buf(),
                 message,
             },

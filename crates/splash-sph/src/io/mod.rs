@@ -25,7 +25,7 @@
 //! Meshes are written as OBJ, PLY (binary little-endian or ascii), POV-Ray `mesh2`, VTK legacy
 //! binary or VTK XML (`.vtu`, `.vtp`), atomically when written to a file with
 //! [`write_mesh_file`]. PLY and VTK files can carry per-vertex attributes
-//! ([`VertexAttributes`]).
+//! ([`VertexAttributes`]). [`read_mesh`] reads OBJ, PLY and VTK XML meshes back.
 
 #[macro_use]
 mod failure;
@@ -35,11 +35,14 @@ mod attribute_columns;
 mod bgeo;
 mod csv;
 mod lines;
+mod mesh_read;
 mod obj;
+mod obj_read;
 mod ply;
 mod ply_ascii;
 mod ply_binary;
 mod ply_layout;
+mod ply_mesh;
 mod ply_write;
 mod point_arrays;
 mod pov;
@@ -61,6 +64,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::mesh::TriMesh;
 use failure::{Failure, IoFailure, Result};
+pub use mesh_read::{MeshFile, read_mesh};
 
 /// One particle frame: positions, and per-particle attributes by name.
 #[derive(Debug, Clone, Default, PartialEq)]

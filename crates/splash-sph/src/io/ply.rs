@@ -6,7 +6,6 @@
 //! after it ignored. This module reads the header and the layout it declares; `ply_binary` and
 //! `ply_ascii` read the payload.
 
-use std::fs::File;
 use std::io::{BufRead, BufReader, Read};
 use std::path::Path;
 
@@ -53,8 +52,9 @@ pub(super) fn read(path: &Path) -> Result<Particles> {
     })
 }
 
-/// Reads the header up to `end_header`, returning it with its length in bytes and lines.
-fn read_header(reader: &mut BufReader<File>) -> Result<(Header, u64, usize)> {
+/// Reads the header up to `end_header`, returning it with its length in bytes and lines
+/// (`ply_mesh` reads meshes' headers with it too).
+pub(super) fn read_header(reader: &mut impl BufRead) -> Result<(Header, u64, usize)> {
     let mut bytes = Vec::new();
     let mut limited = (&mut *reader).take(MAX_HEADER_BYTES);
     limited

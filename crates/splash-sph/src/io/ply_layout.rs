@@ -155,7 +155,7 @@ pub(super) struct Element {
 }
 
 impl Element {
-    fn new(def: &ElementDef) -> Result<Self> {
+    pub(super) fn new(def: &ElementDef) -> Result<Self> {
         let props = def
             .properties
             .values()

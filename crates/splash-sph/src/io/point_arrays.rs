@@ -64,6 +64,35 @@ impl Num {
     }
 }
 
+impl Num {
+    /// One value (`bytes` its size) as a vertex or cell number: `None` if negative or not an
+    /// integer type.
+    pub fn to_index(self, bytes: &[u8], big_endian: bool) -> Option<u64> {
+        macro_rules! one {
+            ($t:ty) => {{
+                let b = bytes.try_into().ok()?;
+                let v = if big_endian {
+                    <$t>::from_be_bytes(b)
+                } else {
+                    <$t>::from_le_bytes(b)
+                };
+                u64::try_from(v).ok()
+            }};
+        }
+        match self {
+            Self::I8 => one!(i8),
+            Self::U8 => one!(u8),
+            Self::I16 => one!(i16),
+            Self::U16 => one!(u16),
+            Self::I32 => one!(i32),
+            Self::U32 => one!(u32),
+            Self::I64 => one!(i64),
+            Self::U64 => one!(u64),
+            Self::F32 | Self::F64 => None,
+        }
+    }
+}
+
 /// One named per-point array of `width` components per point, flattened.
 pub(super) struct PointArray {
     pub name: String,

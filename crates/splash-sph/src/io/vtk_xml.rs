@@ -2,7 +2,7 @@
 //! an `UnstructuredGrid` or `PolyData` file, in any data mode: `ascii`, inline `binary`
 //! (base64) and `appended` (raw or base64), each uncompressed or in zlib-compressed blocks
 //! (`vtkZLibDataCompressor`), with `UInt32` or `UInt64` headers, either byte order. Cells and
-//! cell data are not read.
+//! cell data are not read for particles; [`parse_mesh`] reads a mesh's triangles.
 //!
 //! Hand-written on quick-xml, base64 and flate2: raw appended data is not XML, so the XML
 //! part before `<AppendedData>` is parsed and the binary part addressed by offset. Every size
@@ -46,8 +46,12 @@ struct ArraySpec {
 
 struct Piece {
     points: usize,
+    /// `NumberOfCells` (`.vtu`) or `NumberOfPolys` (`.vtp`), for [`parse_mesh`].
+    cells: usize,
     positions: Option<ArraySpec>,
     arrays: Vec<ArraySpec>,
+    /// The `Cells` or `Polys` arrays, when asked for.
+    cell_arrays: Vec<ArraySpec>,
 }
 
 struct File<'a> {
@@ -72,6 +76,52 @@ fn find(data: &[u8], needle: &[u8]) -> Option<usize> {
 }
 
 pub(super) fn parse(data: &[u8]) -> Result<Particles> {
+    let (file, pieces) = parse_pieces(data, false)?;
+    particles(&file, pieces)
+}
+
+/// A mesh's one piece: its points and point data (the normals are still the array `Normals`)
+/// and its triangles: `.vtu` cells of type 5 (triangle), `.vtp` polygons of 3 corners.
+pub(super) fn parse_mesh(data: &[u8]) -> Result<(Particles, Vec<[u32; 3]>)> {
+    let (file, mut pieces) = parse_pieces(data, true)?;
+    if pieces.len() != 1 {
+        bail_format!("expected one Piece, found {}", pieces.len());
+    }
+    let cells = pieces[0].cells;
+    let arrays = std::mem::take(&mut pieces[0].cell_arrays);
+    let points = particles(&file, pieces)?;
+    let named = |name: &str| arrays.iter().find(|a| a.name == name);
+    let triangles = match (named("connectivity"), named("offsets")) {
+        (Some(connectivity), Some(offsets)) => {
+            let ends = file.indices(offsets, cells)?;
+            if let Some(k) = (0..cells).find(|&k| ends[k] != 3 * (k as u64 + 1)) {
+                bail_format!("cell {k} is not a triangle (its offsets are not 3 apart)");
+            }
+            if let Some(types) = named("types") {
+                let types = file.indices(types, cells)?;
+                if let Some(k) = types.iter().position(|&t| t != 5) {
+                    bail_format!("cell {k} is of type {}, not a triangle (5)", types[k]);
+                }
+            }
+            let corners = file.indices(connectivity, cells.saturating_mul(3))?;
+            let mut triangles = Vec::with_capacity(cells);
+            for (k, c) in corners.chunks_exact(3).enumerate() {
+                let index = |i: u64| u32::try_from(i).ok();
+                match (index(c[0]), index(c[1]), index(c[2])) {
+                    (Some(a), Some(b), Some(c)) => triangles.push([a, b, c]),
+                    _ => bail_format!("cell {k} refers to a vertex number beyond 32 bits"),
+                }
+            }
+            triangles
+        }
+        _ if cells == 0 => Vec::new(),
+        _ => bail_format!("the piece has {cells} cells but no 'connectivity' and 'offsets' arrays"),
+    };
+    Ok((points, triangles))
+}
+
+/// The file's pieces, with their cell arrays if `cells`.
+fn parse_pieces(data: &[u8], cells: bool) -> Result<(File<'_>, Vec<Piece>)> {
     let appended_tag = find(data, b"<AppendedData");
     let xml = &data[..appended_tag.unwrap_or(data.len())];
     let mut appended = None;
@@ -169,10 +219,24 @@ pub(super) fn parse(data: &[u8]) -> Result<Particles> {
                                 short(&points)
                             )
                         })?;
+                        let cell_count = attr(&tag, b"NumberOfCells")
+                            .or_else(|| attr(&tag, b"NumberOfPolys"))
+                            .unwrap_or_default();
+                        let cell_count = match cell_count.trim() {
+                            "" => 0,
+                            count => count.parse::<usize>().map_err(|_| {
+                                format_failure!(
+                                    "the Piece at byte offset {at} has '{}' cells, not a count",
+                                    short(count)
+                                )
+                            })?,
+                        };
                         pieces.push(Piece {
                             points,
+                            cells: cell_count,
                             positions: None,
                             arrays: Vec::new(),
+                            cell_arrays: Vec::new(),
                         });
                     }
                     b"DataArray" => {
@@ -180,10 +244,11 @@ pub(super) fn parse(data: &[u8]) -> Result<Particles> {
                         if spec.format == Format::Appended {
                             file.offsets.push(spec.offset);
                         }
-                        let wanted = matches!(
-                            context.last().map(Vec::as_slice),
-                            Some(b"Points" | b"PointData")
-                        ) && !pieces.is_empty();
+                        let wanted = match context.last().map(Vec::as_slice) {
+                            Some(b"Points" | b"PointData") => true,
+                            Some(b"Cells" | b"Polys") => cells,
+                            _ => false,
+                        } && !pieces.is_empty();
                         if empty {
                             finish(&mut pieces, &context, spec, wanted)?;
                         } else {
@@ -231,7 +296,11 @@ pub(super) fn parse(data: &[u8]) -> Result<Particles> {
     }
     file.offsets.sort_unstable();
     file.offsets.dedup();
+    Ok((file, pieces))
+}
 
+/// The points and point data of every piece.
+fn particles(file: &File, pieces: Vec<Piece>) -> Result<Particles> {
     let mut positions = Vec::new();
     let mut columns: Vec<PointArray> = Vec::new();
     let total: usize = pieces
@@ -347,36 +416,86 @@ fn finish(pieces: &mut [Piece], context: &[Vec<u8>], spec: ArraySpec, wanted: bo
     match context.last().map(Vec::as_slice) {
         Some(b"Points") if piece.positions.is_none() => piece.positions = Some(spec),
         Some(b"Points") => bail_format!("a second Points array at byte offset {}", spec.at),
+        Some(b"Cells" | b"Polys") => piece.cell_arrays.push(spec),
         _ => piece.arrays.push(spec),
     }
     Ok(())
+}
+
+/// An array's content: its text (ascii), or its `n` values' bytes (decoded and inflated).
+enum Data<'s> {
+    Text(&'s [u8]),
+    Binary(&'s [u8]),
 }
 
 impl File<'_> {
     /// The array's `points × width` values as `f32`.
     fn values(&self, spec: &ArraySpec, points: usize) -> Result<Vec<f32>> {
         let n = points.saturating_mul(spec.width);
-        let what = || {
-            format!(
-                "array '{}' (DataArray at byte offset {})",
-                short(&spec.name),
-                spec.at
-            )
-        };
+        self.with_data(spec, n, |data, what| match data {
+            Data::Text(text) => ascii(text, n, spec.num, what),
+            Data::Binary(raw) => {
+                let mut out = Vec::with_capacity(n);
+                spec.num.decode_into(raw, self.big_endian, &mut out);
+                Ok(out)
+            }
+        })
+    }
+
+    /// The array's `n` values as vertex numbers, exactly (negative and fractional values are
+    /// refused).
+    fn indices(&self, spec: &ArraySpec, n: usize) -> Result<Vec<u64>> {
+        let bad = |what: &str| format_failure!("{what}: a value is not a vertex or cell number");
+        self.with_data(spec, n, |data, what| match data {
+            Data::Text(text) => {
+                let words = text
+                    .split(u8::is_ascii_whitespace)
+                    .filter(|w| !w.is_empty());
+                let values: Option<Vec<u64>> = words
+                    .map(|w| std::str::from_utf8(w).ok()?.parse::<u64>().ok())
+                    .collect();
+                match values {
+                    Some(v) if v.len() == n => Ok(v),
+                    Some(v) => bail_format!("{what}: {} values, but {n} declared", v.len()),
+                    None => Err(bad(what)),
+                }
+            }
+            Data::Binary(raw) => {
+                let size = spec.num.size();
+                let values: Option<Vec<u64>> = raw
+                    .chunks_exact(size)
+                    .map(|c| spec.num.to_index(c, self.big_endian))
+                    .collect();
+                values.ok_or_else(|| bad(what))
+            }
+        })
+    }
+
+    /// Calls `f` with the array's text or bytes, for `n` values, and a name for messages.
+    fn with_data<T>(
+        &self,
+        spec: &ArraySpec,
+        n: usize,
+        f: impl FnOnce(Data, &str) -> Result<T>,
+    ) -> Result<T> {
+        let what = &format!(
+            "array '{}' (DataArray at byte offset {})",
+            short(&spec.name),
+            spec.at
+        );
         match spec.format {
-            Format::Ascii => ascii(&spec.text, n, spec.num, &what()),
+            Format::Ascii => f(Data::Text(&spec.text), what),
             Format::Binary => {
-                let bytes = decode_base64(&spec.text, &what())?;
-                self.binary(&bytes, n, spec.num, &what())
+                let bytes = decode_base64(&spec.text, what)?;
+                f(Data::Binary(&self.binary(&bytes, n, spec.num, what)?), what)
             }
             Format::Appended => {
                 let Some((body, base64)) = self.appended else {
-                    bail_format!("{} is appended, but the file has no AppendedData", what());
+                    bail_format!("{what} is appended, but the file has no AppendedData");
                 };
                 if spec.offset > body.len() {
                     bail_format!(
-                        "{} starts at offset {} of the appended data, which has {} bytes",
-                        what(),
+                        "{what} starts at offset {} of the appended data, which has {} bytes",
                         spec.offset,
                         body.len()
                     );
@@ -387,10 +506,11 @@ impl File<'_> {
                         .iter()
                         .find(|&&o| o > spec.offset)
                         .map_or(body.len(), |&o| o.min(body.len()));
-                    let bytes = decode_base64(&body[spec.offset..end], &what())?;
-                    self.binary(&bytes, n, spec.num, &what())
+                    let bytes = decode_base64(&body[spec.offset..end], what)?;
+                    f(Data::Binary(&self.binary(&bytes, n, spec.num, what)?), what)
                 } else {
-                    self.binary(&body[spec.offset..], n, spec.num, &what())
+                    let raw = self.binary(&body[spec.offset..], n, spec.num, what)?;
+                    f(Data::Binary(&raw), what)
                 }
             }
         }
@@ -424,8 +544,15 @@ impl File<'_> {
             .map_err(|_| format_failure!("{what}: header value {value} is too large"))
     }
 
-    /// Decodes header + data (`bytes` may run on past the array's end).
-    fn binary(&self, bytes: &[u8], n: usize, num: Num, what: &str) -> Result<Vec<f32>> {
+    /// The data bytes of `n` values after the header, inflated if compressed (`bytes` may run
+    /// on past the array's end).
+    fn binary<'b>(
+        &self,
+        bytes: &'b [u8],
+        n: usize,
+        num: Num,
+        what: &str,
+    ) -> Result<std::borrow::Cow<'b, [u8]>> {
         let expected = n.saturating_mul(num.size());
         let hsize = if self.header64 { 8 } else { 4 };
         let raw: std::borrow::Cow<[u8]> = if !self.compressed {
@@ -448,9 +575,7 @@ impl File<'_> {
         } else {
             std::borrow::Cow::Owned(self.inflate(bytes, expected, what)?)
         };
-        let mut out = Vec::with_capacity(n);
-        num.decode_into(&raw, self.big_endian, &mut out);
-        Ok(out)
+        Ok(raw)
     }
 
     /// The zlib blocks of one array: header `blocks, block size, last block size, compressed
