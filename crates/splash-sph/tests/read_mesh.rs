@@ -63,6 +63,7 @@ fn every_written_format_reads_back_bit_for_bit() {
         (MeshFormat::Obj, "f.obj"),
         (MeshFormat::PlyBinary, "f.ply"),
         (MeshFormat::PlyAscii, "ascii.ply"),
+        (MeshFormat::Vtk, "f.vtk"),
         (MeshFormat::Vtu, "f.vtu"),
         (MeshFormat::Vtp, "f.vtp"),
     ];
@@ -173,7 +174,7 @@ fn broken_files_are_errors_naming_the_file_and_the_fault() {
     let dir = scratch("broken");
     let header = "ply\nformat binary_little_endian 1.0\nelement vertex 4000000000\n\
                   property float x\nproperty float y\nproperty float z\nend_header\n";
-    let cases: [(&str, &[u8], &str); 10] = [
+    let cases: [(&str, &[u8], &str); 12] = [
         (
             "cut.ply",
             b"ply\nformat binary_little_endian 1.0\nelement vertex 10\n",
@@ -214,6 +215,18 @@ fn broken_files_are_errors_naming_the_file_and_the_fault() {
             "cut.vtu",
             b"<VTKFile type=\"UnstructuredGrid\"><Unstructured",
             "XML",
+        ),
+        (
+            "quad.vtk",
+            b"# vtk DataFile Version 3.0\nx\nASCII\nDATASET POLYDATA\nPOINTS 4 float\n\
+              0 0 0 1 0 0 1 1 0 0 1 0\nPOLYGONS 1 5\n4 0 1 2 3\n",
+            "not all triangles",
+        ),
+        (
+            "lines.vtk",
+            b"# vtk DataFile Version 3.0\nx\nASCII\nDATASET POLYDATA\nPOINTS 2 float\n\
+              0 0 0 1 0 0\nLINES 1 3\n2 0 1\n",
+            "triangles (POLYGONS) only",
         ),
         ("mesh.stl", b"solid x\nendsolid x\n", "extension"),
     ];
@@ -269,6 +282,7 @@ fn mutated_files_never_panic() {
         (MeshFormat::Obj, "m.obj"),
         (MeshFormat::PlyBinary, "m.ply"),
         (MeshFormat::PlyAscii, "a.ply"),
+        (MeshFormat::Vtk, "m.vtk"),
         (MeshFormat::Vtu, "m.vtu"),
         (MeshFormat::Vtp, "m.vtp"),
     ] {

@@ -1,4 +1,4 @@
-//! Reading back the meshes splash writes (OBJ, PLY, VTK XML), with their normals and vertex
+//! Reading back the meshes splash writes (OBJ, PLY, VTK), with their normals and vertex
 //! attributes, for tools that load a farm's output: the Python package, the Blender add-on.
 //! The whole file is read first; its size bounds every allocation after it.
 
@@ -6,7 +6,7 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use super::failure::Result;
-use super::{Attribute, MeshFormat, obj_read, ply_mesh, point_arrays, vtk_xml};
+use super::{Attribute, MeshFormat, obj_read, ply_mesh, point_arrays, vtk_legacy, vtk_xml};
 use crate::mesh::TriMesh;
 
 /// A mesh read from a file: its triangles, vertex normals (empty when the file has none) and
@@ -21,8 +21,8 @@ pub struct MeshFile {
 }
 
 /// Reads a mesh that [`write_mesh_file`](super::write_mesh_file) wrote, by its extension:
-/// `.obj`, `.ply` (binary either byte order, or ascii), `.vtu` or `.vtp` (any data mode,
-/// compressed or not).
+/// `.obj`, `.ply` (binary either byte order, or ascii), legacy `.vtk` (`POLYDATA`, binary or
+/// ascii), `.vtu` or `.vtp` (any data mode, compressed or not). POV-Ray includes are not read.
 ///
 /// Faces must be triangles; PLY `nx ny nz` and VTK's `Normals` array are the normals, one per
 /// vertex; a triangle's corners must be vertices of the file, and vertices finite. Errors name
@@ -54,9 +54,18 @@ fn read(path: &Path) -> Result<MeshFile> {
             };
             with_normals(mesh, points.attributes, "Normals")
         },
-        Some(MeshFormat::Vtk | MeshFormat::Pov) | None => bail_format!(
+        Some(MeshFormat::Vtk) => |data| {
+            let (points, triangles) = vtk_legacy::parse_mesh(data)?;
+            let mesh = TriMesh {
+                vertices: points.positions,
+                normals: Vec::new(),
+                triangles,
+            };
+            with_normals(mesh, points.attributes, "Normals")
+        },
+        Some(MeshFormat::Pov) | None => bail_format!(
             "cannot tell the mesh format from the extension: meshes are read from .obj, .ply, \
-             .vtu and .vtp files"
+             .vtk, .vtu and .vtp files"
         ),
     };
     let file = parse(&point_arrays::read_all(path)?)?;

@@ -25,7 +25,7 @@
 //! Meshes are written as OBJ, PLY (binary little-endian or ascii), POV-Ray `mesh2`, VTK legacy
 //! binary or VTK XML (`.vtu`, `.vtp`), atomically when written to a file with
 //! [`write_mesh_file`]. PLY and VTK files can carry per-vertex attributes
-//! ([`VertexAttributes`]). [`read_mesh`] reads OBJ, PLY and VTK XML meshes back.
+//! ([`VertexAttributes`]). [`read_mesh`] reads them back, but for POV-Ray's.
 
 #[macro_use]
 mod failure;

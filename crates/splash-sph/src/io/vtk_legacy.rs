@@ -2,7 +2,8 @@
 //! points of a `POLYDATA`, `UNSTRUCTURED_GRID` or `STRUCTURED_GRID` data set and every
 //! `POINT_DATA` array (`SCALARS`, `VECTORS`, `NORMALS`, `TEXTURE_COORDINATES`, `TENSORS`,
 //! `COLOR_SCALARS` and the arrays of a `FIELD`). Cells, cell data and field data of the data
-//! set are read past and dropped. File versions up to 5.1 (`OFFSETS`/`CONNECTIVITY` cells).
+//! set are read past and dropped, except a mesh's triangles ([`parse_mesh`]). File versions up
+//! to 5.1 (`OFFSETS`/`CONNECTIVITY` cells).
 
 use super::failure::Result;
 use super::point_arrays::{self, Num, PointArray};
@@ -28,6 +29,18 @@ enum Section {
 }
 
 pub(super) fn parse(data: &[u8]) -> Result<Particles> {
+    parse_any(data, false).map(|(points, _)| points)
+}
+
+/// A `POLYDATA` mesh: its points, point data (the normals are still the array `Normals`) and
+/// `POLYGONS`, which must be triangles; other cells are refused.
+pub(super) fn parse_mesh(data: &[u8]) -> Result<(Particles, Vec<[u32; 3]>)> {
+    parse_any(data, true)
+}
+
+/// The points and point data, and, if `mesh`, the triangles.
+fn parse_any(data: &[u8], mesh: bool) -> Result<(Particles, Vec<[u32; 3]>)> {
+    let mut triangles = Vec::new();
     let mut c = Cursor {
         data,
         pos: 0,
@@ -89,6 +102,12 @@ pub(super) fn parse(data: &[u8]) -> Result<Particles> {
                         short(&kind)
                     );
                 }
+                if mesh && kind != "POLYDATA" {
+                    bail_format!(
+                        "the data set at byte offset {at} is {}: a mesh is POLYDATA",
+                        short(&kind)
+                    );
+                }
                 dataset = true;
             }
             "DIMENSIONS" => {}
@@ -100,6 +119,13 @@ pub(super) fn parse(data: &[u8]) -> Result<Particles> {
                 let num = num_type(arg(2)?, at)?;
                 positions = Some(c.values(n, 3, num, at)?);
                 point_count = Some(n);
+            }
+            "POLYGONS" if mesh => {
+                let (n, size) = (count(1)?, count(2)?);
+                triangles = c.polygons(n, size, at)?;
+            }
+            "VERTICES" | "LINES" | "TRIANGLE_STRIPS" | "CELLS" if mesh && count(1)? > 0 => {
+                bail_format!("{keyword} at byte offset {at}: a mesh has triangles (POLYGONS) only")
             }
             "VERTICES" | "LINES" | "POLYGONS" | "TRIANGLE_STRIPS" | "CELLS" => {
                 let (n, size) = (count(1)?, count(2)?);
@@ -244,7 +270,7 @@ pub(super) fn parse(data: &[u8]) -> Result<Particles> {
     let Some(positions) = positions else {
         bail_format!("the data set has no POINTS");
     };
-    point_arrays::particles(&positions, arrays)
+    Ok((point_arrays::particles(&positions, arrays)?, triangles))
 }
 
 fn num_type(name: &str, at: usize) -> Result<Num> {
@@ -369,6 +395,86 @@ impl<'a> Cursor<'a> {
                 }
             }
             Ok(out)
+        }
+    }
+
+    /// `POLYGONS n size`, all triangles: `size` ints of `3 a b c` each (file versions before
+    /// 5), or `OFFSETS` and `CONNECTIVITY` arrays (version 5).
+    fn polygons(&mut self, n: usize, size: usize, at: usize) -> Result<Vec<[u32; 3]>> {
+        let not_triangles = || format_failure!("POLYGONS at byte offset {at}: not all triangles");
+        let corners = if self.peek_keyword().as_deref() == Some("OFFSETS") {
+            let mut arrays = Vec::with_capacity(2);
+            for (part, len) in [("OFFSETS", n), ("CONNECTIVITY", size)] {
+                let (at, line) = self.line()?;
+                let mut words = line.split_whitespace();
+                if !words.next().is_some_and(|w| w.eq_ignore_ascii_case(part)) {
+                    bail_format!(
+                        "expected {part} at byte offset {at}, found '{}'",
+                        short(line)
+                    );
+                }
+                let num = num_type(words.next().unwrap_or(""), at)?;
+                arrays.push(self.indices(len, num, at)?);
+            }
+            // n offsets bound n − 1 polygons: 0, 3, 6, …
+            let offsets = &arrays[0];
+            if (0..n).any(|k| offsets[k] != 3 * k as u64) || size != 3 * n.saturating_sub(1) {
+                return Err(not_triangles());
+            }
+            arrays.swap_remove(1)
+        } else {
+            if size != n.saturating_mul(4) {
+                return Err(not_triangles());
+            }
+            let values = self.indices(size, Num::I32, at)?;
+            if values.chunks_exact(4).any(|p| p[0] != 3) {
+                return Err(not_triangles());
+            }
+            values
+                .chunks_exact(4)
+                .flat_map(|p| [p[1], p[2], p[3]])
+                .collect()
+        };
+        let index = |i: u64| u32::try_from(i).map_err(|_| not_triangles());
+        corners
+            .chunks_exact(3)
+            .map(|t| Ok([index(t[0])?, index(t[1])?, index(t[2])?]))
+            .collect()
+    }
+
+    /// `n` values of type `num` as vertex numbers, exactly: negative or fractional values are
+    /// refused.
+    fn indices(&mut self, n: usize, num: Num, at: usize) -> Result<Vec<u64>> {
+        let bad =
+            || format_failure!("the array at byte offset {at} holds a value that is not an index");
+        if self.binary {
+            let bytes = n.saturating_mul(num.size());
+            if bytes > self.data.len() - self.pos {
+                bail_format!(
+                    "truncated binary data: the array declared at byte offset {at} needs {bytes}                      bytes from byte offset {}, but the file ends at byte offset {}",
+                    self.pos,
+                    self.data.len()
+                );
+            }
+            let block = &self.data[self.pos..self.pos + bytes];
+            self.pos += bytes;
+            block
+                .chunks_exact(num.size())
+                .map(|b| num.to_index(b, true).ok_or_else(bad))
+                .collect()
+        } else {
+            if n > (self.data.len() - self.pos) / 2 + 1 {
+                bail_format!(
+                    "the array declared at byte offset {at} has {n} values, more than the rest of                      the file can hold"
+                );
+            }
+            (0..n)
+                .map(|_| {
+                    let (_, token) = self.token();
+                    let text = std::str::from_utf8(token).ok();
+                    text.and_then(|t| t.parse::<u64>().ok()).ok_or_else(bad)
+                })
+                .collect()
         }
     }
 
