@@ -9,6 +9,7 @@ mod mesh;
 mod particles;
 mod pools;
 mod preview;
+mod read_mesh;
 mod recon;
 mod settings;
 
@@ -83,6 +84,8 @@ fn native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(iso::iso, m)?)?;
     m.add_function(wrap_pyfunction!(preview::preview, m)?)?;
     m.add_function(wrap_pyfunction!(particles::read_particles, m)?)?;
+    m.add_function(wrap_pyfunction!(read_mesh::read_mesh, m)?)?;
+    read_mesh::add_type(m)?;
     m.add_function(wrap_pyfunction!(estimate_spacing, m)?)?;
     m.add_function(wrap_pyfunction!(default_config, m)?)?;
     m.add_function(wrap_pyfunction!(config_toml, m)?)?;

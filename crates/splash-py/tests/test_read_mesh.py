@@ -1,6 +1,6 @@
-"""splash_sph.read_mesh (what the Blender add-on loads farm sequences with): every format the
-writers produce reads back as the Mesh that wrote it, bit for bit, and meshio agrees on VTU;
-broken files raise ValueError naming the file."""
+"""splash_sph.read_mesh (the library's mesh readers; what the Blender add-on loads farm
+sequences with): every format the writers produce reads back as the Mesh that wrote it, bit
+for bit, and meshio agrees on VTU; broken files raise ValueError naming the file."""
 
 import random
 import subprocess
@@ -28,7 +28,7 @@ def same(a, b):
     return a.shape == b.shape and a.dtype == b.dtype and a.tobytes() == b.tobytes()
 
 
-@pytest.mark.parametrize("fmt", ["obj", "ply", "ply-ascii", "vtu", "vtp"])
+@pytest.mark.parametrize("fmt", ["obj", "ply", "ply-ascii", "vtk", "vtu", "vtp"])
 def test_read_mesh_gives_back_the_written_mesh(mesh, tmp_path, fmt):
     ext = "ply" if fmt.startswith("ply") else fmt
     path = tmp_path / f"f.{ext}"
@@ -74,7 +74,7 @@ def test_read_mesh_of_the_cli_output(splash_bin, tmp_path):
 @pytest.mark.parametrize(
     "name, content, message",
     [
-        ("a.ply", b"ply\nformat binary_little_endian 1.0\nelement vertex 10\n", "not a PLY"),
+        ("a.ply", b"ply\nformat binary_little_endian 1.0\nelement vertex 10\n", "end_header"),
         (
             "b.ply",
             b"ply\nformat binary_little_endian 1.0\nelement vertex 1000\nproperty float x\n"
@@ -94,9 +94,9 @@ def test_read_mesh_of_the_cli_output(splash_bin, tmp_path):
             b"property float z\nelement face 1\nproperty int vertex_indices\nend_header\n3\n",
             "list property 'vertex_indices'",
         ),
-        ("c.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3 4\n", "do not hold 3 numbers"),
+        ("c.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3 4\n", "4 corners"),
         ("d.obj", b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n", "refers to vertex 8"),
-        ("e.vtu", b"<VTKFile><Unstructured", "not a VTK XML"),
+        ("e.vtu", b"<VTKFile><Unstructured", "VTK XML"),
         ("f.stl", b"solid", "extension"),
     ],
 )
@@ -113,7 +113,7 @@ def test_read_mesh_missing_file(tmp_path):
         splash_sph.read_mesh(tmp_path / "none.ply")
 
 
-@pytest.mark.parametrize("fmt", ["obj", "ply", "ply-ascii", "vtu"])
+@pytest.mark.parametrize("fmt", ["obj", "ply", "ply-ascii", "vtk", "vtu"])
 def test_read_mesh_mutated_files_raise_value_errors_only(mesh, tmp_path, fmt):
     """Bytes changed, cut, inserted or truncated (seeded): read_mesh returns a mesh or raises
     ValueError naming the file, nothing else."""

@@ -18,16 +18,17 @@ with the message the command line prints.
 
 from ._native import (
     Mesh,
+    MeshArrays,
     Particles,
     config_toml,
     default_config,
     estimate_spacing,
     iso,
     preview,
+    read_mesh,
     read_particles,
     reconstruct,
 )
-from .meshes import MeshArrays, read_mesh
 
 __all__ = [
     "Mesh",

@@ -1,7 +1,7 @@
 """Type stubs of the native extension; the ``splash_sph`` package re-exports all of it."""
 
 import os
-from typing import Any, Dict, List, Mapping, Optional, Sequence, Union
+from typing import Any, Dict, List, Mapping, NamedTuple, Optional, Sequence, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -99,6 +99,32 @@ def read_particles(path: _Path, format: Optional[str] = None) -> Particles:
     Raises FileNotFoundError for a missing file, OSError when it cannot be read, and
     ValueError when its content is not a valid frame (the message names the file and says
     what is wrong where).
+    """
+
+class MeshArrays(NamedTuple):
+    """A triangle mesh read from a file (``read_mesh``)."""
+
+    #: Vertex positions, shape (V, 3), float32.
+    vertices: npt.NDArray[np.float32]
+    #: Triangles as vertex indices, shape (F, 3), uint32.
+    faces: npt.NDArray[np.uint32]
+    #: Unit vertex normals, shape (V, 3), float32; shape (0, 3) when the file has none.
+    normals: npt.NDArray[np.float32]
+    #: Per-vertex attributes by name (``velocity``: shape (V, 3); scalars: shape (V,)),
+    #: float32.
+    attributes: Dict[str, npt.NDArray[np.float32]]
+
+def read_mesh(path: _Path) -> MeshArrays:
+    """Reads a mesh written by ``splash recon`` or ``Mesh.write``, by its extension:
+    ``.obj``, ``.ply`` (binary or ascii), ``.vtk`` (legacy), ``.vtu`` or ``.vtp``.
+
+    PLY properties ``vx vy vz`` become the attribute ``velocity``, ``{name}_x {name}_y
+    {name}_z`` the vector ``{name}``, other vertex properties scalars; VTK point data arrays
+    keep their names (``Normals`` are the normals). Faces must be triangles. The GIL is
+    released while reading.
+
+    Raises FileNotFoundError for a missing file, OSError when it cannot be read, and
+    ValueError naming the file when its content is not such a mesh.
     """
 
 def reconstruct(
