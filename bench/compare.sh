@@ -10,11 +10,12 @@
 #
 # Options (each applies to the inputs after it): -r SPACING (particle spacing r, required),
 # -c CELLS (default "2r r r/2"), -t THREADS (default 2), -n RUNS (pairs per row, default 1).
-# Environment: SPLASH (default target/release/splash), SPLASHSURF (default: splashsurf on the
-# PATH; the table leaves its columns empty without one), KEEP (a directory to keep the meshes).
+# Environment: SPLASH (default release/splash in cargo's target directory), SPLASHSURF
+# (default: splashsurf on the PATH; the table leaves its columns empty without one), KEEP (a
+# directory to keep the meshes).
 set -euo pipefail
 
-splash=${SPLASH:-$(dirname "$0")/../target/release/splash}
+splash=${SPLASH:-$("$(dirname "$0")"/../scripts/target-dir)/release/splash}
 peer=${SPLASHSURF:-$(command -v splashsurf || true)}
 [ -x "$splash" ] || { echo "no splash at $splash (cargo build --release, or set SPLASH)" >&2; exit 2; }
 [ -x /usr/bin/time ] || { echo "needs /usr/bin/time (GNU time) for peak memory" >&2; exit 2; }
