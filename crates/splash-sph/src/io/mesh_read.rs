@@ -6,7 +6,9 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use super::failure::Result;
-use super::{Attribute, MeshFormat, obj_read, ply_mesh, point_arrays, vtk_legacy, vtk_xml};
+use super::{
+    Attribute, MeshFormat, Particles, obj_read, ply_mesh, point_arrays, vtk_legacy, vtk_xml,
+};
 use crate::mesh::TriMesh;
 
 /// A mesh read from a file: its triangles, vertex normals (empty when the file has none) and
@@ -43,26 +45,10 @@ fn read(path: &Path) -> Result<MeshFile> {
         },
         Some(MeshFormat::PlyBinary | MeshFormat::PlyAscii) => |data| {
             let (mesh, attributes) = ply_mesh::parse(data)?;
-            with_normals(mesh, attributes, "normal")
+            Ok(with_normals(mesh, attributes, "normal"))
         },
-        Some(MeshFormat::Vtu | MeshFormat::Vtp) => |data| {
-            let (points, triangles) = vtk_xml::parse_mesh(data)?;
-            let mesh = TriMesh {
-                vertices: points.positions,
-                normals: Vec::new(),
-                triangles,
-            };
-            with_normals(mesh, points.attributes, "Normals")
-        },
-        Some(MeshFormat::Vtk) => |data| {
-            let (points, triangles) = vtk_legacy::parse_mesh(data)?;
-            let mesh = TriMesh {
-                vertices: points.positions,
-                normals: Vec::new(),
-                triangles,
-            };
-            with_normals(mesh, points.attributes, "Normals")
-        },
+        Some(MeshFormat::Vtu | MeshFormat::Vtp) => |data| Ok(vtk_mesh(vtk_xml::parse_mesh(data)?)),
+        Some(MeshFormat::Vtk) => |data| Ok(vtk_mesh(vtk_legacy::parse_mesh(data)?)),
         Some(MeshFormat::Pov) | None => bail_format!(
             "cannot tell the mesh format from the extension: meshes are read from .obj, .ply, \
              .vtk, .vtu and .vtp files"
@@ -73,18 +59,28 @@ fn read(path: &Path) -> Result<MeshFile> {
     Ok(file)
 }
 
+/// A VTK file's points and triangles as a mesh, its point data `Normals` the normals.
+fn vtk_mesh((points, triangles): (Particles, Vec<[u32; 3]>)) -> MeshFile {
+    let mesh = TriMesh {
+        vertices: points.positions,
+        normals: Vec::new(),
+        triangles,
+    };
+    with_normals(mesh, points.attributes, "Normals")
+}
+
 /// Moves the vector attribute `name` into the mesh's normals.
 fn with_normals(
     mut mesh: TriMesh,
     mut attributes: BTreeMap<String, Attribute>,
     name: &str,
-) -> Result<MeshFile> {
+) -> MeshFile {
     match attributes.remove(name) {
         Some(Attribute::Vector(normals)) => mesh.normals = normals,
         Some(other) => drop(attributes.insert(name.to_owned(), other)),
         None => {}
     }
-    Ok(MeshFile { mesh, attributes })
+    MeshFile { mesh, attributes }
 }
 
 /// What every format must hold: corners that are vertices, one normal per vertex if any.
