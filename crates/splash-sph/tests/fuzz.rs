@@ -1,5 +1,5 @@
-//! Fuzzing on the stable toolchain: every particle reader, the configuration parsers and the
-//! reconstruction get mutated inputs from a seeded generator, and must neither panic nor
+//! Fuzzing on the stable toolchain: every particle and mesh reader, the configuration parsers
+//! and the reconstruction get mutated inputs from a seeded generator, and must neither panic nor
 //! allocate beyond what the input's size justifies; errors must name the file and stay short;
 //! the same input must give the same result.
 //!
@@ -23,6 +23,8 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use glam::Vec3;
+use splash_sph::io::{MeshFormat, VertexAttributes, read_mesh, write_mesh_with};
+use splash_sph::mesh::TriMesh;
 use splash_sph::{
     Attribute, Bytes, Config, Engine, Error, Length, Particles, Reconstructor, read_particles,
 };
@@ -44,6 +46,28 @@ fn by_extension(path: &Path) -> splash_sph::Result<Particles> {
     read_particles(path, None)
 }
 
+/// Reads a mesh (`io::read_mesh`): its vertices as the positions, its normals (when it has
+/// them), triangles' corners and vertex attributes as attributes, so that every part of it
+/// is checked and fingerprinted.
+fn mesh(path: &Path) -> splash_sph::Result<Particles> {
+    let file = read_mesh(path)?;
+    let mut attributes = file.attributes;
+    if !file.mesh.normals.is_empty() {
+        attributes.insert("(normals)".into(), Attribute::Vector(file.mesh.normals));
+    }
+    // The corners cycled to one per vertex: an attribute is as long as the vertices.
+    if !file.mesh.triangles.is_empty() {
+        let corners = file.mesh.triangles.iter().flatten().cycle();
+        let corners = corners.take(file.mesh.vertices.len());
+        let corners = corners.map(|&c| c as f32).collect();
+        attributes.insert("(corners)".into(), Attribute::Scalar(corners));
+    }
+    Ok(Particles {
+        positions: file.mesh.vertices,
+        attributes,
+    })
+}
+
 #[rustfmt::skip]
 const READERS: &[Reader] = &[
     Reader { name: "ply-ascii", extension: "ply", read: by_extension, seeds: ply_ascii_seeds },
@@ -56,6 +80,11 @@ const READERS: &[Reader] = &[
     Reader { name: "vtp", extension: "vtp", read: by_extension, seeds: vtp_seeds },
     Reader { name: "bgeo", extension: "bgeo", read: by_extension, seeds: bgeo_seeds },
     Reader { name: "xyz", extension: "xyz", read: by_extension, seeds: xyz_seeds },
+    Reader { name: "mesh-obj", extension: "obj", read: mesh, seeds: obj_mesh_seeds },
+    Reader { name: "mesh-ply", extension: "ply", read: mesh, seeds: ply_mesh_seeds },
+    Reader { name: "mesh-vtk", extension: "vtk", read: mesh, seeds: vtk_mesh_seeds },
+    Reader { name: "mesh-vtu", extension: "vtu", read: mesh, seeds: vtu_mesh_seeds },
+    Reader { name: "mesh-vtp", extension: "vtp", read: mesh, seeds: vtp_mesh_seeds },
 ];
 
 /// Cases per reader in the default (CI) mode.
@@ -379,7 +408,10 @@ fn check_read(reader: &Reader, path: &Path, input: &[u8], case: &str) -> Option<
             }
         }
         Err(e) => {
-            if !matches!(e, Error::Format { .. } | Error::Io { .. }) {
+            if !matches!(
+                e,
+                Error::Format { .. } | Error::MeshFormat { .. } | Error::Io { .. }
+            ) {
                 return Some(format!("returned an error of the wrong kind: {e:?}"));
             }
             let text = e.to_string();
@@ -1040,6 +1072,73 @@ fn bgeo_seeds() -> Vec<Vec<u8>> {
 
 fn xyz_seeds() -> Vec<Vec<u8>> {
     format_fixtures(".xyz")
+}
+
+/// A tetrahedron written in `formats`, with and without normals and attributes.
+fn mesh_seeds(formats: &[MeshFormat]) -> Vec<Vec<u8>> {
+    let vertices = vec![Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z];
+    let normals = vertices
+        .iter()
+        .map(|v| (*v - Vec3::splat(0.25)).normalize())
+        .collect();
+    let triangles = vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]];
+    let full = TriMesh {
+        vertices,
+        normals,
+        triangles,
+    };
+    let bare = TriMesh {
+        normals: Vec::new(),
+        ..full.clone()
+    };
+    let named = vec![
+        (
+            "density".to_string(),
+            Attribute::Scalar(vec![1000.0, 999.5, 1001.0, 1000.25]),
+        ),
+        (
+            "velocity".to_string(),
+            Attribute::Vector(full.vertices.clone()),
+        ),
+    ];
+    let mut seeds = Vec::new();
+    for &format in formats {
+        for (mesh, named) in [(&full, &named[..]), (&bare, &[][..])] {
+            let named = if format.holds_attributes() {
+                named
+            } else {
+                &[]
+            };
+            let with = VertexAttributes {
+                velocities: None,
+                named,
+            };
+            let mut bytes = Vec::new();
+            write_mesh_with(mesh, &with, format, &mut bytes).unwrap();
+            seeds.push(bytes);
+        }
+    }
+    seeds
+}
+
+fn obj_mesh_seeds() -> Vec<Vec<u8>> {
+    mesh_seeds(&[MeshFormat::Obj])
+}
+
+fn ply_mesh_seeds() -> Vec<Vec<u8>> {
+    mesh_seeds(&[MeshFormat::PlyBinary, MeshFormat::PlyAscii])
+}
+
+fn vtk_mesh_seeds() -> Vec<Vec<u8>> {
+    mesh_seeds(&[MeshFormat::Vtk])
+}
+
+fn vtu_mesh_seeds() -> Vec<Vec<u8>> {
+    mesh_seeds(&[MeshFormat::Vtu])
+}
+
+fn vtp_mesh_seeds() -> Vec<Vec<u8>> {
+    mesh_seeds(&[MeshFormat::Vtp])
 }
 
 fn raw_seeds() -> Vec<Vec<u8>> {
