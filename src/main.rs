@@ -384,7 +384,7 @@ fn recon_with(
         .output
         .as_deref()
         .map_or(Output::BesideInput, Output::parse);
-    let format = mesh_format(&output, &config, args.params.format.as_deref())?;
+    let format = output.mesh_format(config.output.format)?;
     let input_format = args.run.input_format()?;
     let log_format = args.run.log_format()?;
     let shard = args.farm.shard()?;
@@ -416,33 +416,6 @@ fn recon_with(
         ExitCode::SUCCESS
     } else {
         ExitCode::FAILURE
-    })
-}
-
-/// The mesh format: `--format` (the config's), else the one the output name's extension
-/// implies, else OBJ; an extension that contradicts `--format` or names no mesh format is
-/// refused.
-fn mesh_format(output: &Output, config: &Config, flag: Option<&str>) -> Result<MeshFormat> {
-    Ok(match (config.output.format, output.format_hint()) {
-        (Some(format), hint) => {
-            if let Some(hint) = hint.filter(|h| h.extension() != format.extension()) {
-                bail!(
-                    "--format {} does not match the output name's .{} extension",
-                    flag.unwrap_or(format.extension()),
-                    hint.extension()
-                );
-            }
-            format
-        }
-        (None, Some(hint)) => hint,
-        // OBJ text in a `.stl` would pass for a mesh of that kind until something reads it.
-        (None, None) => match output.extension() {
-            Some(ext) => bail!(
-                "the output name's .{ext} extension is not a mesh format splash writes (.obj, \
-                 .ply, .inc, .vtk, .vtu, .vtp); rename the output or give --format"
-            ),
-            None => MeshFormat::Obj,
-        },
     })
 }
 

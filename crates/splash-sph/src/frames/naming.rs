@@ -47,6 +47,33 @@ impl Output {
         }
     }
 
+    /// The mesh format: `configured` (the config's or a flag's), else the one the output
+    /// name's extension implies, else OBJ. An extension that contradicts `configured` or names
+    /// no mesh format is refused: OBJ text in a `.stl` would pass for a mesh of that kind
+    /// until something reads it.
+    pub fn mesh_format(&self, configured: Option<MeshFormat>) -> Result<MeshFormat> {
+        Ok(match (configured, self.format_hint()) {
+            (Some(format), hint) => {
+                if let Some(hint) = hint.filter(|h| h.extension() != format.extension()) {
+                    bail_config!(
+                        "--format {} does not match the output name's .{} extension",
+                        format_name(format),
+                        hint.extension()
+                    );
+                }
+                format
+            }
+            (None, Some(hint)) => hint,
+            (None, None) => match self.extension() {
+                Some(ext) => bail_config!(
+                    "the output name's .{ext} extension is not a mesh format splash writes \
+                     (.obj, .ply, .inc, .vtk, .vtu, .vtp); rename the output or give --format"
+                ),
+                None => MeshFormat::Obj,
+            },
+        })
+    }
+
     /// The extension of an output file name, if it has one.
     pub fn extension(&self) -> Option<String> {
         match self {
@@ -67,6 +94,16 @@ impl Output {
             }
             Output::Pattern(p) => PathBuf::from(expand_pattern(p, &stem)?),
         })
+    }
+}
+
+/// A format's name as `--format` and the config spell it.
+fn format_name(format: MeshFormat) -> &'static str {
+    match format {
+        MeshFormat::PlyBinary => "ply",
+        MeshFormat::PlyAscii => "ply-ascii",
+        MeshFormat::Pov => "pov",
+        other => other.extension(),
     }
 }
 
@@ -173,6 +210,20 @@ mod tests {
         assert_eq!(expand_pattern("{frame}.ply", "x12").unwrap(), "12.ply");
         assert!(expand_pattern("{frame:x}.ply", "x12").is_err());
         assert!(expand_pattern("{frame}.ply", "nodigits").is_err());
+    }
+
+    #[test]
+    fn the_format_follows_the_name_unless_given() {
+        let format = |name: &str, given| Output::parse(name).mesh_format(given);
+        assert_eq!(format("m/{stem}.ply", None).unwrap(), MeshFormat::PlyBinary);
+        assert_eq!(format("m/{stem}", None).unwrap(), MeshFormat::Obj);
+        let given = Some(MeshFormat::PlyAscii);
+        assert_eq!(format("m/{stem}.PLY", given).unwrap(), MeshFormat::PlyAscii);
+        let clash = format("x.ply", Some(MeshFormat::Obj))
+            .unwrap_err()
+            .to_string();
+        assert!(clash.contains("--format obj does not match the output name's .ply"));
+        assert!(format("x.stl", None).is_err());
     }
 
     #[test]
