@@ -10,7 +10,7 @@ use splash_sph::{Bytes, Config, Engine, Length};
 
 use crate::bench::{self, Options};
 use crate::report::records::{FrameRecord, Report};
-use crate::report::tables;
+use crate::tables;
 use splash_sph::pipeline::FrameOutcome;
 
 #[derive(Args)]

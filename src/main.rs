@@ -14,6 +14,7 @@ mod log;
 mod memory;
 mod preview;
 mod report;
+mod tables;
 
 use splash_sph::frames::Output;
 use splash_sph::pipeline::Batch;
