@@ -1,7 +1,7 @@
 //! Frame sequences as simulators write them and farms split them: a frame's number is the last
 //! run of digits in its file stem (`frame_0042.ply` → 42), frames run in number order.
 //!
-//! - [`discovery`]: which particle files a run covers, from files, directories and globs;
+//! - [`select`]: which particle files a run covers, from files, directories and globs;
 //! - [`FrameSet`]: the numbers a run keeps (`1-10,20,30-40x5`);
 //! - [`Shard`]: job K of N takes every N-th selected frame;
 //! - [`Output`]: where each frame's result goes (a directory, a pattern, beside the input).
@@ -41,7 +41,7 @@ pub fn path_frame_number(path: &Path) -> Option<u64> {
 /// Double extensions of particle files: `fluid_0042.bgeo.gz` is frame 42 of stem `fluid_0042`.
 const DOUBLE_EXTENSIONS: [&str; 2] = [".bgeo.gz", ".bgeo.sc"];
 
-/// The file name without its particle extension, the double ones ([`DOUBLE_EXTENSIONS`])
+/// The file name without its particle extension, the double ones (`.bgeo.gz`, `.bgeo.sc`)
 /// included: `f_7.ply` → `f_7`, `fluid.0042.bgeo.gz` → `fluid.0042`.
 pub fn input_stem(path: &Path) -> Option<String> {
     let name = path.file_name()?.to_string_lossy();
