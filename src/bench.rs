@@ -1,7 +1,7 @@
 //! `splash bench`: the paper's comparison matrix on the user's own frames. Every frame of every
 //! scene is reconstructed at every cell size by the scatter (1 thread), the full gather and the
 //! narrow band (each at every thread count), each run in its own rayon pool; the averages per
-//! frame fill Tables 1, 3/4 and 5/6 of Akinci et al. 2012 (see [`crate::report::tables`]).
+//! frame fill Tables 1, 3/4 and 5/6 of Akinci et al. 2012 (see [`crate::tables`]).
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;

@@ -8,10 +8,10 @@ use clap::Args;
 
 use splash_sph::{Bytes, Config, Engine, Length};
 
-use crate::batch::FrameOutcome;
 use crate::bench::{self, Options};
 use crate::report::records::{FrameRecord, Report};
-use crate::report::tables;
+use crate::tables;
+use splash_sph::pipeline::FrameOutcome;
 
 #[derive(Args)]
 #[command(after_help = "\

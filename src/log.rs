@@ -24,9 +24,8 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 use serde_json::json;
 
+use splash_sph::pipeline::{FrameOutcome, Plan, Progress, RunReport};
 use splash_sph::{FrameStats, InputFormat};
-
-use crate::batch::{FrameOutcome, Plan, Progress, RunReport};
 
 /// The logging, input and report flags of a run over frames (`recon`, `preview`).
 #[derive(Args)]
@@ -276,13 +275,13 @@ impl Console {
                 "shard": plan.shard.map(|s| s.to_string()),
                 "assigned": plan.assigned,
                 "skipped": plan.skipped.len(),
-                "to_do": plan.to_do,
+                "to_do": plan.to_do(),
             });
             eprintln!("{line}");
             return;
         }
         if let Some(bar) = &self.bar {
-            bar.set_length(plan.to_do as u64);
+            bar.set_length(plan.to_do() as u64);
             bar.set_draw_target(indicatif::ProgressDrawTarget::stderr());
         }
         if self.verbosity == Verbosity::Quiet {
@@ -299,7 +298,7 @@ impl Console {
             parts.push(format!(
                 "{} found complete and skipped, {} to do",
                 plan.skipped.len(),
-                plan.to_do
+                plan.to_do()
             ));
         }
         if !parts.is_empty() {

@@ -7,22 +7,24 @@ use std::process::ExitCode;
 use anyhow::{Context, Result, bail};
 use clap::{Args, Parser, Subcommand};
 
-mod batch;
 mod bench;
 mod bench_cli;
+mod farm;
 mod log;
 mod memory;
 mod preview;
 mod report;
-mod sequence;
+mod tables;
 
+use splash_sph::frames::Output;
+use splash_sph::pipeline::Batch;
 use splash_sph::{
     Bytes, Config, Engine, Length, MeshFormat, Normals, OutputConfig, Overrides, UpAxis,
 };
 
-use batch::{Batch, Output};
+use farm::FarmArgs;
 use log::{Console, LogFormat, RunArgs};
-use sequence::FarmArgs;
+use memory::Metered;
 
 #[derive(Parser)]
 #[command(
@@ -367,10 +369,13 @@ fn recon(args: Recon, iso: Option<splash_sph::iso::IsoRequest>) -> Result<ExitCo
 
 fn recon_with(
     args: Recon,
-    config: Config,
+    mut config: Config,
     iso: Option<splash_sph::iso::IsoRequest>,
 ) -> Result<ExitCode> {
-    if let Some(n) = config.threads {
+    // The report gives the configuration as resolved, threads included.
+    let report_config = serde_json::to_value(&config)?;
+    if let Some(n) = config.threads.take() {
+        // Every frame runs in the global pool, sized once.
         rayon::ThreadPoolBuilder::new()
             .num_threads(n)
             .build_global()
@@ -380,27 +385,7 @@ fn recon_with(
         .output
         .as_deref()
         .map_or(Output::BesideInput, Output::parse);
-    let format = match (config.output.format, output.format_hint()) {
-        (Some(format), hint) => {
-            if let Some(hint) = hint.filter(|h| h.extension() != format.extension()) {
-                bail!(
-                    "--format {} does not match the output name's .{} extension",
-                    args.params.format.as_deref().unwrap_or(format.extension()),
-                    hint.extension()
-                );
-            }
-            format
-        }
-        (None, Some(hint)) => hint,
-        // OBJ text in a `.stl` would pass for a mesh of that kind until something reads it.
-        (None, None) => match output.extension() {
-            Some(ext) => bail!(
-                "the output name's .{ext} extension is not a mesh format splash writes (.obj, \
-                 .ply, .inc, .vtk, .vtu, .vtp); rename the output or give --format"
-            ),
-            None => MeshFormat::Obj,
-        },
-    };
+    let format = output.mesh_format(config.output.format)?;
     let input_format = args.run.input_format()?;
     let log_format = args.run.log_format()?;
     let shard = args.farm.shard()?;
@@ -409,8 +394,7 @@ fn recon_with(
         args.run.verbosity(),
         std::io::stderr().is_terminal(),
     );
-    let inputs = sequence::select(&args.inputs, args.farm.frames.as_deref(), &console)?;
-    let report_config = serde_json::to_value(&config)?;
+    let inputs = args.farm.select(&args.inputs, &console)?;
     if let Some(path) = &args.run.report {
         report::records::check_report_path(path)?;
     }
@@ -425,7 +409,7 @@ fn recon_with(
         fail_fast: args.farm.fail_fast,
         iso,
     };
-    let report = batch.run(&mut console)?;
+    let report = batch.run(&mut Metered(&mut console))?;
     if let Some(path) = &args.run.report {
         bench_cli::write_recon_report(path, &report.outcomes, &batch.config, report_config)?;
     }

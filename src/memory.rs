@@ -8,7 +8,12 @@
 
 use std::sync::atomic::{AtomicUsize, Ordering};
 
-use splash_sph::{Clock, Observer, Reconstruction, Reconstructor, Stage, StageFigures, Vec3};
+use std::path::Path;
+
+use splash_sph::pipeline::{FrameOutcome, Plan, Progress};
+use splash_sph::{
+    Clock, FrameStats, Observer, Reconstruction, Reconstructor, Stage, StageFigures, Vec3,
+};
 
 static CURRENT: AtomicUsize = AtomicUsize::new(0);
 static PEAK: AtomicUsize = AtomicUsize::new(0);
@@ -161,6 +166,36 @@ pub fn reconstruct_measured(
     let mut rec = reconstructor.reconstruct_observed(particles, &mut meter)?;
     rec.stats.peak_rss = peak_rss().unwrap_or(0);
     Ok(rec)
+}
+
+/// A run's progress with each frame measured: a [`Meter`] on every reconstruction, and the
+/// process's peak resident set size once the frame's surface is made.
+pub struct Metered<'a>(pub &'a mut dyn Progress);
+
+impl Progress for Metered<'_> {
+    fn started(&mut self, plan: &Plan) {
+        self.0.started(plan);
+    }
+
+    fn spacing_estimated(&mut self, from: &Path, spacing: f32) {
+        self.0.spacing_estimated(from, spacing);
+    }
+
+    fn warning(&mut self, input: Option<&Path>, message: &str) {
+        self.0.warning(input, message);
+    }
+
+    fn frame_done(&mut self, outcome: &FrameOutcome, done: usize, total: usize) {
+        self.0.frame_done(outcome, done, total);
+    }
+
+    fn observer(&mut self) -> Box<dyn Observer> {
+        Box::new(Meter::start())
+    }
+
+    fn measured(&mut self, stats: &mut FrameStats) {
+        stats.peak_rss = peak_rss().unwrap_or(0);
+    }
 }
 
 #[cfg(test)]

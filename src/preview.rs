@@ -1,9 +1,8 @@
 //! `splash preview`: one ray-traced PNG of the metaball surface per particle frame, without a
-//! mesh. The frames, `--frames`, `--shard`, `--skip-existing`, the output names, the logs,
-//! progress bar and summary are recon's (sequence.rs, batch.rs, log.rs); the loop is this small
-//! one of its own, since a frame here is an image and its figures are a renderer's.
+//! mesh. The frames, `--frames`, `--shard`, `--skip-existing`, the output names and the run are
+//! recon's (the library's `frames` and `pipeline`), the logs, progress bar and summary too
+//! (log.rs); a frame's work here is an image, and its figures are a renderer's.
 
-use std::collections::BTreeSet;
 use std::io::{IsTerminal, Write};
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -18,9 +17,11 @@ use splash_sph::preview::{
 };
 use splash_sph::{Bytes, Config, InputFormat, Vec3, estimate_spacing, read_particles};
 
-use crate::batch::{FrameOutcome, Output, Plan, RunReport};
+use splash_sph::frames::{Output, output_paths, path_frame_number};
+use splash_sph::pipeline::{FrameOutcome, Plan, run_plan};
+
+use crate::farm::FarmArgs;
 use crate::log::{Console, FrameFigures, RunArgs, Verbosity};
-use crate::sequence::{self, FarmArgs, path_frame_number};
 
 #[derive(Args)]
 #[command(after_help = "\
@@ -197,58 +198,14 @@ impl CameraPlan {
 
 pub fn preview(args: PreviewArgs) -> Result<ExitCode> {
     let mut config = args.config()?;
-    if let Some(n) = config.threads {
+    if let Some(n) = config.threads.take() {
+        // The previewer runs in the global pool, sized once.
         rayon::ThreadPoolBuilder::new()
             .num_threads(n)
             .build_global()
             .context("cannot start the worker threads")?;
-        // The global pool is sized; the previewer runs in it.
-        config.threads = None;
     }
-    let (width, height) = parse_size(&args.size).context("--size")?;
-    let z_up = match args
-        .up_axis
-        .as_deref()
-        .map(|a| a.trim().to_ascii_lowercase())
-    {
-        None => false,
-        Some(a) if a == "y" => false,
-        Some(a) if a == "z" => true,
-        Some(a) => bail!("--up-axis {a}: expected y or z"),
-    };
-    let plan = CameraPlan {
-        width,
-        height,
-        fov: args.fov,
-        up: match &args.up {
-            Some(u) => vector(u, "up")?,
-            None => camera::up_vector(z_up),
-        },
-        position: args
-            .camera
-            .as_deref()
-            .map(|c| vector(c, "camera"))
-            .transpose()?,
-        look_at: args
-            .look_at
-            .as_deref()
-            .map(|c| vector(c, "look-at"))
-            .transpose()?,
-        view: args
-            .view
-            .as_deref()
-            .map(|c| vector(c, "view"))
-            .transpose()?,
-    };
-    if plan.look_at.is_some() && plan.position.is_none() {
-        bail!("--look-at needs --camera (without both, the camera is framed automatically)");
-    }
-    if !(args.fov > 0.0 && args.fov < 180.0) {
-        bail!(
-            "--fov {}: the field of view must lie strictly between 0 and 180 degrees",
-            args.fov
-        );
-    }
+    let camera_plan = args.camera_plan()?;
     let style = Style {
         background: parse_colour(&args.background).context("--background")?,
         colour: parse_colour(&args.colour).context("--colour")?,
@@ -258,16 +215,7 @@ pub fn preview(args: PreviewArgs) -> Result<ExitCode> {
     let input_format = args.run.input_format()?;
     let log_format = args.run.log_format()?;
     let shard = args.farm.shard()?;
-    let output = args
-        .output
-        .as_deref()
-        .map_or(Output::BesideInput, Output::parse);
-    if let Some(ext) = output
-        .extension()
-        .filter(|e| !e.eq_ignore_ascii_case("png"))
-    {
-        bail!("preview writes PNG images: the output name's .{ext} extension should be .png");
-    }
+    let output = args.output()?;
     if let Some(path) = &args.run.report
         && path.extension().is_none_or(|e| e != "json")
     {
@@ -277,59 +225,125 @@ pub fn preview(args: PreviewArgs) -> Result<ExitCode> {
         );
     }
 
-    let console = Console::new(
+    let mut console = Console::new(
         log_format,
         args.run.verbosity(),
         std::io::stderr().is_terminal(),
     );
-    let inputs = sequence::select(&args.inputs, args.farm.frames.as_deref(), &console)?;
-    let outputs: Vec<PathBuf> = inputs
-        .iter()
-        .map(|i| output.path_with(i, "_preview", "png"))
-        .collect::<Result<_>>()?;
-    if let Output::Pattern(p) = &output
-        && inputs.len() > 1
-        && !p.contains("{stem}")
-        && !p.contains("{frame")
-    {
-        bail!(
-            "-o {p} names one file for {} inputs: give a directory (ending in /) or a pattern \
-             with {{stem}} or {{frame:04}}",
-            inputs.len()
-        );
-    }
-    let mut seen = BTreeSet::new();
-    for (i, o) in inputs.iter().zip(&outputs) {
-        if !seen.insert(o) {
-            bail!("two inputs would both be written to {}", o.display());
-        }
-        if inputs.iter().any(|x| x == o) {
-            bail!("the preview of {} would overwrite an input", i.display());
-        }
-    }
-
-    let assigned: Vec<usize> = (0..inputs.len())
-        .filter(|&i| shard.is_none_or(|s| s.takes(i)))
-        .collect();
-    let (skipped, to_do): (Vec<usize>, Vec<usize>) = assigned
-        .iter()
-        .partition(|&&i| args.farm.skip_existing && outputs[i].is_file());
-    let job = Plan {
-        selected: inputs.len(),
-        shard,
-        assigned: assigned.len(),
-        skipped: skipped.iter().map(|&i| inputs[i].clone()).collect(),
-        to_do: to_do.len(),
-    };
+    // The frames, output names and job share follow recon's rules.
+    let inputs = args.farm.select(&args.inputs, &console)?;
+    let outputs = output_paths(&inputs, &output, "preview", "_preview", "png")?;
+    let job = Plan::new(&inputs, &outputs, shard, args.farm.skip_existing);
+    job.check_writable()?;
     console.start(&job);
 
-    // The spacing and the auto camera come from the first readable frame of the whole
-    // selection, so that every shard and restart draws the same surface from the same view.
+    let (previewer, camera) = setup(
+        &inputs,
+        input_format,
+        &mut config,
+        &camera_plan,
+        bvh,
+        &console,
+    )?;
+    let report = run_plan(
+        job,
+        args.farm.fail_fast,
+        &mut console,
+        |input, output, _| {
+            let start = Instant::now();
+            let particles = read_particles(input, input_format)?;
+            let preview = previewer.render(&particles.positions, &camera, &style)?;
+            write_png(output, &preview.image)?;
+            Ok(PreviewFrame {
+                stats: preview.stats,
+                kind: bvh,
+                seconds: start.elapsed().as_secs_f64(),
+            })
+        },
+    );
+    if let Some(path) = &args.run.report {
+        let size = [camera_plan.width, camera_plan.height];
+        write_report(path, &report.outcomes, bvh, size, config.spacing)?;
+    }
+    Ok(if console.finish(&report) {
+        ExitCode::SUCCESS
+    } else {
+        ExitCode::FAILURE
+    })
+}
+
+impl PreviewArgs {
+    /// The camera asked for: size, field of view, up direction, and position, target or view
+    /// where given.
+    fn camera_plan(&self) -> Result<CameraPlan> {
+        let (width, height) = parse_size(&self.size).context("--size")?;
+        let z_up = match self
+            .up_axis
+            .as_deref()
+            .map(|a| a.trim().to_ascii_lowercase())
+        {
+            None => false,
+            Some(a) if a == "y" => false,
+            Some(a) if a == "z" => true,
+            Some(a) => bail!("--up-axis {a}: expected y or z"),
+        };
+        let optional = |text: &Option<String>, flag| text.as_deref().map(|c| vector(c, flag));
+        let plan = CameraPlan {
+            width,
+            height,
+            fov: self.fov,
+            up: match &self.up {
+                Some(u) => vector(u, "up")?,
+                None => camera::up_vector(z_up),
+            },
+            position: optional(&self.camera, "camera").transpose()?,
+            look_at: optional(&self.look_at, "look-at").transpose()?,
+            view: optional(&self.view, "view").transpose()?,
+        };
+        if plan.look_at.is_some() && plan.position.is_none() {
+            bail!("--look-at needs --camera (without both, the camera is framed automatically)");
+        }
+        if !(self.fov > 0.0 && self.fov < 180.0) {
+            bail!(
+                "--fov {}: the field of view must lie strictly between 0 and 180 degrees",
+                self.fov
+            );
+        }
+        Ok(plan)
+    }
+
+    /// `-o`, which must name PNG files.
+    fn output(&self) -> Result<Output> {
+        let output = self
+            .output
+            .as_deref()
+            .map_or(Output::BesideInput, Output::parse);
+        if let Some(ext) = output
+            .extension()
+            .filter(|e| !e.eq_ignore_ascii_case("png"))
+        {
+            bail!("preview writes PNG images: the output name's .{ext} extension should be .png");
+        }
+        Ok(output)
+    }
+}
+
+/// The previewer and the camera of the whole run. The spacing and the auto camera come from
+/// the first readable frame of the whole selection, so that every shard and restart draws the
+/// same surface from the same view.
+fn setup(
+    inputs: &[PathBuf],
+    input_format: Option<InputFormat>,
+    config: &mut Config,
+    plan: &CameraPlan,
+    bvh: BvhKind,
+    console: &Console,
+) -> Result<(Previewer, Camera)> {
     let needs_reference = config.spacing.is_none() || plan.needs_frame();
     let reference = if needs_reference {
         inputs.iter().find_map(|input| {
             let p = read_particles(input, input_format).ok()?;
-            (!p.is_empty()).then_some((input.clone(), p.positions))
+            (!p.is_empty()).then_some((input, p.positions))
         })
     } else {
         None
@@ -347,77 +361,37 @@ pub fn preview(args: PreviewArgs) -> Result<ExitCode> {
         console.spacing(input, r);
         config.spacing = Some(r);
     }
-    let previewer = Previewer::new(&config)?.with_bvh(bvh);
+    let previewer = Previewer::new(config)?.with_bvh(bvh);
     let camera = plan.camera(
         reference.as_ref().map(|(_, p)| p.as_slice()),
         previewer.margin(),
     )?;
-    drop(reference);
-
-    let mut outcomes = Vec::with_capacity(to_do.len());
-    let mut not_attempted = 0;
-    for (k, &i) in to_do.iter().enumerate() {
-        let (input, output) = (&inputs[i], &outputs[i]);
-        let start = Instant::now();
-        let result = frame(&previewer, input, input_format, output, &camera, &style);
-        let outcome = FrameOutcome {
-            input: input.clone(),
-            output: output.clone(),
-            frame: path_frame_number(input),
-            result: result.map(|stats| PreviewFrame {
-                stats,
-                kind: bvh,
-                seconds: start.elapsed().as_secs_f64(),
-            }),
-        };
-        console.frame(&outcome, k + 1, to_do.len());
-        let failed = outcome.result.is_err();
-        outcomes.push(outcome);
-        if failed && args.farm.fail_fast {
-            not_attempted = to_do.len() - k - 1;
-            break;
-        }
-    }
-    if let Some(path) = &args.run.report {
-        let records: Vec<_> = outcomes
-            .iter()
-            .filter_map(|o| Some(record(&o.input, &o.output, o.result.as_ref().ok()?)))
-            .collect();
-        let report = json!({
-            "bvh": bvh.name(),
-            "size": [width, height],
-            "spacing": config.spacing,
-            "threads": rayon::current_num_threads(),
-            "frames": records,
-        });
-        let mut file = std::fs::File::create(path)
-            .with_context(|| format!("cannot write the report '{}'", path.display()))?;
-        writeln!(file, "{}", serde_json::to_string_pretty(&report)?)?;
-    }
-    let report = RunReport {
-        plan: job,
-        outcomes,
-        not_attempted,
-    };
-    Ok(if console.finish(&report) {
-        ExitCode::SUCCESS
-    } else {
-        ExitCode::FAILURE
-    })
+    Ok((previewer, camera))
 }
 
-fn frame(
-    previewer: &Previewer,
-    input: &Path,
-    format: Option<InputFormat>,
-    output: &Path,
-    camera: &Camera,
-    style: &Style,
-) -> Result<PreviewStats> {
-    let particles = read_particles(input, format)?;
-    let preview = previewer.render(&particles.positions, camera, style)?;
-    write_png(output, &preview.image)?;
-    Ok(preview.stats)
+/// The `--report` file: the run's settings and every written frame's figures.
+fn write_report(
+    path: &Path,
+    outcomes: &[FrameOutcome<PreviewFrame>],
+    bvh: BvhKind,
+    size: [u32; 2],
+    spacing: Option<f32>,
+) -> Result<()> {
+    let records: Vec<_> = outcomes
+        .iter()
+        .filter_map(|o| Some(record(&o.input, &o.output, o.result.as_ref().ok()?)))
+        .collect();
+    let report = json!({
+        "bvh": bvh.name(),
+        "size": size,
+        "spacing": spacing,
+        "threads": rayon::current_num_threads(),
+        "frames": records,
+    });
+    let mut file = std::fs::File::create(path)
+        .with_context(|| format!("cannot write the report '{}'", path.display()))?;
+    writeln!(file, "{}", serde_json::to_string_pretty(&report)?)?;
+    Ok(())
 }
 
 /// One image's figures, as the log and the report give them.

@@ -3,7 +3,8 @@
 the frame; likewise a directory of particle frames as an object of vertices only (with
 every particle attribute, `velocity` included), the source of live mode.
 
-Files are numbered as `splash recon` numbers them (the last run of digits in the name);
+Files are numbered as `splash recon` numbers them, by the package's `frame_number` (the last
+run of digits in the name);
 scene frame F shows the file of the largest number <= F - offset (the first file before
 it), so a sequence saved every 3rd frame holds each mesh for 3 frames. Of several
 extensions in one directory the commonest is used. The files are read by
@@ -14,7 +15,6 @@ Blender's own PLY importer drops both. A few recent frames are kept in memory.
 import logging
 import math
 import os
-import re
 from collections import Counter, OrderedDict
 
 import bpy
@@ -29,7 +29,6 @@ EXTENSIONS = (".obj", ".ply", ".vtu", ".vtp")
 # What splash_sph.read_particles reads.
 PARTICLE_EXTENSIONS = (".ply", ".csv", ".txt", ".bin", ".raw", ".vtk", ".vtu", ".vtp", ".bgeo",
                        ".bgeo.gz", ".xyz")  # fmt: skip
-_NUMBER = re.compile(r"(\d+)(?!.*\d)")
 _files_cache = {}
 _mesh_cache = OrderedDict()
 _MESH_CACHE_FRAMES = 8
@@ -39,12 +38,11 @@ class SequenceError(Exception):
     """A problem to show the user."""
 
 
-def _split(name):
-    """(stem, extension), `.bgeo.gz` counting as one extension."""
+def _extension(name):
+    """The extension, lower case, `.bgeo.gz` counting as one."""
     if name.lower().endswith(".bgeo.gz"):
-        return name[: -len(".bgeo.gz")], ".bgeo.gz"
-    stem, ext = os.path.splitext(name)
-    return stem, ext.lower()
+        return ".bgeo.gz"
+    return os.path.splitext(name)[1].lower()
 
 
 def frame_files(directory, particles=False):
@@ -60,12 +58,18 @@ def frame_files(directory, particles=False):
     cached = _files_cache.get((directory, particles))
     if cached and cached[0] == stamp:
         return cached[1]
+    try:
+        frame_number = vendor.splash_sph().frame_number
+    except RuntimeError as e:
+        raise SequenceError(str(e)) from None
     found = []
     for name in names:
-        stem, ext = _split(name)
-        match = _NUMBER.search(stem)
-        if ext in extensions and match and not name.startswith("."):
-            found.append((int(match.group(1)), ext, os.path.join(directory, name)))
+        ext = _extension(name)
+        if ext not in extensions or name.startswith("."):
+            continue
+        number = frame_number(name)
+        if number is not None:
+            found.append((number, ext, os.path.join(directory, name)))
     if not found:
         what = "particle" if particles else "mesh"
         raise SequenceError(f"'{directory}' has no numbered {what} files ({', '.join(extensions)})")

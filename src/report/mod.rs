@@ -1,5 +1,4 @@
-//! Reports of runs: per-frame records with their averages, machine and build (`records`), and
-//! the paper's Tables 1, 3/4 and 5/6 made of them (`tables`).
+//! Reports of runs: per-frame records with their averages, machine and build (`records`); the
+//! paper's tables made of them are `crate::tables`, beside the bench that fills them.
 
 pub mod records;
-pub mod tables;

@@ -11,6 +11,7 @@ mod pools;
 mod preview;
 mod read_mesh;
 mod recon;
+mod sequence;
 mod settings;
 
 use pyo3::exceptions::PyValueError;
@@ -81,6 +82,8 @@ fn config_toml<'py>(
 #[pyo3(name = "_native")]
 fn native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(recon::reconstruct, m)?)?;
+    m.add_function(wrap_pyfunction!(sequence::recon_sequence, m)?)?;
+    m.add_function(wrap_pyfunction!(sequence::frame_number, m)?)?;
     m.add_function(wrap_pyfunction!(iso::iso, m)?)?;
     m.add_function(wrap_pyfunction!(preview::preview, m)?)?;
     m.add_function(wrap_pyfunction!(particles::read_particles, m)?)?;

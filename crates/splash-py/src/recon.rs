@@ -5,8 +5,9 @@ use std::time::{Duration, Instant};
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
+use splash_sph::pipeline;
 use splash_sph::{
-    Attribute as ParticleAttribute, Clock, Config, FrameStats, Reconstruction, Reconstructor, Vec3,
+    Attribute as ParticleAttribute, Clock, Config, FrameStats, Reconstructor, TriMesh, Vec3,
 };
 
 use crate::arrays::{self, Points};
@@ -25,7 +26,8 @@ struct Attribute<'py> {
 
 /// What the library computed, with the times the report adds to its stage times.
 struct Output {
-    rec: Reconstruction,
+    mesh: TriMesh,
+    stats: FrameStats,
     attributes: Vec<Vec<Vec3>>,
     interpolation: Duration,
     total: Duration,
@@ -135,7 +137,7 @@ pub fn reconstruct<'py>(
     }
     Ok(Mesh::new(
         py,
-        out.rec.mesh,
+        out.mesh,
         mesh_attributes,
         report,
         format,
@@ -153,16 +155,15 @@ fn run(
     let threads = config.threads.take();
     let reconstructor = Reconstructor::new(config)?;
     pools::install(threads, || {
-        let rec = reconstructor.reconstruct_observed(positions, &mut Clock::default())?;
-        let interpolation = Instant::now();
-        // One neighbour search for all of them.
         let columns: Vec<ParticleAttribute> = attributes
             .iter()
             .map(|values| ParticleAttribute::Vector(values.to_vec()))
             .collect();
         let columns: Vec<&ParticleAttribute> = columns.iter().collect();
-        let attributes = reconstructor
-            .interpolate_all(&rec.mesh, positions, &columns)?
+        let surface =
+            pipeline::surface(&reconstructor, positions, &columns, &mut Clock::default())?;
+        let attributes = surface
+            .attributes
             .into_iter()
             .map(|a| match a {
                 ParticleAttribute::Vector(v) => v,
@@ -170,9 +171,10 @@ fn run(
             })
             .collect();
         Ok(Output {
-            rec,
+            mesh: surface.mesh,
+            stats: surface.stats,
             attributes,
-            interpolation: interpolation.elapsed(),
+            interpolation: surface.interpolation,
             total: start.elapsed(),
         })
     })?
@@ -185,7 +187,7 @@ fn report<'py>(
     engine: &str,
     field: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
-    let s: &FrameStats = &out.rec.stats;
+    let s: &FrameStats = &out.stats;
     let t = &s.timings;
     let times = PyDict::new(py);
     for (name, d) in [

@@ -40,9 +40,11 @@ mod worker_pool;
 
 pub mod bytes;
 pub mod field;
+pub mod frames;
 pub mod io;
 pub mod iso;
 pub mod mesh;
+pub mod pipeline;
 pub mod preview;
 mod recon;
 pub mod report;

@@ -10,6 +10,8 @@ default), as the ``splash`` command line runs it, on numpy arrays::
     mesh.write("frame_0040.obj")
     back = splash_sph.read_mesh("frame_0040.obj")   # numpy arrays of a written mesh
     rho = splash_sph.iso(p, "density", 1000.0, spacing=0.014)   # isosurface of a quantity
+    run = splash_sph.recon_sequence("sim/", "mesh/fluid_{frame:04}.ply", shard="auto/16",
+                                    skip_existing=True)   # a farm job, as `splash recon` runs it
 
 Lengths are multiples of the particle spacing r (``"2r"``, ``"r"``, ``"r/2"``) or plain
 numbers in world units. Library errors raise OSError (files) or ValueError (data, settings)
@@ -23,10 +25,12 @@ from ._native import (
     config_toml,
     default_config,
     estimate_spacing,
+    frame_number,
     iso,
     preview,
     read_mesh,
     read_particles,
+    recon_sequence,
     reconstruct,
 )
 
@@ -37,9 +41,11 @@ __all__ = [
     "config_toml",
     "default_config",
     "estimate_spacing",
+    "frame_number",
     "iso",
     "preview",
     "read_particles",
     "read_mesh",
+    "recon_sequence",
     "reconstruct",
 ]

@@ -1,7 +1,7 @@
 """Type stubs of the native extension; the ``splash_sph`` package re-exports all of it."""
 
 import os
-from typing import Any, Dict, List, Mapping, NamedTuple, Optional, Sequence, Union
+from typing import Any, Callable, Dict, List, Mapping, NamedTuple, Optional, Sequence, TypedDict, Union
 
 import numpy as np
 import numpy.typing as npt
@@ -270,6 +270,85 @@ def estimate_spacing(positions: _Array) -> float:
     the same estimate. Raises ValueError when fewer than 2 particles are given or all of
     them coincide. The GIL is released while estimating.
     """
+
+class FrameReport(TypedDict, total=False):
+    """One frame of ``recon_sequence``, as ``progress`` gets it and the run report lists it
+    (the fields of ``splash recon --log-format json``'s ``frame`` events)."""
+
+    frame: Optional[int]
+    input: str
+    output: str
+    status: str  # "ok" or "error"
+    particles: int  # the counts and seconds: status "ok" only
+    triangles: int
+    vertices: int
+    seconds: float
+    error: str  # status "error" only
+
+class RunReport(TypedDict):
+    """What ``recon_sequence`` returns: this job's share of the sequence and its frames."""
+
+    selected: int
+    shard: Optional[str]
+    assigned: int
+    skipped: List[str]
+    to_do: int
+    written: int
+    failed: List[FrameReport]
+    not_attempted: int
+    ok: bool
+    spacing: Optional[float]
+    warnings: List[str]
+    frames: List[FrameReport]
+
+def recon_sequence(
+    inputs: Union[_Path, Sequence[_Path]],
+    output: _Path,
+    *,
+    progress: Optional[Callable[[int, int, FrameReport], Any]] = None,
+    frames: Optional[str] = None,
+    shard: Optional[str] = None,
+    skip_existing: bool = False,
+    fail_fast: bool = False,
+    attributes: Union[str, Sequence[str], None] = None,
+    input_format: Optional[str] = None,
+    format: Optional[str] = None,
+    up_axis: Optional[str] = None,
+    spacing: Optional[float] = None,
+    cell: Union[str, float, None] = None,
+    field: Optional[str] = None,
+    engine: Optional[str] = None,
+    normals: Optional[str] = None,
+    correct: Optional[int] = None,
+    threads: Optional[int] = None,
+    max_memory: Union[str, int, None] = None,
+    config: Union[_Path, Mapping[str, Any], None] = None,
+) -> RunReport:
+    """Reconstructs a sequence of particle files into mesh files, as ``splash recon`` does:
+    the same frames, output names, shards, restarts and bytes.
+
+    ``inputs``: a particle file, a directory (its frame sequence), a glob pattern
+    (``"sim/frame_*.ply"``) or a list of these; frames run in frame-number order (the last
+    run of digits in the name, see ``frame_number``). ``output``: a directory (ending in
+    ``/``, or existing; numbers padded to 4 digits) or a pattern with ``{stem}``, ``{frame}``
+    or ``{frame:04}``; the format comes from ``format``, else the extension, else OBJ.
+
+    ``progress(done, total, frame_report)`` is called after each frame; an exception in it
+    stops the run and is raised again. ``frames``: ``"1-10,20,30-40x5"``. ``shard``:
+    ``"K/N"`` or ``"auto/N"`` (K from ``SLURM_ARRAY_TASK_ID``). ``skip_existing``: leave
+    frames whose output exists alone. ``fail_fast``: stop at the first failing frame.
+    ``attributes``: particle attributes to interpolate onto the vertices (PLY, VTK, VTU, VTP).
+    The other keywords are ``reconstruct``'s; without ``spacing`` it is estimated once, on the
+    first frame of the whole selection, so that every shard uses one grid.
+
+    A failing frame does not raise: it is in the report's ``failed``. Raises ValueError for
+    bad settings, inputs that select no frame or colliding outputs, OSError for an output
+    directory that cannot be written, before any frame is reconstructed.
+    """
+
+def frame_number(path: _Path) -> Optional[int]:
+    """The frame number of a file: the last run of digits of its name without the extension
+    (``frame_0042.ply`` -> 42, ``fluid.0007.bgeo.gz`` -> 7), None without digits."""
 
 def default_config() -> Dict[str, Any]:
     """The default configuration as a dict shaped like the TOML file (keys without a default,
