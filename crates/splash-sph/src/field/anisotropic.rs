@@ -34,7 +34,8 @@ use crate::error::Result;
 use glam::{Mat3, Vec3};
 use serde::{Deserialize, Serialize};
 
-use super::density::{cubic_spline, cubic_spline_slope_over_q, particle_volumes};
+use super::cubic_spline::{cubic_spline, cubic_spline_slope_over_q};
+use super::density::particle_volumes;
 use super::radial_kernel::RadialKernel;
 use super::{Fitted, ScalarField};
 use crate::length::Length;

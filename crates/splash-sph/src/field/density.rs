@@ -10,6 +10,7 @@ use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
 use super::ScalarField;
+use super::cubic_spline::{cubic_spline, cubic_spline_slope_over_q};
 use super::radial_kernel::RadialKernel;
 use crate::length::Length;
 use crate::neighbours::handler_array::HandlerArray;
@@ -61,26 +62,10 @@ pub struct Density {
     pub iso: f32,
 }
 
-/// Cubic spline with q = d/h over its compact support h, without the factor 8/(π h³):
-/// 6q³ − 6q² + 1 up to q = ½, 2(1 − q)³ up to 1, written as 2(1 − q)₊³ − 8(½ − q)₊³ so that
-/// it has no branch.
+/// [`cubic_spline`] of the offset (dx, dy, dz) over the support h (`inv_h` = 1/h).
 #[inline(always)]
 fn spline(dx: f32, dy: f32, dz: f32, inv_h: f32) -> f32 {
     cubic_spline((dx * dx + dy * dy + dz * dz).sqrt() * inv_h)
-}
-
-/// The same of q directly.
-#[inline(always)]
-pub(super) fn cubic_spline(q: f32) -> f32 {
-    let (a, b) = ((1.0 - q).max(0.0), (0.5 - q).max(0.0));
-    2.0 * a * a * a - 8.0 * b * b * b
-}
-
-/// d/dq of [`cubic_spline`], divided by q (finite at q = 0, where the slope is 0).
-#[inline(always)]
-pub(super) fn cubic_spline_slope_over_q(q: f32) -> f32 {
-    let (a, b) = ((1.0 - q).max(0.0), (0.5 - q).max(0.0));
-    (24.0 * b * b - 6.0 * a * a) / q.max(f32::MIN_POSITIVE)
 }
 
 fn sigma(h: f32) -> f32 {

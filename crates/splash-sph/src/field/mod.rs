@@ -4,6 +4,7 @@
 
 pub(crate) mod anisotropic;
 pub(crate) mod blobby;
+mod cubic_spline;
 pub(crate) mod density;
 pub(crate) mod metaball;
 pub(crate) mod radial_kernel;
