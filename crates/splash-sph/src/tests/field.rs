@@ -5,8 +5,8 @@ use crate::field::ScalarField;
 use crate::field::ssp07::Ssp07;
 use crate::neighbours::handler_array::HandlerArray;
 use crate::neighbours::neighbourhood::Neighbourhood;
-use crate::recon::band::{BRICK, Band, local_index};
-use crate::recon::field_sampling::{sample_field, vertex_position};
+use crate::recon::bricks::band::{BRICK, Band, local_index};
+use crate::recon::stages::field_sampling::{sample_field, vertex_position};
 use glam::{IVec3, Vec3};
 
 #[test]

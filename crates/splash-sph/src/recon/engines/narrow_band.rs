@@ -4,19 +4,19 @@
 
 use glam::Vec3;
 
-use super::Reconstruction;
-use super::band::Band;
-use super::band_closure::close_band;
-use super::budget::{self, PER_BRICK, mul};
-use super::deferred_values::Deferred;
-use super::field_sampling::sample_field;
 use super::full_grid;
-use super::lone_particles::band_half_widths;
+use super::prepared::Reconstruction;
 use super::prepared::{finish, prepare, triangles_and_normals};
-use super::surface_particles::{SurfaceCriteria, surface_particles};
-use super::triangulation::triangulate;
 use crate::config::{Engine, Params};
 use crate::error::Result;
+use crate::recon::bricks::band::Band;
+use crate::recon::budget::{self, PER_BRICK, mul};
+use crate::recon::stages::band_closure::close_band;
+use crate::recon::stages::deferred_values::Deferred;
+use crate::recon::stages::field_sampling::sample_field;
+use crate::recon::stages::lone_particles::band_half_widths;
+use crate::recon::stages::surface_particles::{SurfaceCriteria, surface_particles};
+use crate::recon::stages::triangulation::triangulate;
 use crate::report::{Stage, Stages};
 
 /// Algorithm 1; with [`Engine::FullGather`], the same gather on every vertex of the grid.
