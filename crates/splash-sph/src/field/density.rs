@@ -14,6 +14,7 @@ use super::cubic_spline::{cubic_spline, cubic_spline_slope_over_q};
 use super::radial_kernel::RadialKernel;
 use crate::length::Length;
 use crate::neighbours::handler_array::HandlerArray;
+use crate::neighbours::lane_sums::lane_sums;
 use crate::neighbours::neighbourhood::{Neighbourhood, map_particles};
 
 /// `[field] kind = "density"`: splashsurf's usual settings (smoothing length of two particle
@@ -72,19 +73,19 @@ fn sigma(h: f32) -> f32 {
     8.0 / (PI * h.powi(3))
 }
 
-crate::lane_sums! {
+lane_sums! {
     fn spline_sum(inv_h: f32) -> [1] |dx, dy, dz| {
         [spline(dx, dy, dz, inv_h)]
     }
 }
 
-crate::lane_sums! {
+lane_sums! {
     fn weighted_spline_sum(inv_h: f32) -> [1] |dx, dy, dz, volume| {
         [volume * spline(dx, dy, dz, inv_h)]
     }
 }
 
-crate::lane_sums! {
+lane_sums! {
     /// Σ V_j W'(q_j)/q_j d_j, with q_j = |d_j|/h.
     fn weighted_spline_slope_sum(inv_h: f32) -> [3] |dx, dy, dz, volume| {
         let q = (dx * dx + dy * dy + dz * dz).sqrt() * inv_h;

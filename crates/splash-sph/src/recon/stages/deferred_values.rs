@@ -36,8 +36,8 @@ fn deferring_pays() -> bool {
         return defer;
     }
     #[cfg(target_arch = "x86_64")]
-    return crate::neighbours::neighbourhood::lanes_path()
-        == crate::neighbours::neighbourhood::Lanes::Avx512;
+    return crate::neighbours::lane_sums::lanes_path()
+        == crate::neighbours::lane_sums::Lanes::Avx512;
     #[cfg(not(target_arch = "x86_64"))]
     return false;
 }
