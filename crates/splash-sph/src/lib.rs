@@ -30,7 +30,6 @@ mod error;
 pub mod attribute_names;
 mod attributes;
 mod config;
-mod config_errors;
 mod length;
 mod neighbours;
 mod overrides;

@@ -168,7 +168,7 @@ impl FieldConfig {
 
     /// The `[field]` table of kind `kind` read from `d`, without its `kind` key (None for an
     /// unknown kind). Reading the kind's struct directly keeps the positions of the keys, which
-    /// the tagged enum's buffering loses: see `config_errors`.
+    /// the tagged enum's buffering loses: see `config::errors`.
     pub(crate) fn deserialize_kind<'de, D: serde::Deserializer<'de>>(
         kind: &str,
         d: D,
