@@ -64,6 +64,3 @@ pub use spacing::estimate_spacing;
 
 #[cfg(test)]
 mod tests;
-// The tests share helpers with the command line's, which call this crate by its name.
-#[cfg(test)]
-extern crate self as splash_sph;

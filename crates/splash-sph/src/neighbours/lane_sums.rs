@@ -104,7 +104,7 @@ pub enum Lanes {
 #[inline]
 pub fn lanes_path() -> Lanes {
     #[cfg(test)]
-    if let Some(path) = tests::LANES.get() {
+    if let Some(path) = tests::FORCED.get() {
         return path;
     }
     #[cfg(target_arch = "x86_64")]
@@ -210,7 +210,8 @@ pub(crate) mod tests {
 
     use super::*;
 
-    thread_local!(pub static LANES: Cell<Option<Lanes>> = const { Cell::new(None) });
+    // The lane path a test forces `lanes_path` to choose, if any.
+    thread_local!(pub static FORCED: Cell<Option<Lanes>> = const { Cell::new(None) });
 
     /// Accumulators of every sign and scale, zeros of both signs, and exact cancellations.
     fn accumulators<const N: usize>(next: &mut impl FnMut() -> f32) -> [[f32; LANES]; N] {

@@ -154,7 +154,7 @@ mod tests {
 
     use super::colour_gradient;
     use crate::neighbours::lane_sums::Lanes;
-    use crate::neighbours::lane_sums::tests::LANES;
+    use crate::neighbours::lane_sums::tests::FORCED;
     use crate::neighbours::neighbourhood::Neighbourhood;
 
     #[test]
@@ -169,9 +169,9 @@ mod tests {
         near.set(Vec3::ZERO, &points);
         for x in [Vec3::ZERO, Vec3::new(0.3, -0.2, 0.1), Vec3::splat(0.9)] {
             let run = |scalar: bool| {
-                LANES.set(scalar.then_some(Lanes::Scalar));
+                FORCED.set(scalar.then_some(Lanes::Scalar));
                 let (g, n) = colour_gradient(&near, x, 1.0);
-                LANES.set(None);
+                FORCED.set(None);
                 (g.to_array().map(f32::to_bits), n.to_bits())
             };
             let (simd, scalar) = (run(false), run(true));

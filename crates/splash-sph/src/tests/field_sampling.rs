@@ -1,4 +1,5 @@
-//! The gathered field equals a brute-force sum over all particles.
+//! Field sampling (Sec. 4.1): the field gathered per brick equals a brute-force sum over all
+//! particles.
 
 use super::common::lattice_ball;
 use crate::field::ScalarField;
