@@ -37,7 +37,7 @@ use serde::{Deserialize, Serialize};
 use super::cubic_spline::{cubic_spline, cubic_spline_slope_over_q};
 use super::density::particle_volumes;
 use super::radial_kernel::RadialKernel;
-use super::{Fitted, ScalarField};
+use super::scalar_field::{Fitted, ScalarField};
 use crate::length::Length;
 use crate::neighbours::handler_array::HandlerArray;
 use crate::neighbours::lane_sums::lane_sums;

@@ -6,8 +6,8 @@ use crate::error::Result;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
-use super::ScalarField;
 use super::radial_kernel::RadialKernel;
+use super::scalar_field::ScalarField;
 use crate::length::Length;
 use crate::neighbours::lane_sums::lane_sums;
 use crate::neighbours::neighbourhood::Neighbourhood;

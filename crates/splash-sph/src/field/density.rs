@@ -9,9 +9,9 @@ use crate::error::Result;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
-use super::ScalarField;
 use super::cubic_spline::{cubic_spline, cubic_spline_slope_over_q};
 use super::radial_kernel::RadialKernel;
+use super::scalar_field::ScalarField;
 use crate::length::Length;
 use crate::neighbours::handler_array::HandlerArray;
 use crate::neighbours::lane_sums::lane_sums;

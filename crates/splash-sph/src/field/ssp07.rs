@@ -6,7 +6,7 @@ use glam::{DMat3, DVec3, Vec3};
 use serde::{Deserialize, Serialize};
 
 use super::radial_kernel::RadialKernel;
-use super::{Sampled, ScalarField, Scattering, SignFirst};
+use super::scalar_field::{Sampled, ScalarField, Scattering, SignFirst};
 use crate::length::Length;
 use crate::neighbours::lane_sums::lane_sums;
 use crate::neighbours::neighbourhood::Neighbourhood;

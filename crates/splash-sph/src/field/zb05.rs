@@ -5,8 +5,8 @@ use crate::error::Result;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
-use super::ScalarField;
 use super::radial_kernel::RadialKernel;
+use super::scalar_field::ScalarField;
 use super::ssp07::{MeanDistance, Sums};
 use crate::length::Length;
 use crate::neighbours::lane_sums::lane_sums;
