@@ -5,10 +5,11 @@
 use glam::Vec3;
 
 use super::full_grid;
-use super::prepared::Reconstruction;
-use super::prepared::{finish, prepare, triangles_and_normals};
+use super::prepared::{Reconstruction, finish, prepare, triangles_and_normals};
 use crate::config::{Engine, Params};
 use crate::error::Result;
+use crate::field::ScalarField;
+use crate::neighbours::handler_array::HandlerArray;
 use crate::recon::bricks::band::Band;
 use crate::recon::budget::{self, PER_BRICK, mul};
 use crate::recon::stages::band_closure::close_band;
@@ -33,56 +34,22 @@ pub(crate) fn gather(
         ..params.clone()
     };
     let held = prepared.heap_bytes() as u64;
-    // The mesh is estimated from the surface particles; the full gather has none, and its
-    // estimate was checked on the grid before it started.
-    let mut surface_count = None;
-    let mut band = if params.engine == Engine::NarrowBand {
+    let (mut band, limits) = if params.engine == Engine::NarrowBand {
         let surface = stages.run(Stage::SurfaceParticles, || {
             surface_particles(&prepared.handlers, &SurfaceCriteria::of(params))
         });
         stages.stats.surface_particles = surface.len();
-        surface_count = Some(surface.len() as u64);
-        let n = surface.len();
-        stages.run(Stage::Band, || {
-            let widths = band_half_widths(&surface, &prepared.handlers, field, params)?;
-            Band::around_within(&surface, params.cell, &widths, |pairs| {
-                // The pairs, twice while gathered, beside the particles' boxes.
-                let need = held
-                    .saturating_add(mul(pairs, 32))
-                    .saturating_add(mul(n as u64, 36));
-                budget::check(params, need, || {
-                    format!(
-                        "the band around {n} surface particles ({pairs} pairs of a brick of \
-                         8³ cells and a particle reaching it)"
-                    )
-                })
-                .map(drop)
-            })
-        })?
+        let band = stages.run(Stage::Band, || {
+            band_around(&surface, &prepared.handlers, field, params, held)
+        })?;
+        (band, Limits::new(params, held, surface.len() as u64))
     } else {
-        stages.run(Stage::Band, || full_grid::band(particles, params))?
+        // The full gather has no surface particles; its estimate was checked on the grid.
+        let band = stages.run(Stage::Band, || full_grid::band(particles, params))?;
+        let surface = budget::surface_guess(particles.len());
+        (band, Limits::new(params, held, surface))
     };
-    let surface = surface_count.unwrap_or_else(|| budget::surface_guess(particles.len()));
-    let mesh = budget::mesh_bytes(budget::mesh_vertices(params, surface));
-    // The band's bricks, their values and the mesh, before the values are sampled.
-    let need_for = |bricks: usize| {
-        held.saturating_add(mul(bricks as u64, PER_BRICK))
-            .saturating_add(mesh)
-    };
-    let bricks_what = |bricks: usize| {
-        move || {
-            format!(
-                "the field values of a band of {bricks} bricks of 8³ vertices and a mesh of \
-                 about {} vertices",
-                budget::mesh_vertices(params, surface)
-            )
-        }
-    };
-    let planned = budget::check(
-        params,
-        need_for(band.bricks.len()),
-        bricks_what(band.bricks.len()),
-    )?;
+    let planned = limits.band(band.bricks.len())?;
     if params.engine == Engine::NarrowBand {
         stages.stats.planned_bytes = planned;
     }
@@ -92,7 +59,7 @@ pub(crate) fn gather(
     stages.stats.deferred_values = deferred.len();
     let closed = stages.run(Stage::Band, || {
         close_band(&mut band, &mut values, |grown, bricks| {
-            budget::check(params, need_for(bricks), bricks_what(bricks))?;
+            limits.band(bricks)?;
             sample_field(grown, samples, field)
         })
     })?;
@@ -107,10 +74,7 @@ pub(crate) fn gather(
         field,
         || {
             triangulate(&band, &values, closed.signs, closed.tables, |mesh| {
-                budget::check(params, held.saturating_add(mesh), || {
-                    "the mesh of the band's surface".into()
-                })
-                .map(drop)
+                limits.mesh(held, mesh)
             })
         },
         || Ok(samples),
@@ -122,4 +86,72 @@ pub(crate) fn gather(
         prepared.heap_bytes(),
         triangulation,
     ))
+}
+
+/// The band of surface vertices around the surface particles (Sec. 4.1), each particle's box
+/// as wide as [`band_half_widths`] gives, checked against `max_memory` before the (brick,
+/// particle) pairs that build it are gathered.
+fn band_around(
+    surface: &[Vec3],
+    handlers: &HandlerArray,
+    field: &dyn ScalarField,
+    params: &Params,
+    held: u64,
+) -> Result<Band> {
+    let widths = band_half_widths(surface, handlers, field, params)?;
+    let n = surface.len();
+    Band::around_within(surface, params.cell, &widths, |pairs| {
+        // The pairs, twice while gathered, beside the particles' boxes.
+        let need = held
+            .saturating_add(mul(pairs, 32))
+            .saturating_add(mul(n as u64, 36));
+        budget::check(params, need, || {
+            format!(
+                "the band around {n} surface particles ({pairs} pairs of a brick of 8³ cells \
+                 and a particle reaching it)"
+            )
+        })
+        .map(drop)
+    })
+}
+
+/// The `max_memory` checks of the gather after the band: `held` bytes of the frame, and a mesh
+/// estimated from the surface particles (or a guess at them, for the full gather).
+struct Limits<'a> {
+    params: &'a Params,
+    held: u64,
+    mesh_vertices: u64,
+}
+
+impl<'a> Limits<'a> {
+    fn new(params: &'a Params, held: u64, surface: u64) -> Self {
+        Limits {
+            params,
+            held,
+            mesh_vertices: budget::mesh_vertices(params, surface),
+        }
+    }
+
+    /// A band of `bricks` bricks with their values, and the mesh: the bytes planned.
+    fn band(&self, bricks: usize) -> Result<u64> {
+        let need = self
+            .held
+            .saturating_add(mul(bricks as u64, PER_BRICK))
+            .saturating_add(budget::mesh_bytes(self.mesh_vertices));
+        budget::check(self.params, need, || {
+            format!(
+                "the field values of a band of {bricks} bricks of 8³ vertices and a mesh of \
+                 about {} vertices",
+                self.mesh_vertices
+            )
+        })
+    }
+
+    /// The mesh of `mesh` bytes beside `held` bytes of the frame and its band.
+    fn mesh(&self, held: u64, mesh: u64) -> Result<()> {
+        budget::check(self.params, held.saturating_add(mesh), || {
+            "the mesh of the band's surface".into()
+        })
+        .map(drop)
+    }
 }
