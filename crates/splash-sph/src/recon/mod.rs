@@ -1,6 +1,8 @@
 //! Surface reconstruction engines behind one signature: [`reconstruct`] runs the engine that
 //! the parameters name. Each engine runs the stages of Algorithm 1 (Akinci et al. 2012) its own
-//! way and ends with the same triangulation and normals.
+//! way and ends with the same triangulation and normals. Layers, lowest first: `budget` (the
+//! memory limit), `bricks/` (the band stored as 8³ bricks), `stages/` (the steps of Algorithm
+//! 1), `engines/` (which run them).
 
 pub(crate) mod bricks;
 pub(crate) mod budget;
