@@ -13,7 +13,8 @@ use clap::Args;
 use serde_json::json;
 
 use splash_sph::preview::{
-    BvhKind, Camera, PreviewStats, Previewer, Style, camera, parse_colour, parse_size, write_png,
+    BvhKind, Camera, PreviewStats, Previewer, Style, parse_colour, parse_size, robust_bounds,
+    up_vector, write_png,
 };
 use splash_sph::{Bytes, Config, InputFormat, Vec3, estimate_spacing, read_particles};
 
@@ -184,7 +185,7 @@ impl CameraPlan {
         Ok(match (self.position, self.look_at, reference) {
             (Some(p), Some(t), _) => Camera::look_at(p, t, up, fov, w, h)?,
             (Some(p), None, Some(points)) => {
-                let (lo, hi) = camera::robust_bounds(points);
+                let (lo, hi) = robust_bounds(points);
                 Camera::look_at(p, 0.5 * (lo + hi), up, fov, w, h)?
             }
             (None, _, Some(points)) => Camera::auto(points, margin, up, self.view, fov, w, h)?,
@@ -294,7 +295,7 @@ impl PreviewArgs {
             fov: self.fov,
             up: match &self.up {
                 Some(u) => vector(u, "up")?,
-                None => camera::up_vector(z_up),
+                None => up_vector(z_up),
             },
             position: optional(&self.camera, "camera").transpose()?,
             look_at: optional(&self.look_at, "look-at").transpose()?,

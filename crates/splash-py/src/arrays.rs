@@ -9,7 +9,7 @@ use numpy::{
 };
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-use splash_sph::Vec3;
+use splash_sph::{Attribute, Vec3};
 
 /// (N, 3) coordinates as `[Vec3]`.
 pub enum Points<'py> {
@@ -161,4 +161,23 @@ pub fn triangles_array(py: Python<'_>, triangles: Vec<[u32; 3]>) -> Bound<'_, Py
 /// Moves values into a new (N,) float32 array.
 pub fn scalars_array(py: Python<'_>, values: Vec<f32>) -> Bound<'_, PyArray1<f32>> {
     PyArray1::from_owned_array(py, Array1::from_vec(values))
+}
+
+/// One value or vector per particle of `array`, checked against the number of particles.
+pub fn column(array: &Bound<'_, PyAny>, what: &str, particles: usize) -> PyResult<Attribute> {
+    let (values, len) = if is_scalar(array)? {
+        let v = scalars(array, what)?;
+        let len = v.len();
+        (Attribute::Scalar(v), len)
+    } else {
+        let v = points(array, what)?.into_vec();
+        let len = v.len();
+        (Attribute::Vector(v), len)
+    };
+    if len != particles {
+        return Err(PyValueError::new_err(format!(
+            "{what} has {len} values for {particles} particles"
+        )));
+    }
+    Ok(values)
 }

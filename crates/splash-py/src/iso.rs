@@ -124,7 +124,7 @@ pub fn iso<'py>(
                 ));
             }
             let positions = arrays::points(particles, "positions")?.into_vec();
-            let values = column(attribute, "attribute", positions.len())?;
+            let values = arrays::column(attribute, "attribute", positions.len())?;
             (
                 positions,
                 BTreeMap::from([(VALUES.to_string(), values)]),
@@ -170,25 +170,6 @@ pub fn iso<'py>(
         format,
         up_axis,
     ))
-}
-
-/// One value or vector per particle of `array`, checked against the number of particles.
-pub fn column(array: &Bound<'_, PyAny>, what: &str, particles: usize) -> PyResult<Attribute> {
-    let (values, len) = if arrays::is_scalar(array)? {
-        let v = arrays::scalars(array, what)?;
-        let len = v.len();
-        (Attribute::Scalar(v), len)
-    } else {
-        let v = arrays::points(array, what)?.into_vec();
-        let len = v.len();
-        (Attribute::Vector(v), len)
-    };
-    if len != particles {
-        return Err(PyValueError::new_err(format!(
-            "{what} has {len} values for {particles} particles"
-        )));
-    }
-    Ok(values)
 }
 
 /// The `iso` figures of the JSON log, with times in seconds.

@@ -44,7 +44,7 @@ impl Particles {
         for (name, values) in self.attributes.bind(py).iter() {
             let name: String = name.extract()?;
             let what = format!("attributes['{name}']");
-            let a = crate::iso::column(&values, &what, positions.len())?;
+            let a = arrays::column(&values, &what, positions.len())?;
             columns.insert(name, a);
         }
         Ok((positions, columns))

@@ -6,7 +6,9 @@ use numpy::PyArray3;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use splash_sph::Vec3;
-use splash_sph::preview::{BvhKind, Camera, Previewer, Style, camera, parse_colour};
+use splash_sph::preview::{
+    BvhKind, Camera, Previewer, Style, parse_colour, robust_bounds, up_vector,
+};
 
 use crate::arrays;
 use crate::errors::to_py;
@@ -84,7 +86,7 @@ pub fn preview<'py>(
     let points = arrays::points(positions, "positions")?;
     let positions = points.as_slice();
     let (w, h) = size;
-    let up = vector(up).unwrap_or_else(|| camera::up_vector(z_up));
+    let up = vector(up).unwrap_or_else(|| up_vector(z_up));
     let (position, target, view) = (vector(camera), vector(look_at), vector(view));
     let image = py
         .detach(|| {
@@ -96,7 +98,7 @@ pub fn preview<'py>(
                             "no particles to look at: give look_at".into(),
                         ));
                     }
-                    let (lo, hi) = camera::robust_bounds(positions);
+                    let (lo, hi) = robust_bounds(positions);
                     Camera::look_at(p, 0.5 * (lo + hi), up, fov, w, h)?
                 }
                 (None, Some(_)) => {

@@ -30,7 +30,6 @@ mod error;
 pub mod attribute_names;
 mod attributes;
 mod config;
-mod config_errors;
 mod length;
 mod neighbours;
 mod overrides;
@@ -67,6 +66,3 @@ pub use spacing::estimate_spacing;
 
 #[cfg(test)]
 mod tests;
-// The tests share helpers with the command line's, which call this crate by its name.
-#[cfg(test)]
-extern crate self as splash_sph;

@@ -10,7 +10,7 @@ use crate::config::{Config, Params};
 use crate::error::{Error, Result, figure};
 use crate::io::Attribute;
 use crate::mesh::TriMesh;
-use crate::recon::full_grid::{self, Grid};
+use crate::recon::engines::full_grid::{self, Grid};
 use crate::recon::{self, Reconstruction};
 use crate::report::Observer;
 use crate::worker_pool::worker_pool;

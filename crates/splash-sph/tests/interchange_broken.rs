@@ -1,7 +1,6 @@
 //! Broken VTK, VTK XML, BGEO and XYZ files: each gives a clear error naming the file and what
 //! is wrong, quickly (no allocation by a declared count), and no damage panics.
 
-#[path = "../../../tests/common/mod.rs"]
 mod common;
 
 use std::fs;

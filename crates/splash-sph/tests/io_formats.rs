@@ -2,7 +2,6 @@
 
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
-#[path = "../../../tests/common/mod.rs"]
 mod common;
 
 use common::TempDir;

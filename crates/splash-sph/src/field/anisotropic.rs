@@ -34,11 +34,13 @@ use crate::error::Result;
 use glam::{Mat3, Vec3};
 use serde::{Deserialize, Serialize};
 
-use super::density::{cubic_spline, cubic_spline_slope_over_q, particle_volumes};
+use super::cubic_spline::{cubic_spline, cubic_spline_slope_over_q};
+use super::density::particle_volumes;
 use super::radial_kernel::RadialKernel;
-use super::{Fitted, ScalarField};
+use super::scalar_field::{Fitted, ScalarField};
 use crate::length::Length;
 use crate::neighbours::handler_array::HandlerArray;
+use crate::neighbours::lane_sums::lane_sums;
 use crate::neighbours::neighbourhood::{Neighbourhood, map_particles};
 
 /// `[field] kind = "anisotropic"`.
@@ -198,7 +200,7 @@ impl Anisotropic {
 
 // Σ w, Σ w d, Σ w d dᵀ (xx, yy, zz, xy, xz, yz) and the count of particles within h, with
 // d = (x_j − x)/h and w = 1 − |d|³ inside h.
-crate::lane_sums! {
+lane_sums! {
     fn moments(inv_h: f32) -> [11] |dx, dy, dz| {
         let (dx, dy, dz) = (dx * inv_h, dy * inv_h, dz * inv_h);
         let q = (dx * dx + dy * dy + dz * dz).sqrt();

@@ -6,9 +6,10 @@ use crate::error::Result;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
-use super::ScalarField;
 use super::radial_kernel::RadialKernel;
+use super::scalar_field::ScalarField;
 use crate::length::Length;
+use crate::neighbours::lane_sums::lane_sums;
 use crate::neighbours::neighbourhood::Neighbourhood;
 
 /// `[field] kind = "blobby"`.
@@ -83,7 +84,7 @@ struct Shape {
     cutoff_s2: f32,
 }
 
-crate::lane_sums! {
+lane_sums! {
     fn bump_sum(p: Shape) -> [1] |dx, dy, dz| {
         let s2 = (dx * dx + dy * dy + dz * dz) * p.inv_r2;
         let bump = (p.b * (1.0 - s2.min(p.cutoff_s2))).exp() - (p.b * (1.0 - p.cutoff_s2)).exp();
@@ -91,7 +92,7 @@ crate::lane_sums! {
     }
 }
 
-crate::lane_sums! {
+lane_sums! {
     /// Σ ∂bump/∂s² · d_j over the particles inside the cut-off.
     fn bump_slope_sum(p: Shape) -> [3] |dx, dy, dz| {
         let s2 = (dx * dx + dy * dy + dz * dz) * p.inv_r2;

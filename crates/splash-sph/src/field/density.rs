@@ -9,10 +9,12 @@ use crate::error::Result;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
-use super::ScalarField;
+use super::cubic_spline::{cubic_spline, cubic_spline_slope_over_q};
 use super::radial_kernel::RadialKernel;
+use super::scalar_field::ScalarField;
 use crate::length::Length;
 use crate::neighbours::handler_array::HandlerArray;
+use crate::neighbours::lane_sums::lane_sums;
 use crate::neighbours::neighbourhood::{Neighbourhood, map_particles};
 
 /// `[field] kind = "density"`: splashsurf's usual settings (smoothing length of two particle
@@ -61,45 +63,29 @@ pub struct Density {
     pub iso: f32,
 }
 
-/// Cubic spline with q = d/h over its compact support h, without the factor 8/(π h³):
-/// 6q³ − 6q² + 1 up to q = ½, 2(1 − q)³ up to 1, written as 2(1 − q)₊³ − 8(½ − q)₊³ so that
-/// it has no branch.
+/// [`cubic_spline`] of the offset (dx, dy, dz) over the support h (`inv_h` = 1/h).
 #[inline(always)]
 fn spline(dx: f32, dy: f32, dz: f32, inv_h: f32) -> f32 {
     cubic_spline((dx * dx + dy * dy + dz * dz).sqrt() * inv_h)
-}
-
-/// The same of q directly.
-#[inline(always)]
-pub(super) fn cubic_spline(q: f32) -> f32 {
-    let (a, b) = ((1.0 - q).max(0.0), (0.5 - q).max(0.0));
-    2.0 * a * a * a - 8.0 * b * b * b
-}
-
-/// d/dq of [`cubic_spline`], divided by q (finite at q = 0, where the slope is 0).
-#[inline(always)]
-pub(super) fn cubic_spline_slope_over_q(q: f32) -> f32 {
-    let (a, b) = ((1.0 - q).max(0.0), (0.5 - q).max(0.0));
-    (24.0 * b * b - 6.0 * a * a) / q.max(f32::MIN_POSITIVE)
 }
 
 fn sigma(h: f32) -> f32 {
     8.0 / (PI * h.powi(3))
 }
 
-crate::lane_sums! {
+lane_sums! {
     fn spline_sum(inv_h: f32) -> [1] |dx, dy, dz| {
         [spline(dx, dy, dz, inv_h)]
     }
 }
 
-crate::lane_sums! {
+lane_sums! {
     fn weighted_spline_sum(inv_h: f32) -> [1] |dx, dy, dz, volume| {
         [volume * spline(dx, dy, dz, inv_h)]
     }
 }
 
-crate::lane_sums! {
+lane_sums! {
     /// Σ V_j W'(q_j)/q_j d_j, with q_j = |d_j|/h.
     fn weighted_spline_slope_sum(inv_h: f32) -> [3] |dx, dy, dz, volume| {
         let q = (dx * dx + dy * dy + dz * dz).sqrt() * inv_h;

@@ -6,9 +6,10 @@ use crate::error::Result;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
-use super::ScalarField;
 use super::radial_kernel::RadialKernel;
+use super::scalar_field::ScalarField;
 use crate::length::Length;
+use crate::neighbours::lane_sums::lane_sums;
 use crate::neighbours::neighbourhood::Neighbourhood;
 
 /// `[field] kind = "metaball"`: Rosenberg's R_c = 3 and T = 0.2 in units of the particle
@@ -77,7 +78,7 @@ pub struct Metaball {
     pub scale: f32,
 }
 
-crate::lane_sums! {
+lane_sums! {
     fn kernel_sum(p: (f32, i32)) -> [1] |dx, dy, dz| {
         let (inv_r2, exponent) = p;
         let t = (1.0 - (dx * dx + dy * dy + dz * dz) * inv_r2).max(0.0);
@@ -85,7 +86,7 @@ crate::lane_sums! {
     }
 }
 
-crate::lane_sums! {
+lane_sums! {
     /// Σ α t^(α−1) d_j over the particles inside the cut-off.
     fn kernel_slope_sum(p: (f32, i32)) -> [3] |dx, dy, dz| {
         let (inv_r2, exponent) = p;

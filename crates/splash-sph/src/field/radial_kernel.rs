@@ -42,7 +42,7 @@ impl RadialKernel {
                 t * t * t
             }
             RadialKernel::CubicSpline { support } => {
-                super::density::cubic_spline(d2.sqrt() / support)
+                super::cubic_spline::cubic_spline(d2.sqrt() / support)
             }
             RadialKernel::Blobby {
                 radius,

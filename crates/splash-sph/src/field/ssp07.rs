@@ -6,8 +6,9 @@ use glam::{DMat3, DVec3, Vec3};
 use serde::{Deserialize, Serialize};
 
 use super::radial_kernel::RadialKernel;
-use super::{Sampled, ScalarField, Scattering, SignFirst};
+use super::scalar_field::{Sampled, ScalarField, Scattering, SignFirst};
 use crate::length::Length;
+use crate::neighbours::lane_sums::lane_sums;
 use crate::neighbours::neighbourhood::Neighbourhood;
 
 /// `[field] kind = "ssp07"`: the paper's defaults.
@@ -243,7 +244,7 @@ fn sum_terms(dx: f32, dy: f32, dz: f32, inv_r2: f32) -> (f32, [f32; 13]) {
     (t, terms)
 }
 
-crate::lane_sums! {
+lane_sums! {
     fn ssp07_sums(inv_r2: f32) -> [13] |dx, dy, dz| {
         sum_terms(dx, dy, dz, inv_r2).1
     }
@@ -349,7 +350,7 @@ struct GradientSums {
     t: [f32; 10],
 }
 
-crate::lane_sums! {
+lane_sums! {
     fn ssp07_gradient_sums(inv_r2: f32) -> [30] |dx, dy, dz| {
         let (t, [k, kx, ky, kz, wx, wy, wz, wxx, wyy, wzz, wxy, wxz, wyz]) =
             sum_terms(dx, dy, dz, inv_r2);
@@ -687,7 +688,7 @@ mod tests {
 
     #[test]
     fn lane_sums_are_the_same_on_every_path() {
-        use crate::neighbours::neighbourhood::{Lanes, lanes_path, tests::LANES};
+        use crate::neighbours::lane_sums::{Lanes, lanes_path, tests::FORCED};
         let widest = lanes_path();
         let mut paths = vec![Lanes::Scalar];
         #[cfg(target_arch = "x86_64")]
@@ -698,13 +699,13 @@ mod tests {
         });
         let n = near(&spiral(203, Vec3::new(2.3, 2.1, 2.5)));
         let sums = |path| {
-            LANES.set(Some(path));
+            FORCED.set(Some(path));
             let x = Vec3::new(0.7, -0.4, 1.1);
             let s = (
                 ssp07_sums(&n, x, 1.0 / 16.0),
                 ssp07_gradient_sums(&n, x, 1.0 / 16.0),
             );
-            LANES.set(None);
+            FORCED.set(None);
             (s.0.map(f32::to_bits), s.1.map(f32::to_bits))
         };
         let scalar = sums(Lanes::Scalar);

@@ -5,10 +5,11 @@ use crate::error::Result;
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
-use super::ScalarField;
 use super::radial_kernel::RadialKernel;
+use super::scalar_field::ScalarField;
 use super::ssp07::{MeanDistance, Sums};
 use crate::length::Length;
+use crate::neighbours::lane_sums::lane_sums;
 use crate::neighbours::neighbourhood::Neighbourhood;
 
 /// `[field] kind = "zb05"`.
@@ -50,7 +51,7 @@ pub struct Zb05 {
     pub radius: f32,
 }
 
-crate::lane_sums! {
+lane_sums! {
     fn mean_sums(inv_r2: f32) -> [4] |dx, dy, dz| {
         let t = (1.0 - (dx * dx + dy * dy + dz * dz) * inv_r2).max(0.0);
         let k = t * t * t;

@@ -7,7 +7,7 @@ use std::collections::BTreeMap;
 
 use glam::Vec3;
 
-use super::Attribute;
+use super::particles::Attribute;
 
 /// What one column of the file holds.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -11,8 +11,8 @@
 use std::io::Read;
 use std::path::Path;
 
-use super::Particles;
 use super::failure::{Failure, Result};
+use super::particles::Particles;
 use super::point_arrays::{self, Num, PointArray};
 
 /// A decompressed `.bgeo.gz` may be at most this large (and, before that, what its header
@@ -177,7 +177,7 @@ fn parse(data: &[u8]) -> Result<Particles> {
             other => bail_format!(
                 "point attribute {index} ('{}', byte offset {at}) has type {other}; splash reads \
                  float (0), int (1), indexed string (4) and vector (5) attributes",
-                super::short(&name)
+                super::failure::short(&name)
             ),
         };
         if keep.is_some() {

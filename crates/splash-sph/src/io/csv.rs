@@ -6,10 +6,10 @@ use std::path::Path;
 
 use glam::Vec3;
 
-use super::Particles;
 use super::attribute_columns::AttributeColumns;
 use super::failure::Result;
 use super::lines::Lines;
+use super::particles::Particles;
 
 #[derive(Clone, Copy)]
 enum Separator {
@@ -100,7 +100,7 @@ impl Table {
                     format_failure!(
                         "line {line} is taken as a header (not all its fields are numbers), but it \
                          has no column '{wanted}' (its columns: {})",
-                        super::listed(names.iter().copied())
+                        super::failure::listed(names.iter().copied())
                     )
                 })?;
             let columns = names
@@ -136,7 +136,7 @@ impl Table {
 /// Reads the coordinates of every row and, if the table has a header, every column that holds a
 /// number in the first row as an attribute (every later row must then hold a number there).
 pub(super) fn read(path: &Path) -> Result<Particles> {
-    let (file, file_len) = super::open_input(path)?;
+    let (file, file_len) = super::failure::open_input(path)?;
     let mut lines = Lines::new(BufReader::with_capacity(1 << 16, file), 0);
     let mut particles = Vec::new();
     let mut table: Option<Table> = None;
@@ -170,7 +170,7 @@ pub(super) fn read(path: &Path) -> Result<Particles> {
             }
         };
         let p = parse_row(table, attributes, text, line)?;
-        particles.push(super::finite(p, || format!("line {line}"))?);
+        particles.push(super::failure::finite(p, || format!("line {line}"))?);
     }
     let attributes = match (attributes, table) {
         (Some(attributes), _) => attributes,
@@ -207,8 +207,8 @@ fn parse_row(
             format_failure!(
                 "line {line}, column {} ('{}'): '{}' is not a number",
                 i + 1,
-                super::short(name(i)),
-                super::short(field)
+                super::failure::short(name(i)),
+                super::failure::short(field)
             )
         })?;
         match coordinate {
@@ -222,7 +222,7 @@ fn parse_row(
         let shown: Vec<String> = missing
             .iter()
             .take(4)
-            .map(|&i| format!("column {} ('{}')", i + 1, super::short(name(i))))
+            .map(|&i| format!("column {} ('{}')", i + 1, super::failure::short(name(i))))
             .collect();
         let more = match missing.len().saturating_sub(shown.len()) {
             0 => String::new(),

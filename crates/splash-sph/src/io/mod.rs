@@ -38,6 +38,7 @@ mod lines;
 mod mesh_read;
 mod obj;
 mod obj_read;
+mod particles;
 mod ply;
 mod ply_ascii;
 mod ply_binary;
@@ -48,14 +49,13 @@ mod point_arrays;
 mod pov;
 mod raw;
 mod records;
+mod vertex_attributes;
 mod vtk_legacy;
 mod vtk_write;
 mod vtk_xml;
 mod vtu_write;
 mod xyz;
 
-use std::collections::BTreeMap;
-use std::fs::File;
 use std::io::{self, BufWriter, Write};
 use std::path::Path;
 
@@ -63,66 +63,12 @@ use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
 use crate::mesh::TriMesh;
-use failure::{Failure, IoFailure, Result};
+use failure::{invalid_input, listed, short};
 pub use mesh_read::{MeshFile, read_mesh};
 
-/// One particle frame: positions, and per-particle attributes by name.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct Particles {
-    /// One position per particle.
-    pub positions: Vec<Vec3>,
-    /// One value per particle each, by name (`velocity`, `density`, …).
-    pub attributes: BTreeMap<String, Attribute>,
-}
-
-/// The values of one per-particle attribute.
-#[derive(Debug, Clone, PartialEq)]
-pub enum Attribute {
-    /// One number per particle (`density`, `pressure`, …).
-    Scalar(Vec<f32>),
-    /// One vector per particle (`velocity`, `normal`, …).
-    Vector(Vec<Vec3>),
-}
-
-impl Particles {
-    /// Particles in the frame.
-    pub fn len(&self) -> usize {
-        self.positions.len()
-    }
-
-    /// Whether the frame has no particles.
-    pub fn is_empty(&self) -> bool {
-        self.positions.is_empty()
-    }
-
-    /// Drops the particles outside the box `[min x, min y, min z, max x, max y, max z]`
-    /// (bounds included; a non-finite position is outside), and their attribute values;
-    /// returns how many were dropped.
-    pub fn retain_in_box(&mut self, aabb: [f32; 6]) -> usize {
-        let (lo, hi) = (Vec3::from_slice(&aabb[..3]), Vec3::from_slice(&aabb[3..]));
-        let keep: Vec<bool> = self
-            .positions
-            .iter()
-            .map(|p| p.cmpge(lo).all() && p.cmple(hi).all())
-            .collect();
-        let dropped = keep.iter().filter(|&&k| !k).count();
-        if dropped == 0 {
-            return 0;
-        }
-        fn retain<T>(values: &mut Vec<T>, keep: &[bool]) {
-            let mut k = keep.iter();
-            values.retain(|_| *k.next().unwrap_or(&false));
-        }
-        retain(&mut self.positions, &keep);
-        for a in self.attributes.values_mut() {
-            match a {
-                Attribute::Scalar(s) => retain(s, &keep),
-                Attribute::Vector(v) => retain(v, &keep),
-            }
-        }
-        dropped
-    }
-}
+pub use particles::{Attribute, Particles};
+pub use pov::POV_OBJECT;
+pub use vertex_attributes::VertexAttributes;
 
 /// Reads one particle frame, its positions and attributes; `format` overrides the guess from
 /// the file's extension.
@@ -233,20 +179,6 @@ fn has_bgeo_stem(path: &Path) -> bool {
         .is_some_and(|e| e.eq_ignore_ascii_case("bgeo"))
 }
 
-/// Opens a particle file, returning it with its length in bytes.
-fn open_input(path: &Path) -> Result<(File, u64)> {
-    let file = File::open(path).map_err(|e| Failure::io("cannot open the file", e))?;
-    let metadata = file
-        .metadata()
-        .map_err(|e| Failure::io("cannot query the file's size", e))?;
-    if metadata.is_dir() {
-        // Reading it would fail with a less telling message, on some systems only later.
-        let failure = IoFailure::of_kind(io::ErrorKind::IsADirectory, "it is a directory");
-        return Err(failure.into());
-    }
-    Ok((file, metadata.len()))
-}
-
 /// File format of an output mesh.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "kebab-case")]
@@ -267,9 +199,6 @@ pub enum MeshFormat {
     /// VTK XML poly data (`.vtp`), binary and zlib-compressed.
     Vtp,
 }
-
-/// The name a `--format pov` file declares its mesh under: `object { SplashMesh … }`.
-pub const POV_OBJECT: &str = "SplashMesh";
 
 impl MeshFormat {
     /// File extension, without the dot.
@@ -327,64 +256,6 @@ impl MeshFormat {
             _ => None,
         }
     }
-}
-
-/// Per-vertex data written beside the mesh, where the format has room for it (PLY, VTK; OBJ
-/// and POV-Ray files refuse it).
-///
-/// In PLY, the vector `velocity` is written as the properties `vx vy vz`, any other vector
-/// `name` as `name_x name_y name_z`, a scalar as a property of its name (all `float`). VTK
-/// files get point data arrays of the attributes' names (vectors with 3 components).
-#[derive(Clone, Copy, Debug, Default)]
-pub struct VertexAttributes<'a> {
-    /// One velocity per vertex, written as the attribute `velocity` (before `named`).
-    pub velocities: Option<&'a [Vec3]>,
-    /// Further attributes by name, one value per vertex each.
-    pub named: &'a [(String, Attribute)],
-}
-
-/// A borrowed attribute column.
-#[derive(Clone, Copy, Debug)]
-pub(crate) enum AttributeValues<'a> {
-    Scalar(&'a [f32]),
-    Vector(&'a [Vec3]),
-}
-
-impl AttributeValues<'_> {
-    fn len(&self) -> usize {
-        match self {
-            Self::Scalar(s) => s.len(),
-            Self::Vector(v) => v.len(),
-        }
-    }
-}
-
-impl<'a> VertexAttributes<'a> {
-    /// Whether there is nothing to write.
-    pub fn is_empty(&self) -> bool {
-        self.velocities.is_none() && self.named.is_empty()
-    }
-
-    /// Every attribute by name, `velocity` first.
-    pub(crate) fn arrays(&self) -> Vec<(&'a str, AttributeValues<'a>)> {
-        let velocities = self
-            .velocities
-            .map(|v| ("velocity", AttributeValues::Vector(v)));
-        velocities
-            .into_iter()
-            .chain(self.named.iter().map(|(name, a)| {
-                let values = match a {
-                    Attribute::Scalar(s) => AttributeValues::Scalar(s),
-                    Attribute::Vector(v) => AttributeValues::Vector(v),
-                };
-                (name.as_str(), values)
-            }))
-            .collect()
-    }
-}
-
-fn invalid_input(message: String) -> io::Error {
-    io::Error::new(io::ErrorKind::InvalidInput, message)
 }
 
 /// Writes `mesh` in `format`. `normals` must be empty or have one entry per vertex; without
@@ -525,67 +396,4 @@ fn check_mesh(mesh: &TriMesh) -> io::Result<()> {
         )));
     }
     Ok(())
-}
-
-/// Passes finite points through; `at` says where a non-finite one was found.
-#[inline]
-fn finite(p: Vec3, at: impl FnOnce() -> String) -> Result<Vec3> {
-    if p.is_finite() {
-        Ok(p)
-    } else {
-        Err(non_finite(p, &at()))
-    }
-}
-
-#[cold]
-fn non_finite(p: Vec3, at: &str) -> Failure {
-    format_failure!(
-        "{at} has a non-finite coordinate: ({}, {}, {})",
-        p.x,
-        p.y,
-        p.z
-    )
-}
-
-/// At most this many characters of a file's text are quoted in an error message, and at
-/// most this many names listed: a file with no line breaks must not become a megabyte of text.
-const QUOTED_CHARS: usize = 40;
-const LISTED_NAMES: usize = 12;
-const LISTED_CHARS: usize = 120;
-
-/// `text` as an error message quotes it: cut to [`QUOTED_CHARS`] characters, with "…".
-fn short(text: &str) -> String {
-    match text.char_indices().nth(QUOTED_CHARS) {
-        Some((end, _)) => format!("{}…", &text[..end]),
-        None => text.to_string(),
-    }
-}
-
-/// A message from elsewhere (a parser's) as an error message quotes it: cut to a few lines'
-/// worth, with "…", since it may quote the file.
-fn short_message(text: &str) -> String {
-    match text.char_indices().nth(4 * QUOTED_CHARS) {
-        Some((end, _)) => format!("{}…", &text[..end]),
-        None => text.to_string(),
-    }
-}
-
-/// Names joined by commas for an error message: at most [`LISTED_NAMES`], each [`short`], and
-/// no more than [`LISTED_CHARS`] characters of them.
-fn listed<'a>(names: impl IntoIterator<Item = &'a str>) -> String {
-    let names: Vec<&str> = names.into_iter().collect();
-    let mut out: Vec<String> = Vec::new();
-    let mut chars = 0;
-    for name in names.iter().take(LISTED_NAMES) {
-        let name = short(name);
-        chars += name.chars().count() + 2;
-        if chars > LISTED_CHARS && !out.is_empty() {
-            break;
-        }
-        out.push(name);
-    }
-    if names.len() > out.len() {
-        out.push(format!("… {} more", names.len() - out.len()));
-    }
-    out.join(", ")
 }

@@ -12,10 +12,10 @@ use std::path::Path;
 use ply_rs_bw::parser::{Parser, Reader};
 use ply_rs_bw::ply::{DefaultElement, Encoding, Header};
 
-use super::Particles;
 use super::attribute_columns::AttributeColumns;
 use super::failure::{Failure, Result};
 use super::lines::Lines;
+use super::particles::Particles;
 use super::ply_layout::{Kind, Layout};
 use super::{ply_ascii, ply_binary};
 
@@ -25,7 +25,7 @@ const MAX_HEADER_BYTES: u64 = 1 << 20;
 /// Reads the `vertex` element's coordinates and every other scalar property of it as an
 /// attribute (list properties are skipped).
 pub(super) fn read(path: &Path) -> Result<Particles> {
-    let (file, file_len) = super::open_input(path)?;
+    let (file, file_len) = super::failure::open_input(path)?;
     let mut reader = BufReader::with_capacity(1 << 16, file);
     let (header, header_len, header_lines) = read_header(&mut reader)?;
     let layout = Layout::new(&header)?;
@@ -99,9 +99,9 @@ pub(super) fn read_header(reader: &mut impl BufRead) -> Result<(Header, u64, usi
             let message = match message.split_once("String: '") {
                 Some((head, line)) => {
                     let line = line.strip_suffix('\'').unwrap_or(line);
-                    format!("{head}String: '{}'", super::short(line))
+                    format!("{head}String: '{}'", super::failure::short(line))
                 }
-                None => super::short_message(&message),
+                None => super::failure::short_message(&message),
             };
             format_failure!("malformed PLY header: {message}")
         })?;
@@ -148,11 +148,11 @@ fn check_header_lines(header: &[u8]) -> Result<()> {
             bail_format!(
                 "malformed PLY header: line {n} ('{}') has non-ASCII characters (a PLY header \
                  is ASCII)",
-                super::short(line.trim())
+                super::failure::short(line.trim())
             );
         }
         let words: Vec<&str> = line.split_ascii_whitespace().collect();
-        let got = || super::short(line.trim());
+        let got = || super::failure::short(line.trim());
         match words.first().copied() {
             None if i + 1 < header.split(|&b| b == b'\n').count() - 1 => bail_format!(
                 "malformed PLY header: line {n} is blank (a PLY header has no blank lines)"
@@ -207,7 +207,7 @@ fn check_header_lines(header: &[u8]) -> Result<()> {
             Some(word) => bail_format!(
                 "malformed PLY header: line {n} starts with '{}', expected one of format, \
                  comment, obj_info, element, property, end_header",
-                super::short(word)
+                super::failure::short(word)
             ),
         }
     }

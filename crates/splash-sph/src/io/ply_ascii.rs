@@ -48,7 +48,7 @@ pub(super) fn read(
         };
         let p = parse_vertex(text, vertex, xyz, last, attributes)
             .map_err(|e| format_failure!("line {line} (vertex {index}): {e}"))?;
-        out.push(super::finite(p, || {
+        out.push(super::failure::finite(p, || {
             format!("line {line} (vertex {index})")
         })?);
     }
@@ -96,8 +96,8 @@ fn parse_vertex(
                     continue;
                 }
                 let value = token.parse().map_err(|_| {
-                    let token = super::short(token);
-                    let name = super::short(&prop.name);
+                    let token = super::failure::short(token);
+                    let name = super::failure::short(&prop.name);
                     format!("cannot parse '{token}' as property '{name}'")
                 })?;
                 match coordinate {
@@ -112,7 +112,7 @@ fn parse_vertex(
         return Err(format!(
             "more values than the {} properties of the 'vertex' element (from '{}' on)",
             vertex.props.len(),
-            super::short(extra)
+            super::failure::short(extra)
         ));
     }
     Ok(Vec3::from_array(coordinates))
@@ -128,8 +128,8 @@ fn skip_list<'a>(
 ) -> Result<(), String> {
     if let Kind::List { .. } = prop.kind {
         let n: usize = token.parse().map_err(|_| {
-            let token = super::short(token);
-            let name = super::short(&prop.name);
+            let token = super::failure::short(token);
+            let name = super::failure::short(&prop.name);
             format!("invalid list length '{token}' for property '{name}'")
         })?;
         if n > 0 {

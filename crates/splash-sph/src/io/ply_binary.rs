@@ -164,7 +164,7 @@ fn read_varying(
         let ([Some(x), Some(y), Some(z)], true) = (coordinates, decoded) else {
             bail_format!("cannot decode vertex {index} at byte offset {start}");
         };
-        out.push(super::finite(Vec3::new(x, y, z), || {
+        out.push(super::failure::finite(Vec3::new(x, y, z), || {
             format!("vertex {index} (byte offset {start})")
         })?);
     }
@@ -209,7 +209,7 @@ fn walk_record(
                 let n = len.to_len(bytes, big_endian).ok_or_else(|| {
                     format_failure!(
                         "negative list length for property '{}' of {} record {index} at byte offset {offset}",
-                        super::short(&prop.name),
+                        super::failure::short(&prop.name),
                         element.name
                     )
                 })?;

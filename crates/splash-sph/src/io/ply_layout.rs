@@ -23,7 +23,7 @@ impl Layout {
             let names: Vec<&str> = header.elements.keys().map(String::as_str).collect();
             bail_format!(
                 "the PLY header has no 'vertex' element (its elements: {})",
-                super::listed(names.iter().copied())
+                super::failure::listed(names.iter().copied())
             );
         };
         let vertex = Element::new(vertex)?;
@@ -168,8 +168,8 @@ impl Element {
                             bail_format!(
                                 "malformed PLY header: list property '{}' of element '{}' has a \
                                  non-integer length type",
-                                super::short(&p.name),
-                                super::short(&def.name)
+                                super::failure::short(&p.name),
+                                super::failure::short(&def.name)
                             );
                         }
                         Kind::List {
@@ -186,7 +186,7 @@ impl Element {
             .collect::<Result<_>>()?;
         Ok(Self {
             // For messages only (a header's names may be a megabyte long).
-            name: super::short(&def.name),
+            name: super::failure::short(&def.name),
             count: def.count,
             props,
         })
@@ -226,7 +226,7 @@ fn coordinate_properties(vertex: &Element) -> Result<[(usize, Scalar); 3]> {
             let names: Vec<&str> = vertex.props.iter().map(|p| p.name.as_str()).collect();
             bail_format!(
                 "the 'vertex' element has no property '{name}' (its properties: {})",
-                super::listed(names.iter().copied())
+                super::failure::listed(names.iter().copied())
             );
         };
         let Kind::Scalar(scalar) = prop.kind else {

@@ -243,7 +243,7 @@ fn ascii(
 }
 
 fn finite_vertex(p: Vec3, index: usize) -> Result<Vec3> {
-    super::finite(p, || format!("vertex {index}"))
+    super::failure::finite(p, || format!("vertex {index}"))
 }
 
 /// A corner's vertex number as an index; `None` when the file's value is not one.

@@ -11,7 +11,7 @@ use ply_rs_bw::ply::{
 };
 use ply_rs_bw::writer::Writer;
 
-use super::{AttributeValues, VertexAttributes};
+use super::vertex_attributes::{AttributeValues, VertexAttributes};
 use crate::mesh::TriMesh;
 
 /// Binary payload is gathered into blocks of about this size before each write.

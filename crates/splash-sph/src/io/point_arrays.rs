@@ -6,7 +6,7 @@ use std::collections::BTreeMap;
 use glam::Vec3;
 
 use super::failure::Result;
-use super::{Attribute, Particles};
+use super::particles::{Attribute, Particles};
 
 /// A numeric type of a binary or text array.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -108,7 +108,7 @@ pub(super) fn particles(positions: &[f32], arrays: Vec<PointArray>) -> Result<Pa
     let mut points = Vec::with_capacity(positions.len() / 3);
     for (i, p) in positions.chunks_exact(3).enumerate() {
         let p = Vec3::new(p[0], p[1], p[2]);
-        points.push(super::finite(p, || format!("point {i}"))?);
+        points.push(super::failure::finite(p, || format!("point {i}"))?);
     }
     let mut attributes = BTreeMap::new();
     for array in arrays {
@@ -148,7 +148,7 @@ pub(super) fn particles(positions: &[f32], arrays: Vec<PointArray>) -> Result<Pa
 /// Reads the whole file (bounded by its size, which the caller checked by opening it).
 pub(super) fn read_all(path: &std::path::Path) -> Result<Vec<u8>> {
     use std::io::Read;
-    let (mut file, len) = super::open_input(path)?;
+    let (mut file, len) = super::failure::open_input(path)?;
     let mut data = Vec::with_capacity(usize::try_from(len).unwrap_or(0).min(1 << 30));
     file.read_to_end(&mut data)
         .map_err(|e| super::failure::Failure::io("read error", e))?;

@@ -9,8 +9,10 @@
 
 use std::io::{self, Write};
 
-use super::POV_OBJECT;
 use crate::mesh::TriMesh;
+
+/// The name a `--format pov` file declares its mesh under: `object { SplashMesh … }`.
+pub const POV_OBJECT: &str = "SplashMesh";
 
 pub(super) fn write(mesh: &TriMesh, out: &mut impl Write) -> io::Result<()> {
     writeln!(

@@ -5,14 +5,14 @@ use std::path::Path;
 
 use glam::Vec3;
 
-use super::Particles;
 use super::failure::Result;
+use super::particles::Particles;
 use super::records::{self, Records};
 
 const RECORD_BYTES: usize = 12;
 
 pub(super) fn read(path: &Path) -> Result<Particles> {
-    let (mut file, file_len) = super::open_input(path)?;
+    let (mut file, file_len) = super::failure::open_input(path)?;
     let remainder = file_len % RECORD_BYTES as u64;
     if remainder != 0 {
         bail_format!(

@@ -90,7 +90,7 @@ pub(super) fn read(
                 bail_format!("cannot decode {what} {index} at byte offset {offset}");
             }
             if !p.is_finite() {
-                return Err(super::non_finite(
+                return Err(super::failure::non_finite(
                     *p,
                     &format!("{what} {index} (byte offset {offset})"),
                 ));

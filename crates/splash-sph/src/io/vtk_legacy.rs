@@ -6,8 +6,9 @@
 //! to 5.1 (`OFFSETS`/`CONNECTIVITY` cells).
 
 use super::failure::Result;
+use super::failure::short;
+use super::particles::Particles;
 use super::point_arrays::{self, Num, PointArray};
-use super::{Particles, short};
 
 pub(super) fn read(path: &std::path::Path) -> Result<Particles> {
     parse(&point_arrays::read_all(path)?)

@@ -5,7 +5,8 @@
 
 use std::io::{self, Write};
 
-use super::{AttributeValues, VertexAttributes, invalid_input};
+use super::failure::invalid_input;
+use super::vertex_attributes::{AttributeValues, VertexAttributes};
 use crate::mesh::TriMesh;
 
 /// Payload bytes gathered before each write.

@@ -15,8 +15,9 @@ use base64::Engine;
 use quick_xml::events::{BytesStart, Event};
 
 use super::failure::Result;
+use super::failure::short;
+use super::particles::Particles;
 use super::point_arrays::{self, Num, PointArray};
-use super::{Particles, short};
 
 /// Deflate inflates at most about 1032:1; more in a header is a lie.
 const MAX_DEFLATE_RATIO: usize = 1032;
@@ -175,7 +176,7 @@ fn parse_pieces(data: &[u8], cells: bool) -> Result<(File<'_>, Vec<Piece>)> {
             Err(_) if file.appended.is_some() && at + 64 >= xml.len() => break,
             Err(e) => bail_format!(
                 "malformed XML near byte offset {at}: {}",
-                super::short_message(&e.to_string())
+                super::failure::short_message(&e.to_string())
             ),
         };
         let empty = matches!(event, Event::Empty(_));

@@ -17,7 +17,8 @@ use flate2::Compression;
 use flate2::write::ZlibEncoder;
 use rayon::prelude::*;
 
-use super::{AttributeValues, VertexAttributes, invalid_input};
+use super::failure::invalid_input;
+use super::vertex_attributes::{AttributeValues, VertexAttributes};
 use crate::mesh::TriMesh;
 
 /// Uncompressed bytes per block (VTK's default).

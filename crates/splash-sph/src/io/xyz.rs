@@ -5,8 +5,8 @@
 use std::io::Read;
 use std::path::Path;
 
-use super::Particles;
 use super::failure::{Failure, Result};
+use super::particles::Particles;
 
 /// Bytes looked at to tell text from binary.
 const SNIFF_BYTES: usize = 4096;
@@ -22,7 +22,7 @@ pub(super) fn read(path: &Path) -> Result<Particles> {
 /// Whether the file starts with text: only printable ASCII and whitespace, beginning with
 /// something a table of numbers can begin with. An empty file is raw (no particles).
 fn is_text(path: &Path) -> Result<bool> {
-    let (file, _) = super::open_input(path)?;
+    let (file, _) = super::failure::open_input(path)?;
     let mut head = Vec::with_capacity(SNIFF_BYTES);
     file.take(SNIFF_BYTES as u64)
         .read_to_end(&mut head)

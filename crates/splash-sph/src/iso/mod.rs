@@ -7,7 +7,6 @@
 mod assembly;
 pub(crate) mod quantity;
 pub(crate) mod seed_cells;
-pub(crate) mod settings;
 mod slice_cache;
 pub(crate) mod sph_interpolant;
 pub(crate) mod stats;
@@ -25,8 +24,8 @@ use crate::error::{Error, Result};
 use crate::io::Attribute;
 use crate::mesh::TriMesh;
 
+pub use crate::config::iso::IsoConfig;
 pub use quantity::{Derived, IsoRequest};
-pub use settings::IsoConfig;
 pub use stats::{CORRECTION_BINS, CorrectionStats, IsoStats, IsoTimings};
 
 /// An isosurface: its mesh (normals from ∇A, pointing to larger A), the extra attributes

@@ -341,120 +341,6 @@ pub fn map_particles<T: Send>(
         .collect()
 }
 
-/// The widest code [`lane_sums!`] is compiled for that the CPU runs.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Lanes {
-    Scalar,
-    #[cfg(target_arch = "x86_64")]
-    Avx2,
-    #[cfg(target_arch = "x86_64")]
-    Avx512,
-}
-
-/// Which of the [`lane_sums!`] paths runs: the widest the CPU has, or the one a test chose.
-#[inline]
-pub fn lanes_path() -> Lanes {
-    #[cfg(test)]
-    if let Some(path) = tests::LANES.get() {
-        return path;
-    }
-    #[cfg(target_arch = "x86_64")]
-    {
-        use std::arch::is_x86_feature_detected as has;
-        if has!("avx512f") && has!("avx512vl") {
-            return Lanes::Avx512;
-        }
-        if has!("avx2") {
-            return Lanes::Avx2;
-        }
-    }
-    Lanes::Scalar
-}
-
-/// Defines `fn NAME(near: &Neighbourhood, x: Vec3, PARAM: TYPE) -> [f32; N]`, returning
-/// Σ_j TERM over the particles of `near`, where TERM sees `dx, dy, dz` = x_j − x (and, when a
-/// fourth name is given, the particle's channel 0, e.g. its volume) and gives N values. The sums run in `LANES` independent lanes so that the loop vectorises, compiled
-/// once more for AVX2 and chosen at run time; every lane does the same IEEE operations in the
-/// same order on both paths, so results do not depend on the CPU or the thread count. TERM
-/// must give 0 for the padding (beyond any kernel's support) and should not branch.
-///
-/// A macro rather than a function taking a closure: a closure is compiled without the AVX2
-/// feature and would not be inlined into the AVX2 loop.
-#[macro_export]
-macro_rules! lane_sums {
-    ($(#[$attr:meta])* $vis:vis fn $name:ident($p:ident: $ty:ty) -> [$n:expr] |$dx:ident, $dy:ident, $dz:ident $(, $v:ident)?| $term:block) => {
-        $(#[$attr])*
-        $vis fn $name(
-            near: &$crate::neighbours::neighbourhood::Neighbourhood,
-            x: glam::Vec3,
-            $p: $ty,
-        ) -> [f32; $n] {
-            use $crate::neighbours::neighbourhood::LANES;
-            #[inline(always)]
-            fn lanes(
-                near: &$crate::neighbours::neighbourhood::Neighbourhood,
-                x: glam::Vec3,
-                $p: $ty,
-            ) -> [[f32; LANES]; $n] {
-                let mut acc = [[0.0f32; LANES]; $n];
-                let n = near.len() / LANES;
-                for i in 0..n {
-                    let r = i * LANES..(i + 1) * LANES;
-                    $( let $v = &near.channels[0][r.clone()]; )?
-                    let (cx, cy, cz) = (&near.x[r.clone()], &near.y[r.clone()], &near.z[r]);
-                    let mut terms = [[0.0f32; LANES]; $n];
-                    for l in 0..LANES {
-                        let ($dx, $dy, $dz) = (cx[l] - x.x, cy[l] - x.y, cz[l] - x.z);
-                        $( let $v = $v[l]; )?
-                        let lane = $term;
-                        for (term, v) in terms.iter_mut().zip(lane) {
-                            term[l] = v;
-                        }
-                    }
-                    for (a, t) in acc.iter_mut().zip(&terms) {
-                        for l in 0..LANES {
-                            a[l] += t[l];
-                        }
-                    }
-                }
-                acc
-            }
-            use $crate::neighbours::lane_totals::lane_totals;
-            #[cfg(target_arch = "x86_64")]
-            #[target_feature(enable = "avx2")]
-            unsafe fn lanes_avx2(
-                near: &$crate::neighbours::neighbourhood::Neighbourhood,
-                x: glam::Vec3,
-                $p: $ty,
-            ) -> [f32; $n] {
-                lane_totals(&lanes(near, x, $p))
-            }
-            // With AVX-512's 32 vector registers the accumulators of many sums (SSP07's 13)
-            // stay in registers instead of going through the stack every step.
-            #[cfg(target_arch = "x86_64")]
-            #[target_feature(enable = "avx512f,avx512vl")]
-            unsafe fn lanes_avx512(
-                near: &$crate::neighbours::neighbourhood::Neighbourhood,
-                x: glam::Vec3,
-                $p: $ty,
-            ) -> [f32; $n] {
-                // The totals transposed: with 32 registers the lane loop keeps its own.
-                $crate::neighbours::lane_totals::lane_totals_avx2(&lanes(near, x, $p))
-            }
-            use $crate::neighbours::neighbourhood::{Lanes, lanes_path};
-            match lanes_path() {
-                // SAFETY: the CPU has AVX-512 F and VL, as `lanes_path` checked.
-                #[cfg(target_arch = "x86_64")]
-                Lanes::Avx512 => unsafe { lanes_avx512(near, x, $p) },
-                // SAFETY: the CPU has AVX2, as `lanes_path` checked.
-                #[cfg(target_arch = "x86_64")]
-                Lanes::Avx2 => unsafe { lanes_avx2(near, x, $p) },
-                Lanes::Scalar => lane_totals(&lanes(near, x, $p)),
-            }
-        }
-    };
-}
-
 #[cfg(test)]
 pub(crate) mod tests {
     use std::cell::Cell;
@@ -462,7 +348,6 @@ pub(crate) mod tests {
     use super::*;
 
     thread_local!(pub static SCALAR: Cell<bool> = const { Cell::new(false) });
-    thread_local!(pub static LANES: Cell<Option<Lanes>> = const { Cell::new(None) });
 
     /// Runs `f` on the scalar paths, then on the AVX2 ones where the CPU has them.
     fn both<T>(mut f: impl FnMut() -> T) -> (T, T) {

@@ -3,9 +3,9 @@
 //!
 //! The surface is the zero set of the `metaball` field (the configuration's `[field]` table
 //! when it is of that kind, else the metaball defaults), the one `splash recon --field
-//! metaball` meshes. [`Previewer::render`] builds the hierarchy ([`fitted_bvh`]), traces one
-//! ray per pixel through a [`Camera`] ([`trace`]), shades hits with Phong and a hard shadow
-//! ([`shade`]), rows in parallel; the image does not depend on the number of threads.
+//! metaball` meshes. [`Previewer::render`] builds the hierarchy ([`FittedBvh`]), traces one
+//! ray per pixel through a [`Camera`] ([`Tracer`]), shades hits with Phong and a hard shadow
+//! ([`Style`]), rows in parallel; the image does not depend on the number of threads.
 //!
 //! ```
 //! use splash_sph::preview::{Camera, Previewer, Style};
@@ -19,12 +19,12 @@
 //! # Ok::<(), splash_sph::Error>(())
 //! ```
 
-pub mod camera;
-pub mod fitted_bvh;
-pub mod metaballs;
-pub mod png_file;
-pub mod shade;
-pub mod trace;
+mod camera;
+mod fitted_bvh;
+mod metaballs;
+mod png_file;
+mod shade;
+mod trace;
 
 #[cfg(test)]
 mod tests;
@@ -40,12 +40,12 @@ use crate::config::Config;
 use crate::error::Result;
 use crate::field::{FieldConfig, MetaballConfig};
 
-pub use camera::{Camera, parse_size};
-pub use fitted_bvh::{BvhKind, BvhStats, FittedBvh};
+pub use camera::{Camera, parse_size, robust_bounds, up_vector};
+pub use fitted_bvh::{Aabb, BvhKind, BvhStats, FittedBvh};
 pub use metaballs::Metaballs;
 pub use png_file::{Image, encode_png, write_png};
 pub use shade::{Style, parse_colour};
-pub use trace::{Hit, RayCounts, Tracer};
+pub use trace::{Hit, RayCounts, Scratch, Tracer};
 
 /// One rendered frame and what it took.
 pub struct Preview {

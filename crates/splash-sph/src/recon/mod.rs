@@ -1,28 +1,13 @@
 //! Surface reconstruction engines behind one signature: [`reconstruct`] runs the engine that
 //! the parameters name. Each engine runs the stages of Algorithm 1 (Akinci et al. 2012) its own
-//! way and ends with the same triangulation and normals.
+//! way and ends with the same triangulation and normals. Layers, lowest first: `budget` (the
+//! memory limit), `bricks/` (the band stored as 8³ bricks), `stages/` (the steps of Algorithm
+//! 1), `engines/` (which run them).
 
-pub(crate) mod band;
-pub(crate) mod band_closure;
-pub(crate) mod brick_neighbours;
-pub(crate) mod brick_signs;
-pub(crate) mod brick_values;
+pub(crate) mod bricks;
 pub(crate) mod budget;
-pub(crate) mod deferred_values;
-pub(crate) mod edge_tables;
-pub(crate) mod field_sampling;
-pub(crate) mod full_grid;
-pub(crate) mod halo;
-pub(crate) mod lone_particles;
-pub(crate) mod marching_slices;
-pub(crate) mod narrow_band;
-pub(crate) mod normals;
-pub(crate) mod prepared;
-pub(crate) mod scatter;
-pub(crate) mod surface_cells;
-pub(crate) mod surface_particles;
-pub(crate) mod triangulation;
-pub(crate) mod vertex_correction;
+pub(crate) mod engines;
+pub(crate) mod stages;
 
 use glam::Vec3;
 
@@ -30,16 +15,10 @@ use crate::config::{Engine, Params};
 use crate::error::Result;
 use crate::mesh::TriMesh;
 use crate::report::{FrameStats, Observer, Stages};
-use full_grid::Grid;
+use engines::full_grid::{self, Grid};
+use engines::{marching_slices, narrow_band, scatter};
 
-/// A mesh and the report of its reconstruction.
-#[derive(Debug, Clone, Default)]
-pub struct Reconstruction {
-    /// The closed, outward-oriented surface.
-    pub mesh: TriMesh,
-    /// Counts, array bytes, and the stage figures of an [`Observer`](crate::Observer).
-    pub stats: FrameStats,
-}
+pub use engines::prepared::Reconstruction;
 
 /// Reconstructs the surface of `particles` with `params.engine`, in the current rayon pool.
 pub(crate) fn reconstruct(

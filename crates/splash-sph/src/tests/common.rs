@@ -1,12 +1,15 @@
-//! The helpers of every test (shared with the command line's tests), and parameters and
-//! reconstructions reached from inside the library.
+//! The helpers of the library's unit tests: those shared with the integration and command
+//! line tests (particle sets, fixtures, real frames), meshes compared up to rounding, and
+//! parameters and reconstructions reached from inside the library.
 
-use glam::Vec3;
+use glam::{IVec3, Vec3};
+use rustc_hash::FxHashMap;
 
-pub use super::shared::*;
+pub use super::support::*;
 use crate::config::{Config, Params};
 use crate::field::FieldConfig;
 use crate::length::Length;
+use crate::mesh::TriMesh;
 
 /// The default parameters (SSP07) at spacing `r` and cell size `cell`.
 pub fn params(r: f32, cell: &str) -> Params {
@@ -51,4 +54,101 @@ pub fn uniform(seed: u64) -> impl FnMut() -> f32 {
             .wrapping_add(1_442_695_040_888_963_407);
         (state >> 40) as f32 / (1u64 << 24) as f32
     }
+}
+
+/// Whether two meshes are the same up to float rounding: same vertex and triangle counts, each
+/// vertex of `a` within `tol` of a vertex of `b`, and the same triangles under that matching
+/// (up to rotation). The scatter engine sums each vertex's particle contributions in another
+/// order than the gather (particle by particle rather than lane-wise over a gathered list), and
+/// with offsets rounded from world rather than brick-local coordinates, so its field values
+/// differ from the gather's in the last bits, and so do the interpolated vertices. The narrow
+/// band and the full gather share the gather code and match exactly (`tol` 0).
+///
+/// Vertices closer than `tol` to each other (a surface through a grid vertex puts the vertices
+/// of several edges there) form one group; a group must have as many vertices in both meshes,
+/// and triangles are compared as triples of groups.
+pub fn same_mesh(a: &TriMesh, b: &TriMesh, tol: f32) -> Result<(), String> {
+    if a.vertices.len() != b.vertices.len() || a.triangles.len() != b.triangles.len() {
+        return Err(format!(
+            "{} vertices and {} triangles vs {} and {}",
+            a.vertices.len(),
+            a.triangles.len(),
+            b.vertices.len(),
+            b.triangles.len()
+        ));
+    }
+    // Buckets of side `2 tol` (at least 1e-4, far below the cells): a match lies in one of the
+    // 27 around.
+    let side = (2.0 * tol).max(1e-4);
+    let key = |v: Vec3| (v / side).floor().as_ivec3();
+    let mut buckets: FxHashMap<IVec3, Vec<u32>> = FxHashMap::default();
+    for (i, &v) in b.vertices.iter().enumerate() {
+        buckets.entry(key(v)).or_default().push(i as u32);
+    }
+    // The lowest index of the vertices of `b` within `tol` of `v`.
+    let group = |v: Vec3| {
+        let k = key(v);
+        let mut best: Option<u32> = None;
+        for d in (0..27).map(|n| IVec3::new(n % 3 - 1, n / 3 % 3 - 1, n / 9 - 1)) {
+            for &j in buckets.get(&(k + d)).into_iter().flatten() {
+                if (b.vertices[j as usize] - v).abs().max_element() <= tol {
+                    best = Some(best.map_or(j, |m| m.min(j)));
+                }
+            }
+        }
+        best
+    };
+    let mut count: FxHashMap<u32, i64> = FxHashMap::default();
+    let mut ga = Vec::with_capacity(a.vertices.len());
+    for &v in &a.vertices {
+        let g = group(v).ok_or_else(|| format!("vertex {v} has no match within {tol}"))?;
+        *count.entry(g).or_default() += 1;
+        ga.push(g);
+    }
+    let gb: Vec<u32> = b.vertices.iter().map(|&v| group(v).unwrap()).collect();
+    for &g in &gb {
+        *count.entry(g).or_default() -= 1;
+    }
+    if let Some((g, n)) = count.iter().find(|(_, n)| **n != 0) {
+        return Err(format!(
+            "{n} more vertices near {} in the first mesh",
+            b.vertices[*g as usize]
+        ));
+    }
+    let canonical = |t: [u32; 3]| {
+        let first = (0..3).min_by_key(|&i| t[i]).unwrap();
+        [t[first], t[(first + 1) % 3], t[(first + 2) % 3]]
+    };
+    let triples = |tris: &[[u32; 3]], g: &[u32]| {
+        let mut out: Vec<[u32; 3]> = tris
+            .iter()
+            .map(|t| canonical(t.map(|i| g[i as usize])))
+            .collect();
+        out.sort_unstable();
+        out
+    };
+    let (ta, tb) = (triples(&a.triangles, &ga), triples(&b.triangles, &gb));
+    match ta.iter().zip(&tb).position(|(x, y)| x != y) {
+        None => Ok(()),
+        Some(k) => Err(format!("triangles differ: {:?} vs {:?}", ta[k], tb[k])),
+    }
+}
+
+/// Distance, in cells, from each vertex of `a` to the nearest vertex of `b`.
+pub fn offsets(a: &TriMesh, b: &TriMesh, cell: f32) -> Vec<f32> {
+    let key = |v: Vec3| (v / cell).floor().as_ivec3();
+    let mut buckets: FxHashMap<IVec3, Vec<Vec3>> = FxHashMap::default();
+    for &v in &b.vertices {
+        buckets.entry(key(v)).or_default().push(v);
+    }
+    a.vertices
+        .iter()
+        .map(|&v| {
+            (0..27)
+                .map(|n| IVec3::new(n % 3 - 1, n / 3 % 3 - 1, n / 9 - 1))
+                .flat_map(|d| buckets.get(&(key(v) + d)).into_iter().flatten())
+                .map(|w| (*w - v).abs().max_element() / cell)
+                .fold(f32::INFINITY, f32::min)
+        })
+        .collect()
 }

@@ -10,7 +10,7 @@ use crate::mesh::TriMesh;
 use crate::mesh::topology::topology;
 use crate::neighbours::handler_array::HandlerArray;
 use crate::neighbours::neighbourhood::Neighbourhood;
-use crate::recon::vertex_correction::edge_of;
+use crate::recon::stages::vertex_correction::edge_of;
 use crate::report::CorrectionFigures;
 use glam::Vec3;
 

@@ -2,11 +2,11 @@
 //! the triangulation of a region whose border is outside is closed, manifold and oriented.
 
 use crate::mesh::topology::{signed_volume, topology};
-use crate::recon::band::{BRICK, BRICK_VERTICES, Band, local_index};
-use crate::recon::brick_signs::Signs;
-use crate::recon::brick_values::BrickValues;
-use crate::recon::edge_tables::EdgeTables;
-use crate::recon::triangulation::triangulate;
+use crate::recon::bricks::band::{BRICK, BRICK_VERTICES, Band, local_index};
+use crate::recon::bricks::brick_signs::Signs;
+use crate::recon::bricks::brick_values::BrickValues;
+use crate::recon::bricks::edge_tables::EdgeTables;
+use crate::recon::stages::triangulation::triangulate;
 use glam::{IVec3, Vec3};
 
 fn random_field(n: i32, seed: u64) -> (Band, BrickValues) {

@@ -5,8 +5,8 @@ mod anisotropic;
 pub(crate) mod common;
 mod correction;
 mod engines;
-mod field;
-mod fields;
+mod field_kinds;
+mod field_sampling;
 mod gradients;
 mod iso;
 mod iso_components;
@@ -14,6 +14,7 @@ mod marching_cubes;
 mod reconstruction;
 mod slices;
 
-/// The helpers of the repository's tests/, which name this crate `splash_sph`.
-#[path = "../../../../tests/common/mod.rs"]
-mod shared;
+/// The helpers the integration tests and the command line's tests share.
+#[allow(dead_code)]
+#[path = "../../tests/common/support.rs"]
+mod support;

@@ -8,7 +8,7 @@ use crate::config::Params;
 use crate::mesh::TriMesh;
 use crate::mesh::topology::{component_volumes, topology};
 use crate::recon::Reconstruction;
-use crate::recon::marching_slices::{self, Checks, SlicesReport};
+use crate::recon::engines::marching_slices::{self, Checks, SlicesReport};
 use crate::report::{FrameStats, Stages};
 use glam::Vec3;
 

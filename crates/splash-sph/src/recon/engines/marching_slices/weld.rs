@@ -12,9 +12,9 @@ use rayon::prelude::*;
 use super::marching::BlockMesh;
 use crate::error::{Error, Result};
 use crate::mesh::TriMesh;
-use crate::recon::band::{BRICK, brick_of, local_index};
+use crate::recon::bricks::band::{BRICK, brick_of, local_index};
 use crate::recon::budget;
-use crate::recon::triangulation::Triangulation;
+use crate::recon::stages::triangulation::Triangulation;
 
 /// Sort key of an edge: its brick in (z, y, x) order, then its lower corner in the brick,
 /// then its axis.

@@ -7,9 +7,8 @@
 //!
 //! Vertex `v` sits at `v * cell` in world coordinates, so the grid is the same in every frame.
 
-use super::brick_values::BrickValues;
-use super::budget;
 use crate::error::Result;
+use crate::recon::budget;
 use glam::{IVec3, Vec3};
 use rayon::prelude::*;
 use rustc_hash::FxHashMap;
@@ -153,65 +152,7 @@ impl Band {
         band
     }
 
-    /// Adds the vertices of `other` and their values, keeping bricks in (z, y, x) order; where
-    /// both have a vertex, `other`'s value wins unless it is NaN.
-    pub fn merge(
-        &mut self,
-        values: &mut BrickValues,
-        other: Band,
-        other_values: BrickValues,
-    ) -> Result<()> {
-        // Each merged brick with its index in `self` and in `other`.
-        let mut sources: Vec<(IVec3, Option<usize>, Option<usize>)> = self
-            .bricks
-            .iter()
-            .enumerate()
-            .map(|(i, &b)| (b, Some(i), None))
-            .collect();
-        for (j, &b) in other.bricks.iter().enumerate() {
-            match self.brick_index(b) {
-                Some(i) => sources[i].2 = Some(j),
-                None => sources.push((b, None, Some(j))),
-            }
-        }
-        sources.sort_unstable_by_key(|(b, _, _)| (b.z, b.y, b.x));
-        let masks = sources
-            .iter()
-            .map(|&(_, i, j)| {
-                let mut mask = i.map_or([0; 8], |i| self.masks[i]);
-                for (word, add) in mask.iter_mut().zip(j.map_or([0; 8], |j| other.masks[j])) {
-                    *word |= add;
-                }
-                mask
-            })
-            .collect();
-        let bricks = sources.iter().map(|s| s.0).collect();
-        let merged = Band::from_parts(self.cell, bricks, masks);
-        let merged_values = BrickValues::sample(
-            &merged,
-            || (),
-            |_, k| {
-                let (_, i, j) = sources[k];
-                let mut v = i.map_or([f32::NAN; BRICK_VERTICES], |i| {
-                    values.dense(&self.masks[i], i)
-                });
-                if let Some(j) = j {
-                    let add = other_values.dense(&other.masks[j], j);
-                    for (a, &x) in v.iter_mut().zip(&add) {
-                        if !x.is_nan() {
-                            *a = x;
-                        }
-                    }
-                }
-                v
-            },
-        )?;
-        *self = merged;
-        *values = merged_values;
-        Ok(())
-    }
-
-    fn from_parts(cell: f32, bricks: Vec<IVec3>, masks: Vec<[u64; 8]>) -> Band {
+    pub(super) fn from_parts(cell: f32, bricks: Vec<IVec3>, masks: Vec<[u64; 8]>) -> Band {
         let index = bricks
             .iter()
             .enumerate()

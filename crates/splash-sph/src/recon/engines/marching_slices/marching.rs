@@ -19,8 +19,8 @@ use crate::mesh::marching_cubes::{
 };
 use crate::neighbours::handler_array::HandlerArray;
 use crate::neighbours::neighbourhood::{Neighbourhood, reach};
-use crate::recon::field_sampling::vertex_position;
-use crate::recon::halo::offset;
+use crate::recon::bricks::halo::offset;
+use crate::recon::stages::field_sampling::vertex_position;
 
 /// What one block's marching needs besides the block.
 pub struct Setting<'a, F: ScalarField + ?Sized> {

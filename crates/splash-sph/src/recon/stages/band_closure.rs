@@ -10,14 +10,14 @@
 use glam::IVec3;
 use rayon::prelude::*;
 
-use super::band::{BRICK, Band};
-use super::brick_neighbours::NeighbourWalk;
-use super::brick_signs::Signs;
-use super::edge_tables::{self, EdgeTables};
-use super::field_sampling::BrickValues;
-use super::halo::offset;
-use super::surface_cells::BrickCells;
 use crate::error::Result;
+use crate::recon::bricks::band::{BRICK, Band};
+use crate::recon::bricks::brick_neighbours::NeighbourWalk;
+use crate::recon::bricks::brick_signs::Signs;
+use crate::recon::bricks::brick_values::{self, BrickValues};
+use crate::recon::bricks::edge_tables::{self, EdgeTables};
+use crate::recon::bricks::halo::offset;
+use crate::recon::bricks::surface_cells::BrickCells;
 
 /// The band once closed: the vertices closure added, the sign planes of its values and the
 /// edge tables of its bricks.
@@ -54,7 +54,7 @@ pub fn close_band(
         let grown_bricks = grown.bricks.clone();
         let grown_values = sample(&grown, band.bricks.len() + grown.bricks.len())?;
         let old = band.bricks.clone();
-        band.merge(values, grown, grown_values)?;
+        brick_values::merge(band, values, grown, grown_values)?;
         tables = tables.regrid(&old, &band.bricks);
         // Only cells near the new vertices can have new open faces, or new edge tables.
         scan = vec![false; band.bricks.len()];

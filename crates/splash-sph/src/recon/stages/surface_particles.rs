@@ -8,7 +8,8 @@ use glam::Vec3;
 
 use crate::config::Params;
 use crate::neighbours::handler_array::HandlerArray;
-use crate::neighbours::neighbourhood::{LANES, Lanes, Neighbourhood, lanes_path, map_particles};
+use crate::neighbours::lane_sums::{Lanes, lanes_path};
+use crate::neighbours::neighbourhood::{LANES, Neighbourhood, map_particles};
 
 pub struct SurfaceCriteria {
     /// Colour field support h; also the neighbour count radius.
@@ -152,8 +153,9 @@ mod tests {
     use glam::Vec3;
 
     use super::colour_gradient;
-    use crate::neighbours::neighbourhood::tests::LANES;
-    use crate::neighbours::neighbourhood::{Lanes, Neighbourhood};
+    use crate::neighbours::lane_sums::Lanes;
+    use crate::neighbours::lane_sums::tests::FORCED;
+    use crate::neighbours::neighbourhood::Neighbourhood;
 
     #[test]
     fn colour_lanes_are_the_same_on_every_path() {
@@ -167,9 +169,9 @@ mod tests {
         near.set(Vec3::ZERO, &points);
         for x in [Vec3::ZERO, Vec3::new(0.3, -0.2, 0.1), Vec3::splat(0.9)] {
             let run = |scalar: bool| {
-                LANES.set(scalar.then_some(Lanes::Scalar));
+                FORCED.set(scalar.then_some(Lanes::Scalar));
                 let (g, n) = colour_gradient(&near, x, 1.0);
-                LANES.set(None);
+                FORCED.set(None);
                 (g.to_array().map(f32::to_bits), n.to_bits())
             };
             let (simd, scalar) = (run(false), run(true));

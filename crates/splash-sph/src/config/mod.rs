@@ -3,6 +3,9 @@
 //! Lengths are given in units of the particle spacing `r` (Akinci et al. 2012 Sec. 3: cell sizes
 //! 2r, r, r/2; support 4r; band 2r) and resolved to world lengths once `r` is known.
 
+mod errors;
+pub(crate) mod iso;
+
 use std::fmt;
 use std::path::Path;
 use std::sync::Arc;
@@ -10,7 +13,6 @@ use std::sync::Arc;
 use serde::{Deserialize, Serialize};
 
 use crate::bytes::{Bytes, default_limit};
-use crate::config_errors;
 use crate::error::{Error, Result};
 use crate::field::{FieldConfig, ScalarField, Scattering};
 use crate::io::{MeshFormat, UpAxis};
@@ -51,7 +53,7 @@ pub struct Config {
     /// How meshes are written.
     pub output: OutputConfig,
     /// Isosurfaces of particle quantities (`splash iso`, Marching Correctors).
-    pub iso: crate::iso::settings::IsoConfig,
+    pub iso: iso::IsoConfig,
     /// `[min x, min y, min z, max x, max y, max z]`: particles outside this box (bounds
     /// included in it) are dropped before the reconstruction, with their attributes. All are
     /// kept when absent.
@@ -276,7 +278,7 @@ impl Default for Config {
             threads: None,
             max_memory: None,
             output: OutputConfig::default(),
-            iso: crate::iso::settings::IsoConfig::default(),
+            iso: iso::IsoConfig::default(),
             particle_aabb: None,
         }
     }
@@ -321,11 +323,11 @@ impl Config {
     /// Parses and validates TOML text; errors point at the offending key's line.
     pub fn from_toml(text: &str) -> Result<Config> {
         let config: Config = toml::from_str(text).map_err(|e| {
-            let e = config_errors::parse_error(text, e);
-            Error::config(config_errors::render_parse_error(text, &e))
+            let e = errors::parse_error(text, e);
+            Error::config(errors::render_parse_error(text, &e))
         })?;
         config.validate().map_err(|e| match e {
-            Error::Config(m) => Error::config(config_errors::validation_error(text, &m)),
+            Error::Config(m) => Error::config(errors::validation_error(text, &m)),
             e => e.context("invalid configuration"),
         })?;
         Ok(config)

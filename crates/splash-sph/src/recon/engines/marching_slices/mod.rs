@@ -18,11 +18,11 @@ use glam::Vec3;
 use rayon::prelude::*;
 use serde::Serialize;
 
-use super::Reconstruction;
-use super::budget::{self, mul};
+use super::prepared::Reconstruction;
 use super::prepared::{prepare, triangles_and_normals};
 use crate::bytes::human;
 use crate::config::{Normals, Params};
+use crate::recon::budget::{self, mul};
 use crate::report::{SlicesFigures, Stage, Stages};
 use marching::{BlockStats, InFlight, Setting, march};
 

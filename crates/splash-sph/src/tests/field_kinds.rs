@@ -1,4 +1,4 @@
-//! Every scalar field on shapes with known answers, and every preset in configs/.
+//! Every kind of scalar field on shapes with known answers, and every preset in configs/.
 
 use super::common::reconstruct;
 use super::common::{field_params, fixture, lattice_ball, repository};

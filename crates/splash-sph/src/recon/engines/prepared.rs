@@ -1,23 +1,33 @@
 //! What every engine shares: the field and the handler array of the frame before the field is
-//! sampled, and the counts and memory figures once the mesh exists.
+//! sampled, and the counts and memory figures once the mesh exists, in the [`Reconstruction`]
+//! every engine returns.
 
 use std::borrow::Borrow;
 use std::sync::Arc;
 
 use glam::Vec3;
 
-use super::Reconstruction;
-use super::band::Band;
-use super::budget::{self, PER_PARTICLE, mul};
-use super::field_sampling::BrickValues;
-use super::normals::set_normals;
-use super::triangulation::Triangulation;
-use super::vertex_correction::correct_vertices;
 use crate::config::Params;
 use crate::error::Result;
 use crate::field::{Fitted, ScalarField};
+use crate::mesh::TriMesh;
 use crate::neighbours::handler_array::HandlerArray;
+use crate::recon::bricks::band::Band;
+use crate::recon::bricks::brick_values::BrickValues;
+use crate::recon::budget::{self, PER_PARTICLE, mul};
+use crate::recon::stages::normals::set_normals;
+use crate::recon::stages::triangulation::Triangulation;
+use crate::recon::stages::vertex_correction::correct_vertices;
 use crate::report::{CorrectionFigures, FrameStats, Stage, Stages};
+
+/// A mesh and the report of its reconstruction.
+#[derive(Debug, Clone, Default)]
+pub struct Reconstruction {
+    /// The closed, outward-oriented surface.
+    pub mesh: TriMesh,
+    /// Counts, array bytes, and the stage figures of an [`Observer`](crate::Observer).
+    pub stats: FrameStats,
+}
 
 /// The field, and the handler array of the frame with the field's channels; fields with
 /// adaptive kernels also come fitted to the frame, with their own handler array.

@@ -13,12 +13,12 @@ use crate::error::Result;
 use glam::{IVec3, Vec3};
 use rayon::prelude::*;
 
-use super::brick_values::TASK_BRICKS;
 use crate::config::Normals;
 use crate::field::ScalarField;
 use crate::mesh::TriMesh;
 use crate::neighbours::handler_array::HandlerArray;
 use crate::neighbours::neighbourhood::Neighbourhood;
+use crate::recon::bricks::brick_values::TASK_BRICKS;
 
 /// Gives an engine's mesh, which comes with its grid normals, the normals `kind` asks for.
 /// `bricks` are the ranges of vertices that each lie within one brick; `handlers` gives the

@@ -10,15 +10,15 @@
 use glam::IVec3;
 use rayon::prelude::*;
 
-use super::band::{BRICK, Band, brick_of, local_index, local_vertex};
-use super::brick_neighbours::NeighbourWalk;
-use super::brick_values::BrickValues;
-use super::edge_tables::EdgeTables;
 use super::field_sampling::{sample_field, sample_field_deferring};
-use super::halo::neighbour_slot;
 use crate::error::Result;
 use crate::field::ScalarField;
 use crate::neighbours::handler_array::HandlerArray;
+use crate::recon::bricks::band::{BRICK, Band, brick_of, local_index, local_vertex};
+use crate::recon::bricks::brick_neighbours::NeighbourWalk;
+use crate::recon::bricks::brick_values::BrickValues;
+use crate::recon::bricks::edge_tables::EdgeTables;
+use crate::recon::bricks::halo::neighbour_slot;
 
 /// The vertices whose values were left out, as bits per brick, by brick coordinates (closing
 /// the band renumbers the bricks).
@@ -36,8 +36,8 @@ fn deferring_pays() -> bool {
         return defer;
     }
     #[cfg(target_arch = "x86_64")]
-    return crate::neighbours::neighbourhood::lanes_path()
-        == crate::neighbours::neighbourhood::Lanes::Avx512;
+    return crate::neighbours::lane_sums::lanes_path()
+        == crate::neighbours::lane_sums::Lanes::Avx512;
     #[cfg(not(target_arch = "x86_64"))]
     return false;
 }
@@ -172,7 +172,7 @@ pub(crate) mod tests {
     use crate::config::{Normals, Params};
     use crate::tests::common::{field_params, lattice_ball, reconstruct, uniform};
 
-    use crate::recon::field_sampling::tests::MARGIN_CELLS;
+    use crate::recon::stages::field_sampling::tests::MARGIN_CELLS;
 
     thread_local! {
         /// Whether the band's sampling defers (on any CPU), where a test says so.

@@ -4,13 +4,13 @@
 
 use glam::{IVec3, Vec3};
 
-use super::band::{BRICK, BRICK_VERTICES, Band, local_index};
 use crate::error::Result;
 use crate::field::{Sampled, ScalarField};
 use crate::neighbours::handler_array::HandlerArray;
 use crate::neighbours::neighbourhood::Neighbourhood;
+use crate::recon::bricks::band::{BRICK, BRICK_VERTICES, Band, local_index};
 
-pub use super::brick_values::BrickValues;
+pub use crate::recon::bricks::brick_values::BrickValues;
 
 /// How far from zero, in cells, a field that can tell its sign first
 /// ([`ScalarField::sign_first`]) must be settled for a vertex's value to be deferred. Only

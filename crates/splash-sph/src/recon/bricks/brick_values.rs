@@ -3,11 +3,12 @@
 //! a small part of the bricks it touches, and a dense brick array made its memory grow with
 //! the bricks (2 KiB each), not with its vertices.
 
+use glam::IVec3;
 use rayon::prelude::*;
 
 use super::band::{BRICK_VERTICES, Band};
-use super::budget;
 use crate::error::Result;
+use crate::recon::budget;
 
 /// Field values of a band's surface vertices; NaN where a vertex is not in the band.
 #[derive(Debug, Default)]
@@ -140,4 +141,62 @@ fn pack(mask: &[u64; 8], dense: &[f32; BRICK_VERTICES], out: &mut [f32]) {
             bits &= bits - 1;
         }
     }
+}
+
+/// Adds the vertices of `other` and their values to `band` and `values`, keeping bricks in
+/// (z, y, x) order; where both have a vertex, `other`'s value wins unless it is NaN.
+pub fn merge(
+    band: &mut Band,
+    values: &mut BrickValues,
+    other: Band,
+    other_values: BrickValues,
+) -> Result<()> {
+    // Each merged brick with its index in `band` and in `other`.
+    let mut sources: Vec<(IVec3, Option<usize>, Option<usize>)> = band
+        .bricks
+        .iter()
+        .enumerate()
+        .map(|(i, &b)| (b, Some(i), None))
+        .collect();
+    for (j, &b) in other.bricks.iter().enumerate() {
+        match band.brick_index(b) {
+            Some(i) => sources[i].2 = Some(j),
+            None => sources.push((b, None, Some(j))),
+        }
+    }
+    sources.sort_unstable_by_key(|(b, _, _)| (b.z, b.y, b.x));
+    let masks = sources
+        .iter()
+        .map(|&(_, i, j)| {
+            let mut mask = i.map_or([0; 8], |i| band.masks[i]);
+            for (word, add) in mask.iter_mut().zip(j.map_or([0; 8], |j| other.masks[j])) {
+                *word |= add;
+            }
+            mask
+        })
+        .collect();
+    let bricks = sources.iter().map(|s| s.0).collect();
+    let merged = Band::from_parts(band.cell, bricks, masks);
+    let merged_values = BrickValues::sample(
+        &merged,
+        || (),
+        |_, k| {
+            let (_, i, j) = sources[k];
+            let mut v = i.map_or([f32::NAN; BRICK_VERTICES], |i| {
+                values.dense(&band.masks[i], i)
+            });
+            if let Some(j) = j {
+                let add = other_values.dense(&other.masks[j], j);
+                for (a, &x) in v.iter_mut().zip(&add) {
+                    if !x.is_nan() {
+                        *a = x;
+                    }
+                }
+            }
+            v
+        },
+    )?;
+    *band = merged;
+    *values = merged_values;
+    Ok(())
 }

@@ -7,8 +7,8 @@ use crate::config::{Engine, Params};
 use crate::error::Result;
 use glam::{IVec3, Vec3};
 
-use super::band::{Band, brick_of};
-use super::budget::{self, PER_BRICK, PER_PARTICLE, mul};
+use crate::recon::bricks::band::{Band, brick_of};
+use crate::recon::budget::{self, PER_BRICK, PER_PARTICLE, mul};
 
 /// The vertices of the particles' bounding box widened by the field's support.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -4,7 +4,7 @@
 use glam::{IVec3, Vec3};
 
 use super::band::{BRICK, Band};
-use super::field_sampling::BrickValues;
+use super::brick_values::BrickValues;
 use crate::mesh::marching_cubes::corner_offset;
 
 /// Local coordinates −1..=9: a brick, its +1 neighbours for cells and edges that leave it, and

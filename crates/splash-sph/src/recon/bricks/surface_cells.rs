@@ -181,10 +181,10 @@ fn span(d: i32) -> impl Iterator<Item = (usize, usize)> {
 mod tests {
     use super::*;
     use crate::mesh::marching_cubes::case_index;
-    use crate::recon::band::BRICK_VERTICES;
-    use crate::recon::brick_neighbours::NeighbourWalk;
-    use crate::recon::brick_values::BrickValues;
-    use crate::recon::halo::{Halo, offset};
+    use crate::recon::bricks::band::BRICK_VERTICES;
+    use crate::recon::bricks::brick_neighbours::NeighbourWalk;
+    use crate::recon::bricks::brick_values::BrickValues;
+    use crate::recon::bricks::halo::{Halo, offset};
     use glam::Vec3;
 
     /// Bits against the values, on a random field with holes, over every cell and edge.

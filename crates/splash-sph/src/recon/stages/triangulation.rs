@@ -13,18 +13,19 @@ use std::sync::LazyLock;
 use glam::{IVec3, Vec3};
 use rayon::prelude::*;
 
-use super::band::{BRICK, Band, brick_of, local_index, local_vertex};
-use super::brick_neighbours::NeighbourWalk;
-use super::brick_signs::Signs;
-use super::brick_values::TASK_BRICKS;
-use super::budget;
-use super::edge_tables::{BrickEdges, EdgeTables, PER_BRICK_EDGES};
-use super::field_sampling::{BrickValues, vertex_position};
-use super::halo::{Halo, neighbour_slot, offset};
-use super::surface_cells::BrickCells;
+use super::field_sampling::vertex_position;
 use crate::error::{Error, Result};
 use crate::mesh::TriMesh;
 use crate::mesh::marching_cubes::{cases, crossing_normal, edge_axis, edge_corners, edge_crossing};
+use crate::recon::bricks::band::{BRICK, Band, brick_of, local_index, local_vertex};
+use crate::recon::bricks::brick_neighbours::NeighbourWalk;
+use crate::recon::bricks::brick_signs::Signs;
+use crate::recon::bricks::brick_values::BrickValues;
+use crate::recon::bricks::brick_values::TASK_BRICKS;
+use crate::recon::bricks::edge_tables::{BrickEdges, EdgeTables, PER_BRICK_EDGES};
+use crate::recon::bricks::halo::{Halo, neighbour_slot, offset};
+use crate::recon::bricks::surface_cells::BrickCells;
+use crate::recon::budget;
 
 pub struct Triangulation {
     pub mesh: TriMesh,

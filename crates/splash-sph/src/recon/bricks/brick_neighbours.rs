@@ -70,8 +70,8 @@ fn gallop(bricks: &[IVec3], from: usize, target: (i32, i32, i32)) -> usize {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::recon::band::Band;
-    use crate::recon::halo::neighbour_slot;
+    use crate::recon::bricks::band::Band;
+    use crate::recon::bricks::halo::neighbour_slot;
     use glam::Vec3;
 
     #[test]

@@ -9,18 +9,18 @@
 use crate::error::{Error, Result};
 use glam::{IVec3, Vec3};
 
-use super::Reconstruction;
-use super::band::{BRICK, BRICK_VERTICES, Band, local_index};
-use super::brick_signs::Signs;
-use super::budget;
-use super::edge_tables::EdgeTables;
-use super::field_sampling::BrickValues;
 use super::full_grid::{self, Grid};
+use super::prepared::Reconstruction;
 use super::prepared::{finish, triangles_and_normals};
-use super::triangulation::triangulate;
 use crate::config::Params;
 use crate::field::Scattering;
 use crate::neighbours::handler_array::HandlerArray;
+use crate::recon::bricks::band::{BRICK, BRICK_VERTICES, Band, local_index};
+use crate::recon::bricks::brick_signs::Signs;
+use crate::recon::bricks::brick_values::BrickValues;
+use crate::recon::bricks::edge_tables::EdgeTables;
+use crate::recon::budget;
+use crate::recon::stages::triangulation::triangulate;
 use crate::report::{Stage, Stages};
 
 /// The scatter engine's reconstruction: the scatter needs no neighbour search, only the

@@ -145,7 +145,7 @@ fn brick_signs(mask: &[u64; 8], values: &[f32]) -> ([u64; 8], [u64; 8]) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::recon::band::BRICK_VERTICES;
+    use crate::recon::bricks::band::BRICK_VERTICES;
     use glam::Vec3;
 
     #[test]
