@@ -2,6 +2,7 @@
 
 pub mod correction;
 pub(crate) mod marching_cubes;
+pub mod quality;
 pub mod topology;
 
 use glam::Vec3;
