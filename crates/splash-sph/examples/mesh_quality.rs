@@ -27,7 +27,13 @@ fn read_mesh(path: &Path) -> Result<TriMesh, String> {
     };
     let vertices = ply.payload["vertex"]
         .iter()
-        .map(|e| Ok(Vec3::new(float(e.get("x"))?, float(e.get("y"))?, float(e.get("z"))?)))
+        .map(|e| {
+            Ok(Vec3::new(
+                float(e.get("x"))?,
+                float(e.get("y"))?,
+                float(e.get("z"))?,
+            ))
+        })
         .collect::<Result<Vec<_>, String>>()?;
     let indices = |p: &Property| -> Option<Vec<u32>> {
         match p {
@@ -59,9 +65,10 @@ fn main() -> Result<(), String> {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let usage = "usage: mesh_quality --spacing R PARTICLES_DIR MESH_DIR [SLIVER_FRAME]";
     let (spacing, rest) = match args.as_slice() {
-        [flag, r, rest @ ..] if flag == "--spacing" => {
-            (r.parse::<f32>().map_err(|e| format!("--spacing: {e}"))?, rest)
-        }
+        [flag, r, rest @ ..] if flag == "--spacing" => (
+            r.parse::<f32>().map_err(|e| format!("--spacing: {e}"))?,
+            rest,
+        ),
         _ => return Err(usage.into()),
     };
     let [particles, meshes, sliver_frame @ ..] = rest else {
@@ -73,7 +80,9 @@ fn main() -> Result<(), String> {
         .filter(|p| p.extension().is_some_and(|x| x == "ply"))
         .collect();
     files.sort();
-    println!("mesh\tvolume_error_%\tbumpiness_deg\tslivers_%\tfaces\tclosed_manifold\tcomponents\tsmall_components");
+    println!(
+        "mesh\tvolume_error_%\tbumpiness_deg\tslivers_%\tfaces\tclosed_manifold\tcomponents\tsmall_components"
+    );
     let (mut errors, mut bumps, mut faces) = (Vec::new(), Vec::new(), Vec::new());
     let mut sliver_row = None;
     for file in &files {
@@ -108,7 +117,9 @@ fn main() -> Result<(), String> {
     let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
     let (lo, hi) = errors
         .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &e| (a.min(e), b.max(e)));
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &e| {
+            (a.min(e), b.max(e))
+        });
     let abs: Vec<f64> = errors.iter().map(|e| e.abs()).collect();
     let (sliver_name, slivers) = sliver_row.unwrap();
     println!(

@@ -280,11 +280,19 @@ mod tests {
         let edges: Vec<f32> = mesh
             .triangles
             .iter()
-            .flat_map(|t| (0..3).map(|k| (mesh.vertices[t[k] as usize] - mesh.vertices[t[(k + 1) % 3] as usize]).length()))
+            .flat_map(|t| {
+                (0..3).map(|k| {
+                    (mesh.vertices[t[k] as usize] - mesh.vertices[t[(k + 1) % 3] as usize]).length()
+                })
+            })
             .collect();
         let mean_edge = edges.iter().sum::<f32>() as f64 / edges.len() as f64;
         let expected = (mean_edge / 3f64.sqrt()).to_degrees();
-        assert!((q.bumpiness / expected - 1.0).abs() < 0.05, "{} vs {expected}", q.bumpiness);
+        assert!(
+            (q.bumpiness / expected - 1.0).abs() < 0.05,
+            "{} vs {expected}",
+            q.bumpiness
+        );
         // Halving the edges halves the angles.
         let finer = bumpiness(&icosphere(6));
         assert!((finer / q.bumpiness - 0.5).abs() < 0.02, "{finer}");
@@ -307,14 +315,24 @@ mod tests {
     fn slivers_are_counted_by_their_smallest_angle() {
         let deg = |a: f64| {
             // A triangle with angles a, 90°, 90° − a.
-            [DVec3::ZERO, DVec3::X, DVec3::new(1.0, a.to_radians().tan(), 0.0)]
+            [
+                DVec3::ZERO,
+                DVec3::X,
+                DVec3::new(1.0, a.to_radians().tan(), 0.0),
+            ]
         };
         for a in [1.0, 9.9, 10.1, 30.0, 45.0] {
             assert!((smallest_angle(deg(a)) - a).abs() < 1e-9, "{a}");
         }
-        let vertices = [DVec3::ZERO, DVec3::X, DVec3::new(1.0, 0.1, 0.0), DVec3::Y, DVec3::ONE]
-            .map(|p| p.as_vec3())
-            .to_vec();
+        let vertices = [
+            DVec3::ZERO,
+            DVec3::X,
+            DVec3::new(1.0, 0.1, 0.0),
+            DVec3::Y,
+            DVec3::ONE,
+        ]
+        .map(|p| p.as_vec3())
+        .to_vec();
         let mesh = TriMesh {
             vertices,
             normals: Vec::new(),
