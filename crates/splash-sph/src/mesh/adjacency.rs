@@ -1,14 +1,19 @@
-//! The triangles around each vertex of a [`TriMesh`](super::TriMesh), as compressed rows (CSR):
-//! the one-ring that smoothing, vertex normals and component labels read.
+//! The triangles and neighbours around each vertex of a [`TriMesh`](super::TriMesh), as
+//! compressed rows (CSR): the one-ring that smoothing, vertex normals and component labels read.
 
 /// For vertex `v`, `faces[offsets[v]..offsets[v + 1]]` are the triangles that use it, in
-/// increasing order (so whatever reads them sums in the same order on any thread count).
+/// increasing order (so whatever reads them sums in the same order on any thread count), and
+/// `next[offsets[v]..offsets[v + 1]]` the vertex that follows `v` in each of them: on a closed
+/// oriented manifold every edge from `v` is walked away from `v` by exactly one triangle, so
+/// these are `v`'s neighbours, each once.
 #[derive(Debug, Clone, Default)]
 pub struct VertexFaces {
     /// `vertices + 1` row starts.
     pub offsets: Vec<u32>,
     /// Triangle indices, row after row.
     pub faces: Vec<u32>,
+    /// The vertex after the row's vertex in each of those triangles.
+    pub next: Vec<u32>,
 }
 
 impl VertexFaces {
@@ -30,14 +35,20 @@ impl VertexFaces {
         }
         let mut next = offsets.clone();
         let mut faces = vec![0u32; 3 * triangles.len()];
+        let mut after = vec![0u32; 3 * triangles.len()];
         for (i, t) in triangles.iter().enumerate() {
-            for &v in t {
-                let slot = &mut next[v as usize];
+            for k in 0..3 {
+                let slot = &mut next[t[k] as usize];
                 faces[*slot as usize] = i as u32;
+                after[*slot as usize] = t[(k + 1) % 3];
                 *slot += 1;
             }
         }
-        VertexFaces { offsets, faces }
+        VertexFaces {
+            offsets,
+            faces,
+            next: after,
+        }
     }
 
     /// The triangles around `v`.
@@ -45,8 +56,8 @@ impl VertexFaces {
         &self.faces[self.offsets[v] as usize..self.offsets[v + 1] as usize]
     }
 
-    /// Bytes held.
-    pub fn heap_bytes(&self) -> usize {
-        4 * (self.offsets.capacity() + self.faces.capacity())
+    /// The neighbours of `v` (see the type's docs).
+    pub fn neighbours(&self, v: usize) -> &[u32] {
+        &self.next[self.offsets[v] as usize..self.offsets[v + 1] as usize]
     }
 }

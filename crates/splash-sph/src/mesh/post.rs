@@ -105,7 +105,6 @@ pub fn postprocess(
     taubin(
         vertices,
         &mut scratch,
-        triangles,
         &rings,
         config.smoothing_iterations,
         lambda,
@@ -152,14 +151,13 @@ pub fn postprocess(
     };
     for _ in 0..config.volume_rounds {
         volume_steps(vertices, normals, 1);
-        taubin(vertices, &mut scratch, triangles, &rings, 1, lambda, mu);
+        taubin(vertices, &mut scratch, &rings, 1, lambda, mu);
         vertex_normals(vertices, triangles, &rings, normals);
     }
     relax_tangentially(
         vertices,
         &mut scratch,
         normals,
-        triangles,
         &rings,
         config.relax_iterations,
         0.5,

@@ -18,7 +18,6 @@ const CHUNK: usize = 4096;
 pub fn taubin(
     vertices: &mut [Vec3],
     scratch: &mut [Vec3],
-    triangles: &[[u32; 3]],
     rings: &VertexFaces,
     iterations: u32,
     lambda: f32,
@@ -26,40 +25,28 @@ pub fn taubin(
 ) {
     debug_assert_eq!(vertices.len(), scratch.len());
     for _ in 0..iterations {
-        umbrella_step(vertices, scratch, triangles, rings, lambda);
-        umbrella_step(scratch, vertices, triangles, rings, mu);
+        umbrella_step(vertices, scratch, rings, lambda);
+        umbrella_step(scratch, vertices, rings, mu);
     }
 }
 
-/// `to[v] = from[v] + factor · (mean of v's neighbours − from[v])`. Each triangle around v
-/// brings its two other corners, so on a closed manifold every neighbour counts twice: the
-/// uniform umbrella operator without a neighbour list.
-fn umbrella_step(
-    from: &[Vec3],
-    to: &mut [Vec3],
-    triangles: &[[u32; 3]],
-    rings: &VertexFaces,
-    factor: f32,
-) {
+/// The umbrella operator: the mean of `v`'s neighbours minus `v`.
+#[inline]
+fn umbrella(from: &[Vec3], rings: &VertexFaces, v: usize) -> Vec3 {
+    let ring = rings.neighbours(v);
+    if ring.is_empty() {
+        return Vec3::ZERO;
+    }
+    let sum: Vec3 = ring.iter().map(|&u| from[u as usize]).sum();
+    sum / ring.len() as f32 - from[v]
+}
+
+/// `to[v] = from[v] + factor · umbrella(v)`.
+fn umbrella_step(from: &[Vec3], to: &mut [Vec3], rings: &VertexFaces, factor: f32) {
     to.par_chunks_mut(CHUNK).enumerate().for_each(|(c, out)| {
         for (k, slot) in out.iter_mut().enumerate() {
             let v = c * CHUNK + k;
-            let p = from[v];
-            let ring = rings.of(v);
-            if ring.is_empty() {
-                *slot = p;
-                continue;
-            }
-            let mut sum = Vec3::ZERO;
-            for &f in ring {
-                let t = triangles[f as usize];
-                for &u in &t {
-                    sum += from[u as usize];
-                }
-            }
-            // The sum holds v once per triangle: take it out.
-            let mean = (sum - ring.len() as f32 * p) / (2 * ring.len()) as f32;
-            *slot = p + factor * (mean - p);
+            *slot = from[v] + factor * umbrella(from, rings, v);
         }
     });
 }
@@ -94,7 +81,6 @@ pub fn relax_tangentially(
     vertices: &mut [Vec3],
     scratch: &mut [Vec3],
     normals: &[Vec3],
-    triangles: &[[u32; 3]],
     rings: &VertexFaces,
     iterations: u32,
     factor: f32,
@@ -107,19 +93,8 @@ pub fn relax_tangentially(
             .for_each(|(c, out)| {
                 for (k, slot) in out.iter_mut().enumerate() {
                     let v = c * CHUNK + k;
-                    let (p, ring) = (from[v], rings.of(v));
-                    if ring.is_empty() {
-                        *slot = p;
-                        continue;
-                    }
-                    let sum: Vec3 = ring
-                        .iter()
-                        .flat_map(|&f| triangles[f as usize])
-                        .map(|u| from[u as usize])
-                        .sum();
-                    let step = (sum - ring.len() as f32 * p) / (2 * ring.len()) as f32 - p;
-                    let n = normals[v];
-                    *slot = p + factor * (step - step.dot(n) * n);
+                    let (step, n) = (umbrella(from, rings, v), normals[v]);
+                    *slot = from[v] + factor * (step - step.dot(n) * n);
                 }
             });
         vertices.copy_from_slice(scratch);
