@@ -9,8 +9,8 @@ use serde::{Deserialize, Serialize};
 
 use super::TriMesh;
 use super::adjacency::VertexFaces;
-use super::smoothing::{relax_tangentially, taubin, vertex_normals};
-use super::volume::{Components, particles_inside, restore};
+use super::smoothing::{relax_tangentially, taubin};
+use super::volume::{Components, Measures, normals_and_measures, particles_inside, restore};
 use crate::error::Result;
 
 /// `[post]`: what happens to the mesh after the engine. Defaults measured on cbd-small (21
@@ -96,7 +96,7 @@ pub fn postprocess(
         return;
     }
     let rings = VertexFaces::new(mesh.vertices.len(), &mesh.triangles);
-    let components = Components::new(&mesh.triangles, &rings);
+    let components = Components::new(&rings);
     let raw_volumes = components.volumes_and_areas(&mesh.vertices, &mesh.triangles);
     let (lambda, mu) = (config.lambda, config.mu);
     let mut scratch = vec![Vec3::ZERO; mesh.vertices.len()];
@@ -113,7 +113,8 @@ pub fn postprocess(
     let wants_normals = !mesh.normals.is_empty();
     let normals = &mut mesh.normals;
     normals.resize(vertices.len(), Vec3::ZERO);
-    vertex_normals(vertices, triangles, &rings, normals);
+    let mut measures = Measures::default();
+    normals_and_measures(vertices, triangles, &rings, normals, &mut measures);
 
     let targets: Vec<f64> = if config.volume_rounds + config.volume_steps > 0 {
         let inside = particles_inside(
@@ -135,24 +136,26 @@ pub fn postprocess(
         Vec::new()
     };
     let max_step = config.max_offset * spacing;
-    let volume_steps = |vertices: &mut [Vec3], normals: &mut [Vec3], steps: u32| {
-        if !targets.is_empty() {
-            restore(
-                vertices,
-                normals,
-                triangles,
-                &rings,
-                &components,
-                &targets,
-                steps,
-                max_step,
-            );
-        }
-    };
+    let volume_steps =
+        |vertices: &mut [Vec3], normals: &mut [Vec3], measures: &mut Measures, steps: u32| {
+            if !targets.is_empty() {
+                restore(
+                    vertices,
+                    normals,
+                    measures,
+                    triangles,
+                    &rings,
+                    &components,
+                    &targets,
+                    steps,
+                    max_step,
+                );
+            }
+        };
     for _ in 0..config.volume_rounds {
-        volume_steps(vertices, normals, 1);
         taubin(vertices, &mut scratch, &rings, 1, lambda, mu);
-        vertex_normals(vertices, triangles, &rings, normals);
+        normals_and_measures(vertices, triangles, &rings, normals, &mut measures);
+        volume_steps(vertices, normals, &mut measures, 1);
     }
     relax_tangentially(
         vertices,
@@ -162,8 +165,8 @@ pub fn postprocess(
         config.relax_iterations,
         0.5,
     );
-    vertex_normals(vertices, triangles, &rings, normals);
-    volume_steps(vertices, normals, config.volume_steps);
+    normals_and_measures(vertices, triangles, &rings, normals, &mut measures);
+    volume_steps(vertices, normals, &mut measures, config.volume_steps);
     if !wants_normals {
         *normals = Vec::new();
     }
