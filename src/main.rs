@@ -146,6 +146,11 @@ struct ConfigArgs {
         allow_hyphen_values = true
     )]
     particle_aabb: Option<String>,
+
+    /// Keep the field's exact isosurface: no smoothing and no volume restoration (by default
+    /// the mesh is smoothed and each part given the volume of the particles inside it).
+    #[arg(long)]
+    raw: bool,
 }
 
 impl ConfigArgs {
@@ -186,6 +191,7 @@ impl ConfigArgs {
                 "--particle-aabb",
                 splash_sph::parse_aabb,
             )?,
+            raw: self.raw.then_some(true),
         };
         Ok(config.apply(&overrides)?)
     }

@@ -73,6 +73,7 @@ fn config_toml<'py>(
         correct,
         threads,
         max_memory,
+        ..Overrides::default()
     };
     Ok(settings::resolve(config, overrides)?.to_toml())
 }

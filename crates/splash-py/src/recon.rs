@@ -55,7 +55,8 @@ struct Output {
 /// the default, keeps Marching Cubes' linear interpolation). ``threads``: worker threads, all
 /// cores by default; the mesh does not depend on it (each calling thread keeps its workers for
 /// its next calls). ``max_memory``: the heap a frame may plan to use (every engine checks
-/// it), in bytes or as ``"8G"``.
+/// it), in bytes or as ``"8G"``. ``raw=True``: the field's exact isosurface, without the
+/// default post-processing (smoothing, each part given its particles' volume N·r³).
 ///
 /// ``config``: a TOML file's path (as ``splash recon --config`` reads) or a dict shaped like
 /// it (see ``default_config``). Its ``output.format`` and ``output.up_axis`` become the
@@ -81,7 +82,7 @@ struct Output {
 #[allow(clippy::too_many_arguments)]
 #[pyfunction]
 #[pyo3(signature = (positions, spacing=None, *, cell=None, field=None, engine=None, normals=None,
-    correct=None, threads=None, max_memory=None, config=None, attributes=None))]
+    correct=None, threads=None, max_memory=None, config=None, attributes=None, raw=None))]
 pub fn reconstruct<'py>(
     py: Python<'py>,
     positions: &Bound<'py, PyAny>,
@@ -95,6 +96,7 @@ pub fn reconstruct<'py>(
     max_memory: Option<Bound<'py, PyAny>>,
     config: Option<&Bound<'py, PyAny>>,
     attributes: Option<&Bound<'py, PyAny>>,
+    raw: Option<bool>,
 ) -> PyResult<Mesh> {
     let overrides = Overrides {
         spacing,
@@ -105,6 +107,7 @@ pub fn reconstruct<'py>(
         correct,
         threads,
         max_memory,
+        raw,
     };
     let config = settings::resolve(config, overrides)?;
     if config.spacing.is_none() {

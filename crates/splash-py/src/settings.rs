@@ -21,6 +21,7 @@ pub struct Overrides<'py> {
     pub correct: Option<i64>,
     pub threads: Option<i64>,
     pub max_memory: Option<Bound<'py, PyAny>>,
+    pub raw: Option<bool>,
 }
 
 /// `config` (None, a TOML file's path or a dict) with `overrides` applied, validated.
@@ -49,6 +50,7 @@ pub fn resolve(config: Option<&Bound<'_, PyAny>>, overrides: Overrides<'_>) -> P
         correct,
         threads,
         max_memory,
+        raw,
     } = overrides;
     let cell = match cell {
         None => None,
@@ -102,6 +104,7 @@ pub fn resolve(config: Option<&Bound<'_, PyAny>>, overrides: Overrides<'_>) -> P
         correct,
         threads,
         max_memory,
+        raw,
         ..Default::default()
     };
     config.apply(&overrides).map_err(to_py)

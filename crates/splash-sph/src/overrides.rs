@@ -38,6 +38,8 @@ pub struct Overrides {
     pub attributes: Option<Vec<String>>,
     /// `particle_aabb`.
     pub particle_aabb: Option<[f32; 6]>,
+    /// `post.raw`: the field's exact isosurface, without post-processing.
+    pub raw: Option<bool>,
 }
 
 impl Config {
@@ -62,6 +64,7 @@ impl Config {
             self.output.attributes = a.clone();
         }
         self.particle_aabb = o.particle_aabb.or(self.particle_aabb);
+        self.post.raw = o.raw.unwrap_or(self.post.raw);
         self.validate()?;
         Ok(self)
     }

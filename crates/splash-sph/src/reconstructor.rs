@@ -10,9 +10,10 @@ use crate::config::{Config, Params};
 use crate::error::{Error, Result, figure};
 use crate::io::Attribute;
 use crate::mesh::TriMesh;
+use crate::mesh::post::postprocess;
 use crate::recon::engines::full_grid::{self, Grid};
 use crate::recon::{self, Reconstruction};
-use crate::report::Observer;
+use crate::report::{Observer, Stage, Stages};
 use crate::worker_pool::worker_pool;
 
 /// Reconstructs frames with one configuration: `Reconstructor::new(config)?.reconstruct(&positions)?`.
@@ -75,7 +76,7 @@ impl Reconstructor {
     fn run(
         &self,
         positions: &[Vec3],
-        observer: Option<&mut dyn Observer>,
+        mut observer: Option<&mut dyn Observer>,
     ) -> Result<Reconstruction> {
         if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
             let p = positions[i];
@@ -85,7 +86,23 @@ impl Reconstructor {
             )));
         }
         self.check_resolution(positions)?;
-        self.install(|| recon::reconstruct(positions, &self.params, observer))
+        self.install(|| {
+            let reborrowed: Option<&mut dyn Observer> = match &mut observer {
+                Some(o) => Some(&mut **o),
+                None => None,
+            };
+            let mut out = recon::reconstruct(positions, &self.params, reborrowed)?;
+            let post = &self.config.post;
+            if !post.raw && !out.mesh.is_empty() {
+                let (r, cell) = (self.params.spacing, self.params.cell);
+                let mut stages = Stages::start(out.stats, observer);
+                stages.run(Stage::Post, || {
+                    postprocess(&mut out.mesh, positions, r, cell, post)
+                });
+                out.stats = stages.stats;
+            }
+            Ok(out)
+        })
     }
 
     /// Refuses coordinates so large that f32's steps there are a sizeable part of a cell: the

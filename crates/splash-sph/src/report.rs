@@ -21,6 +21,8 @@ pub struct Timings {
     pub scalar_field: Duration,
     /// t_tri.
     pub triangulation: Duration,
+    /// Post-processing the mesh (smoothing, volume; issue 25).
+    pub post: Duration,
     /// Writing the mesh (set by callers that write it).
     pub write: Duration,
 }
@@ -33,6 +35,7 @@ impl Timings {
             + self.band
             + self.scalar_field
             + self.triangulation
+            + self.post
     }
 }
 
@@ -49,6 +52,8 @@ pub enum Stage {
     ScalarField,
     /// The triangles and their normals, t_tri.
     Triangulation,
+    /// Post-processing the mesh (smoothing, volume).
+    Post,
 }
 
 /// What an [`Observer`] measured of one run of a stage.
@@ -113,6 +118,7 @@ impl<'a> Stages<'a> {
             Stage::Band => (&mut t.band, &mut h.band),
             Stage::ScalarField => (&mut t.scalar_field, &mut h.scalar_field),
             Stage::Triangulation => (&mut t.triangulation, &mut h.triangulation),
+            Stage::Post => (&mut t.post, &mut h.post),
         };
         *time += figures.time;
         *heap = (*heap).max(figures.heap_peak);
@@ -134,6 +140,8 @@ pub struct StageHeap {
     pub scalar_field: usize,
     /// See [`Stage::Triangulation`].
     pub triangulation: usize,
+    /// See [`Stage::Post`].
+    pub post: usize,
 }
 
 impl StageHeap {
@@ -145,6 +153,7 @@ impl StageHeap {
             self.band,
             self.scalar_field,
             self.triangulation,
+            self.post,
         ]
         .into_iter()
         .max()
@@ -319,7 +328,7 @@ impl fmt::Display for FrameStats {
             f,
             "{} particles ({} surface{}), {} surface vertices, {} triangles; \
              read {:.0} ms, sort {:.0} ms, t_sp {:.0} ms, band {:.0} ms, t_sf {:.0} ms, \
-             t_tri {:.0} ms, write {:.0} ms; {:.1} MB arrays, {:.1} MB peak heap, {:.1} MB peak RSS{}{}",
+             t_tri {:.0} ms, post {:.0} ms, write {:.0} ms; {:.1} MB arrays, {:.1} MB peak heap, {:.1} MB peak RSS{}{}",
             self.particles,
             self.surface_particles,
             if self.particles_outside_box > 0 {
@@ -338,6 +347,7 @@ impl fmt::Display for FrameStats {
             ms(t.band),
             ms(t.scalar_field),
             ms(t.triangulation),
+            ms(t.post),
             ms(t.write),
             self.peak_bytes as f64 / 1e6,
             self.heap_peak as f64 / 1e6,

@@ -58,6 +58,9 @@ pub struct Config {
     /// included in it) are dropped before the reconstruction, with their attributes. All are
     /// kept when absent.
     pub particle_aabb: Option<[f32; 6]>,
+    /// What happens to the mesh after the engine (smoothing, volume); `post.raw` keeps the
+    /// field's exact isosurface.
+    pub post: crate::mesh::post::PostConfig,
 }
 
 /// Which grid vertices get a field value, and in what order.
@@ -280,6 +283,7 @@ impl Default for Config {
             output: OutputConfig::default(),
             iso: iso::IsoConfig::default(),
             particle_aabb: None,
+            post: crate::mesh::post::PostConfig::default(),
         }
     }
 }
@@ -353,6 +357,7 @@ impl Config {
         }
         positive("cell", self.cell.value())?;
         self.check_cell_against_spacing()?;
+        self.post.validate()?;
         positive(
             "surface_particles.support",
             self.surface_particles.support.value(),

@@ -1,8 +1,13 @@
 //! Triangle meshes: the output of every engine.
 
+pub mod adjacency;
 pub mod correction;
 pub(crate) mod marching_cubes;
+pub mod post;
+pub mod quality;
+pub mod smoothing;
 pub mod topology;
+pub mod volume;
 
 use glam::Vec3;
 

@@ -1,6 +1,6 @@
 //! One frame's surface from particles in memory: reconstruction (Akinci et al. 2012,
-//! Algorithm 1), then the mesh's post-processing, then the particle attributes interpolated
-//! onto the final vertices. The file pipeline ([`FramePipeline`](super::FramePipeline)) and
+//! Algorithm 1) with the mesh's post-processing (`[post]`, run by the reconstructor), then the
+//! particle attributes interpolated onto the final vertices. The file pipeline ([`FramePipeline`](super::FramePipeline)) and
 //! the Python binding both go through it.
 
 use std::time::{Duration, Instant};
@@ -39,9 +39,8 @@ pub fn surface(
         .reconstruct_observed(positions, observer)
         .map_err(|e| e.context("reconstruction failed"))?;
     let mesh = rec.mesh;
-    // Mesh post-processing (issue 25: smoothing, decimation, small components, mesh box) is
-    // called here, on the closed mesh and before the interpolation, so that attributes are
-    // carried onto the vertices that are written.
+    // The reconstructor has post-processed the mesh (`[post]`), so the attributes are carried
+    // onto the vertices that are written.
     let start = Instant::now();
     let attributes = reconstructor.interpolate_all(&mesh, positions, attributes)?;
     Ok(Surface {

@@ -15,6 +15,11 @@ fn config() -> Config {
     Config {
         spacing: Some(R),
         field: FieldConfig::Metaball(MetaballConfig::default()),
+        // The preview traces the field's isosurface: the mesh to compare is the raw one.
+        post: crate::mesh::post::PostConfig {
+            raw: true,
+            ..Default::default()
+        },
         ..Config::default()
     }
 }

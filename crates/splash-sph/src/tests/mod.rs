@@ -11,6 +11,7 @@ mod gradients;
 mod iso;
 mod iso_components;
 mod marching_cubes;
+mod post;
 mod reconstruction;
 mod slices;
 

@@ -1,0 +1,185 @@
+//! Post-processing (mesh::post) on analytic particle sets and a real frame: the particles'
+//! volume, flat faces and corners kept, topology kept, the same bytes on 1 and 2 threads.
+
+use glam::Vec3;
+
+use super::common::{lattice_ball, shared_data};
+use crate::mesh::TriMesh;
+use crate::mesh::post::PostConfig;
+use crate::mesh::topology::{normal_agreement, signed_volume, topology};
+use crate::{Config, Length, Reconstructor};
+
+const R: f32 = 0.1;
+
+fn mesh(particles: &[Vec3], raw: bool, threads: usize) -> TriMesh {
+    let config = Config {
+        spacing: Some(R),
+        threads: Some(threads),
+        cell: Length::Spacings(0.5),
+        post: PostConfig {
+            raw,
+            ..PostConfig::default()
+        },
+        ..Config::default()
+    };
+    Reconstructor::new(config)
+        .unwrap()
+        .reconstruct(particles)
+        .unwrap()
+        .mesh
+}
+
+/// Particles on the lattice of spacing R filling [0, n·R)³.
+fn lattice_box(n: i32) -> Vec<Vec3> {
+    let mut out = Vec::new();
+    for z in 0..n {
+        for y in 0..n {
+            for x in 0..n {
+                out.push(Vec3::new(x as f32, y as f32, z as f32) * R);
+            }
+        }
+    }
+    out
+}
+
+fn volume_error(mesh: &TriMesh, particles: usize) -> f64 {
+    signed_volume(mesh) / (particles as f64 * f64::from(R).powi(3)) - 1.0
+}
+
+/// Closed, manifold, outward, with the raw mesh's components and Euler characteristic.
+fn assert_topology_kept(raw: &TriMesh, post: &TriMesh) {
+    let (a, b) = (topology(raw), topology(post));
+    assert!(b.is_closed_manifold(), "{b:?}");
+    assert_eq!(
+        (a.components, a.euler_characteristic, a.triangles),
+        (b.components, b.euler_characteristic, b.triangles)
+    );
+    assert!(normal_agreement(post) > 0.999, "{}", normal_agreement(post));
+}
+
+#[test]
+fn a_ball_of_particles_gets_their_volume_and_keeps_its_topology() {
+    let particles = lattice_ball(Vec3::splat(0.05), 8.0 * R, R);
+    let (raw, post) = (mesh(&particles, true, 2), mesh(&particles, false, 2));
+    let (before, after) = (
+        volume_error(&raw, particles.len()),
+        volume_error(&post, particles.len()),
+    );
+    assert!(after.abs() < 0.01, "raw {before:+.4}, post {after:+.4}");
+    assert_topology_kept(&raw, &post);
+}
+
+#[test]
+fn a_box_keeps_its_volume_its_flat_faces_and_its_corners() {
+    let n = 12;
+    let particles = lattice_box(n);
+    let (raw, post) = (mesh(&particles, true, 2), mesh(&particles, false, 2));
+    let error = volume_error(&post, particles.len());
+    assert!(
+        error.abs() < 0.01,
+        "raw {:+.4}, post {error:+.4}",
+        volume_error(&raw, particles.len())
+    );
+    assert_topology_kept(&raw, &post);
+
+    // The top face's middle (a cell and more from every edge of the box's top): flat.
+    let (lo, hi) = (2.0 * R, (n - 3) as f32 * R);
+    let top_z = post.vertices.iter().map(|p| p.z).fold(f32::MIN, f32::max);
+    let face: Vec<f32> = post
+        .vertices
+        .iter()
+        .filter(|p| p.x > lo && p.x < hi && p.y > lo && p.y < hi && p.z > top_z - R)
+        .map(|p| p.z)
+        .collect();
+    assert!(face.len() > 100, "{}", face.len());
+    let spread =
+        face.iter().fold(f32::MIN, |a, &b| a.max(b)) - face.iter().fold(f32::MAX, |a, &b| a.min(b));
+    assert!(spread < 0.02 * R, "top face spread {spread}");
+
+    // Corners: the post mesh comes as close to each corner of the raw mesh's bounding box as
+    // the raw mesh does, give or take a cell.
+    let bound = |m: &TriMesh| {
+        m.vertices
+            .iter()
+            .fold((Vec3::MAX, Vec3::MIN), |(a, b), &p| (a.min(p), b.max(p)))
+    };
+    let (a, b) = bound(&raw);
+    for k in 0..8 {
+        let corner = Vec3::new(
+            if k & 1 == 0 { a.x } else { b.x },
+            if k & 2 == 0 { a.y } else { b.y },
+            if k & 4 == 0 { a.z } else { b.z },
+        );
+        let nearest = |m: &TriMesh| {
+            m.vertices
+                .iter()
+                .map(|p| p.distance(corner))
+                .fold(f32::MAX, f32::min)
+        };
+        let (d_raw, d_post) = (nearest(&raw), nearest(&post));
+        assert!(
+            d_post < d_raw + 0.5 * R,
+            "corner {k}: raw {d_raw}, post {d_post}"
+        );
+    }
+}
+
+#[test]
+fn droplets_get_the_volume_of_their_particles() {
+    // A ball and, apart, two lone particles and a pair: the field swells those to spheres of
+    // radius r̄ = r (4.2 r³ each); post-processing brings each to its own particles' volume.
+    let mut particles = lattice_ball(Vec3::ZERO, 5.0 * R, R);
+    let ball = particles.len();
+    particles.extend([
+        Vec3::new(1.0, 0.0, 0.0),
+        Vec3::new(0.0, 1.0, 0.0),
+        Vec3::new(0.0, 0.0, 1.0),
+        Vec3::new(R, 0.0, 1.0),
+    ]);
+    let post = mesh(&particles, false, 2);
+    let mut volumes: Vec<(usize, f64)> = crate::mesh::topology::component_volumes(&post);
+    volumes.sort_by(|a, b| a.1.total_cmp(&b.1));
+    let r3 = f64::from(R).powi(3);
+    let got: Vec<f64> = volumes.iter().map(|v| v.1 / r3).collect();
+    assert_eq!(got.len(), 4, "{got:?}");
+    for (g, want) in got.iter().zip([1.0, 1.0, 2.0, ball as f64]) {
+        assert!((g / want - 1.0).abs() < 0.01, "{got:?}");
+    }
+}
+
+#[test]
+fn post_processing_gives_the_same_bytes_on_one_and_two_threads() {
+    let mut particles = lattice_ball(Vec3::ZERO, 6.0 * R, R);
+    particles.extend(lattice_ball(Vec3::new(1.5, 0.2, 0.0), 2.0 * R, R));
+    let (one, two) = (mesh(&particles, false, 1), mesh(&particles, false, 2));
+    assert_eq!(one, two);
+    assert_ne!(one, mesh(&particles, true, 2));
+}
+
+#[test]
+fn a_real_splashing_frame_stays_closed_manifold_and_outward() {
+    let Some(path) = shared_data("cbd-small/frame_0040.ply") else {
+        return;
+    };
+    let particles = crate::read_particles(&path, None).unwrap().positions;
+    let config = |raw| Config {
+        spacing: Some(0.014),
+        threads: Some(2),
+        post: PostConfig {
+            raw,
+            ..PostConfig::default()
+        },
+        ..Config::default()
+    };
+    let run = |raw| {
+        Reconstructor::new(config(raw))
+            .unwrap()
+            .reconstruct(&particles)
+            .unwrap()
+            .mesh
+    };
+    let (raw, post) = (run(true), run(false));
+    assert_topology_kept(&raw, &post);
+    let error = signed_volume(&post) / (particles.len() as f64 * 0.014f64.powi(3)) - 1.0;
+    assert!(error.abs() < 0.02, "{error}");
+}
