@@ -1,8 +1,14 @@
 //! Triangle meshes: the output of every engine.
 
+mod adjacency;
+pub mod components;
 pub mod correction;
+pub mod decimation;
 pub(crate) mod marching_cubes;
 pub mod topology;
+
+pub use components::drop_small_components;
+pub use decimation::decimate;
 
 use glam::Vec3;
 
