@@ -374,12 +374,12 @@ impl<'a> Decimation<'a> {
 
     fn run(&mut self) {
         let n = self.positions.len();
-        // Per corner slot (triangle × 3 + corner: the edge from that corner to the next):
-        // whether its last check refused it. A refused edge is checked again only when a
-        // collapse of the previous pass touched one of its ends' stars.
-        let mut refused = vec![false; 3 * self.triangles.len()];
+        // Per corner slot (triangle × 3 + corner: the edge from that corner to the next), the
+        // cost its last check found, infinite when refused. The check depends only on the
+        // stars of the edge's ends, so it holds until a collapse touches one of them.
+        let mut costs = vec![f32::INFINITY; 3 * self.triangles.len()];
         // The pass that last locked each vertex: a vertex of the star of a collapse taken in
-        // that pass (so also the vertices whose stars that collapse changed).
+        // that pass (so also every vertex whose star that collapse changed).
         let mut locked = vec![0u32; n];
         let mut pass = 0u32;
         loop {
@@ -387,12 +387,12 @@ impl<'a> Decimation<'a> {
             self.stars.rebuild(n, &self.triangles);
             let this = &*self;
             const CHUNK: usize = 1 << 12;
-            let mut keys: Vec<u64> = refused
+            let mut keys: Vec<u64> = costs
                 .par_chunks_mut(CHUNK)
                 .enumerate()
                 .flat_map_iter(|(c, chunk)| {
                     let mut keys = Vec::new();
-                    for (j, refused) in chunk.iter_mut().enumerate() {
+                    for (j, cost) in chunk.iter_mut().enumerate() {
                         let slot = c * CHUNK + j;
                         let t = this.triangles[slot / 3];
                         let (a, b) = (t[slot % 3], t[(slot + 1) % 3]);
@@ -400,17 +400,14 @@ impl<'a> Decimation<'a> {
                         if t[0] == DEAD || a >= b {
                             continue;
                         }
-                        let stale =
-                            locked[a as usize] == pass - 1 || locked[b as usize] == pass - 1;
-                        if *refused && !stale {
-                            continue;
+                        let touched = pass == 1
+                            || locked[a as usize] == pass - 1
+                            || locked[b as usize] == pass - 1;
+                        if touched {
+                            *cost = this.evaluate(a, b).unwrap_or(f32::INFINITY);
                         }
-                        match this.evaluate(a, b) {
-                            Some(cost) => {
-                                *refused = false;
-                                keys.push((u64::from(cost.to_bits()) << 32) | slot as u64);
-                            }
-                            None => *refused = true,
+                        if cost.is_finite() {
+                            keys.push((u64::from(cost.to_bits()) << 32) | slot as u64);
                         }
                     }
                     keys
@@ -461,49 +458,67 @@ impl<'a> Decimation<'a> {
     }
 }
 
-/// The original triangles bucketed on a uniform grid by centroid, for "is this point within
-/// `max_error` of the surface" queries.
+/// The original triangles bucketed on a uniform grid (each in every cell its bounding box
+/// meets), for "is this point within `max_error` of the surface" queries.
 struct SurfaceGrid<'a> {
     vertices: &'a [Vec3],
     triangles: &'a [[u32; 3]],
     cell: f64,
-    /// How far a triangle reaches from its centroid at most, plus `max_error`: the search
-    /// radius around a query point.
-    reach: f64,
     cells: FxHashMap<[i32; 3], (u32, u32)>,
-    /// Triangle indices by cell, and their centroid and radius for a cheap first test.
-    order: Vec<u32>,
-    spheres: Vec<[f32; 4]>,
-    /// Triangles larger than four times the mean radius, tested by every query.
+    /// Triangle indices by cell.
+    entries: Vec<u32>,
+    /// Triangles meeting more than [`SurfaceGrid::MOST_CELLS`] cells, tested by every query.
     large: Vec<u32>,
 }
 
 impl<'a> SurfaceGrid<'a> {
+    const MOST_CELLS: i64 = 27;
+
     fn new(vertices: &'a [Vec3], triangles: &'a [[u32; 3]], max_error: f64) -> Self {
-        let spheres: Vec<[f32; 4]> = triangles
+        let bounds = |t: &[u32; 3]| {
+            let p = t.map(|v| vertices[v as usize].as_dvec3());
+            (p[0].min(p[1]).min(p[2]), p[0].max(p[1]).max(p[2]))
+        };
+        // Cells twice the mean box side (and the error): most triangles meet one to four.
+        let mean = triangles
             .par_iter()
             .map(|t| {
-                let p = t.map(|v| vertices[v as usize]);
-                let c = (p[0] + p[1] + p[2]) / 3.0;
-                let r = p.iter().map(|v| v.distance(c)).fold(0.0f32, f32::max);
-                // Rounding up by a part in a million keeps the sphere around the triangle.
-                [c.x, c.y, c.z, r * (1.0 + 1e-6) + f32::MIN_POSITIVE]
+                let (lo, hi) = bounds(t);
+                (hi - lo).max_element()
+            })
+            .sum::<f64>()
+            / triangles.len() as f64;
+        let cell = (2.0 * mean).max(2.0 * max_error).max(f64::MIN_POSITIVE);
+        let key = |p: DVec3| Self::key(p, cell);
+        let spans: Vec<([i32; 3], [i32; 3])> = triangles
+            .par_iter()
+            .map(|t| {
+                let (lo, hi) = bounds(t);
+                (key(lo), key(hi))
             })
             .collect();
-        let mean = spheres.iter().map(|s| f64::from(s[3])).sum::<f64>() / spheres.len() as f64;
-        let cap = 4.0 * mean;
-        let reach = max_error + cap;
-        let cell = 2.0 * reach;
-        let mut keyed: Vec<([i32; 3], u32)> = Vec::with_capacity(triangles.len());
+        let count = |(lo, hi): &([i32; 3], [i32; 3])| {
+            (0..3)
+                .map(|i| i64::from(hi[i]) - i64::from(lo[i]) + 1)
+                .product::<i64>()
+        };
+        let mut keyed: Vec<([i32; 3], u32)> = Vec::new();
         let mut large = Vec::new();
-        for (i, s) in spheres.iter().enumerate() {
-            if f64::from(s[3]) > cap {
+        for (i, span) in spans.iter().enumerate() {
+            if count(span) > Self::MOST_CELLS {
                 large.push(i as u32);
-            } else {
-                let c = DVec3::new(s[0].into(), s[1].into(), s[2].into());
-                keyed.push((Self::key(c, cell), i as u32));
+                continue;
+            }
+            let (lo, hi) = span;
+            for x in lo[0]..=hi[0] {
+                for y in lo[1]..=hi[1] {
+                    for z in lo[2]..=hi[2] {
+                        keyed.push(([x, y, z], i as u32));
+                    }
+                }
             }
         }
+        drop(spans);
         keyed.par_sort_unstable();
         let mut cells = FxHashMap::default();
         let mut start = 0;
@@ -511,17 +526,13 @@ impl<'a> SurfaceGrid<'a> {
             cells.insert(group[0].0, (start as u32, group.len() as u32));
             start += group.len();
         }
-        let order: Vec<u32> = keyed.iter().map(|k| k.1).collect();
-        drop(keyed);
-        let spheres = order.iter().map(|&i| spheres[i as usize]).collect();
+        let entries = keyed.iter().map(|k| k.1).collect();
         SurfaceGrid {
             vertices,
             triangles,
             cell,
-            reach,
             cells,
-            order,
-            spheres,
+            entries,
             large,
         }
     }
@@ -535,23 +546,28 @@ impl<'a> SurfaceGrid<'a> {
         point_triangle_distance_squared(p, q) <= max_error * max_error
     }
 
-    /// Whether `p` lies within `max_error` (the grid's) of some triangle.
+    fn cell_near(&self, key: [i32; 3], p: DVec3, max_error: f64) -> bool {
+        self.cells.get(&key).is_some_and(|&(start, len)| {
+            self.entries[start as usize..(start + len) as usize]
+                .iter()
+                .any(|&t| self.near(t, p, max_error))
+        })
+    }
+
+    /// Whether `p` lies within `max_error` (at most the grid's) of some triangle: a triangle
+    /// that close meets a cell of the box `p ± max_error`; `p`'s own cell is searched first.
     fn within(&self, p: DVec3, max_error: f64) -> bool {
-        let lo = Self::key(p - DVec3::splat(self.reach), self.cell);
-        let hi = Self::key(p + DVec3::splat(self.reach), self.cell);
+        let own = Self::key(p, self.cell);
+        if self.cell_near(own, p, max_error) {
+            return true;
+        }
+        let lo = Self::key(p - DVec3::splat(max_error), self.cell);
+        let hi = Self::key(p + DVec3::splat(max_error), self.cell);
         for x in lo[0]..=hi[0] {
             for y in lo[1]..=hi[1] {
                 for z in lo[2]..=hi[2] {
-                    let Some(&(start, len)) = self.cells.get(&[x, y, z]) else {
-                        continue;
-                    };
-                    let range = start as usize..(start + len) as usize;
-                    for (&t, s) in self.order[range.clone()].iter().zip(&self.spheres[range]) {
-                        let c = DVec3::new(s[0].into(), s[1].into(), s[2].into());
-                        let r = f64::from(s[3]) + max_error;
-                        if c.distance_squared(p) <= r * r && self.near(t, p, max_error) {
-                            return true;
-                        }
+                    if [x, y, z] != own && self.cell_near([x, y, z], p, max_error) {
+                        return true;
                     }
                 }
             }
