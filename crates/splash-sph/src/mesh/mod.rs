@@ -1,12 +1,14 @@
 //! Triangle meshes: the output of every engine.
 
 mod adjacency;
+pub mod clipping;
 pub mod components;
 pub mod correction;
 pub mod decimation;
 pub(crate) mod marching_cubes;
 pub mod topology;
 
+pub use clipping::clip_to_box;
 pub use components::drop_small_components;
 pub use decimation::decimate;
 
