@@ -74,9 +74,9 @@ fn distance(p: Vec3, t: [Vec3; 3]) -> f64 {
         .fold(f64::INFINITY, f64::min)
 }
 
-/// The largest distance of a vertex of `mesh` to `original`, searched within `radius`
-/// (infinity when some vertex has no triangle that close).
-fn largest_distance(mesh: &TriMesh, original: &TriMesh, radius: f32) -> f64 {
+/// The largest distance of `points` to `original`, searched within `radius` (infinity when
+/// some point has no triangle that close).
+fn largest_distance(points: &[Vec3], original: &TriMesh, radius: f32) -> f64 {
     let cell = radius.max(1e-9);
     let key = |p: Vec3| (p / cell).floor().as_ivec3().to_array();
     let mut grid: HashMap<[i32; 3], Vec<u32>> = HashMap::new();
@@ -92,7 +92,7 @@ fn largest_distance(mesh: &TriMesh, original: &TriMesh, radius: f32) -> f64 {
         }
     }
     let mut worst = 0.0f64;
-    for &p in &mesh.vertices {
+    for &p in points {
         let (lo, hi) = (key(p - radius), key(p + radius));
         let mut best = f64::INFINITY;
         for x in lo[0]..=hi[0] {
@@ -133,13 +133,21 @@ fn main() {
             component_volumes(&mesh).len(),
             component_volumes(&out).len(),
         );
-        let worst = if measure_distance {
-            largest_distance(&out, &mesh, 2.0 * max_error) / f64::from(spacing)
+        let (worst, worst_centroid) = if measure_distance {
+            let centroids: Vec<Vec3> = out
+                .triangles
+                .iter()
+                .map(|t| t.iter().map(|&v| out.vertices[v as usize]).sum::<Vec3>() / 3.0)
+                .collect();
+            (
+                largest_distance(&out.vertices, &mesh, 2.0 * max_error) / f64::from(spacing),
+                largest_distance(&centroids, &mesh, 20.0 * max_error) / f64::from(spacing),
+            )
         } else {
-            f64::NAN
+            (f64::NAN, f64::NAN)
         };
         println!(
-            "{} {} {} {} {}->{} {}->{} {:+.4} {seconds:.3} {worst:.5}",
+            "{} {} {} {} {}->{} {}->{} {:+.4} {seconds:.3} {worst:.6} {worst_centroid:.4}",
             std::path::Path::new(path)
                 .file_name()
                 .unwrap()

@@ -7,8 +7,11 @@
 //! the cheapest ones are taken greedily as long as their stars share no triangle, so the checks
 //! stay true and the result does not depend on the thread count. A collapse is refused when
 //! - the root-mean-square distance of the new point to the merged planes exceeds `max_error`;
-//! - the new point lies farther than `max_error` from every original triangle (exact
-//!   point-to-triangle distance through a grid of the original triangles): the guarantee;
+//! - the new point, or the centroid of a triangle it makes, lies farther than `max_error` from
+//!   every original triangle (exact point-to-triangle distance through a grid of the original
+//!   triangles): the guarantee. Checking the centroids too keeps the faces, not only their
+//!   corners, on the surface: on cbd-small frame 40 at 0.1 r, vertices alone let centroids
+//!   stray 0.23 r, for 2 % fewer triangles;
 //! - it breaks the link condition (the edge's ends share exactly the two opposite vertices),
 //!   which keeps a closed manifold closed and manifold, the Euler characteristic and the
 //!   components as they were (a collapse never joins two components);
@@ -47,8 +50,9 @@ const REGULARISATION: f64 = 1e-3;
 /// Decimates `mesh` by quadric-error edge collapses until no collapse is left that keeps every
 /// vertex within `max_error` of the original surface (see the module documentation for the
 /// checks). The result is as closed and manifold as the input, with the same components and
-/// Euler characteristic per component; only new vertices move, and each of them lies within
-/// `max_error` of a triangle of `mesh` by exact point-to-triangle distance. Normals, when `mesh`
+/// Euler characteristic per component; every vertex, and the centroid of every triangle, lies
+/// within `max_error` of a triangle of `mesh` by exact point-to-triangle distance, and the
+/// enclosed volume of each collapse's neighbourhood is kept. Normals, when `mesh`
 /// has them, are the area-weighted normals of the new faces. The same mesh comes out whatever
 /// the number of threads.
 ///
@@ -345,6 +349,8 @@ impl<'a> Decimation<'a> {
             return None;
         }
         let new = p.as_dvec3();
+        let mut centroids = [DVec3::ZERO; 2 * MAX_STAR];
+        let mut new_triangles = 0;
         let mut worst_before = f64::INFINITY;
         let mut worst_after = f64::INFINITY;
         for (&t, moved) in sa.iter().map(|t| (t, a)).chain(sb.iter().map(|t| (t, b))) {
@@ -360,6 +366,8 @@ impl<'a> Decimation<'a> {
             if n1.dot(n0) <= MIN_NORMAL_COSINE * n0.length() * n1.length() {
                 return None;
             }
+            centroids[new_triangles] = (after[0] + after[1] + after[2]) / 3.0;
+            new_triangles += 1;
             worst_before = worst_before.min(quality(before, n0));
             worst_after = worst_after.min(quality(after, n1));
         }
@@ -367,6 +375,12 @@ impl<'a> Decimation<'a> {
             return None;
         }
         if !self.surface.within(new, self.max_error) {
+            return None;
+        }
+        if !centroids[..new_triangles]
+            .iter()
+            .all(|&c| self.surface.within(c, self.max_error))
+        {
             return None;
         }
         Some(cost as f32)
@@ -648,14 +662,26 @@ mod tests {
             .fold(f64::INFINITY, f64::min)
     }
 
-    fn max_vertex_distance(decimated: &TriMesh, original: &TriMesh) -> f64 {
+    /// The largest distance of a vertex or a triangle centroid of `decimated` to `original`.
+    fn max_distance(decimated: &TriMesh, original: &TriMesh) -> f64 {
         let tris: Vec<[DVec3; 3]> = original
             .triangles
             .iter()
             .map(|t| t.map(|v| original.vertices[v as usize].as_dvec3()))
             .collect();
-        decimated
+        let centroids = decimated.triangles.iter().map(|t| {
+            t.iter()
+                .map(|&v| decimated.vertices[v as usize])
+                .sum::<Vec3>()
+                / 3.0
+        });
+        let points: Vec<Vec3> = decimated
             .vertices
+            .iter()
+            .copied()
+            .chain(centroids)
+            .collect();
+        points
             .par_iter()
             .map(|v| {
                 let p = v.as_dvec3();
@@ -751,14 +777,14 @@ mod tests {
             mesh.triangles.len(),
             out.triangles.len()
         );
-        let distance = max_vertex_distance(&out, &mesh);
+        let distance = max_distance(&out, &mesh);
         assert!(distance <= f64::from(max_error), "{distance}");
         let (v0, v1) = (signed_volume(&mesh), signed_volume(&out));
         assert!((v1 / v0 - 1.0).abs() < 0.005, "{v0} -> {v1}");
         assert_eq!(out.normals.len(), out.vertices.len());
         assert_eq!(crate::mesh::topology::normal_agreement(&out), 1.0);
         eprintln!(
-            "{} -> {} triangles, largest vertex distance {distance:.5} of {max_error}, volume {:+.3} %",
+            "{} -> {} triangles, largest vertex or centroid distance {distance:.5} of {max_error}, volume {:+.3} %",
             mesh.triangles.len(),
             out.triangles.len(),
             100.0 * (v1 / v0 - 1.0)
