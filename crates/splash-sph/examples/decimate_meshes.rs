@@ -5,9 +5,11 @@
 //!
 //! `cargo run --release --example decimate_meshes -- SPACING FACTOR MESH.ply...`
 //! (the error allowed is FACTOR × SPACING; `--no-distance` skips the distance measurement).
+//! `--clip=X0,Y0,Z0,X1,Y1,Z1` and `--min-component=V` (in SPACING³) also clip each mesh to the
+//! box and drop its small components, and report the results' topology and volume.
 
-use splash_sph::mesh::decimate;
 use splash_sph::mesh::topology::{component_volumes, signed_volume, topology};
+use splash_sph::mesh::{clip_to_box, decimate, drop_small_components};
 use splash_sph::{TriMesh, Vec3};
 use std::collections::HashMap;
 use std::io::{BufRead, BufReader, Read};
@@ -114,13 +116,19 @@ fn largest_distance(points: &[Vec3], original: &TriMesh, radius: f32) -> f64 {
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let measure_distance = !args.iter().any(|a| a == "--no-distance");
+    let option = |name: &str| {
+        args.iter()
+            .find_map(|a| a.strip_prefix(name).map(str::to_string))
+    };
+    let clip = option("--clip=").map(|text| splash_sph::parse_aabb(&text).unwrap());
+    let min_component: Option<f64> = option("--min-component=").map(|v| v.parse().unwrap());
     let args: Vec<&String> = args.iter().filter(|a| !a.starts_with("--")).collect();
     let spacing: f32 = args[0].parse().unwrap();
     let factor: f32 = args[1].parse().unwrap();
     let max_error = factor * spacing;
     let (mut before_sum, mut after_sum, mut count) = (0usize, 0usize, 0usize);
     println!(
-        "mesh faces_before faces_after closed_manifold components euler volume_change_% seconds max_distance/r"
+        "mesh faces_before faces_after closed_manifold components euler volume_change_% seconds max_vertex_distance/r max_centroid_distance/r"
     );
     for path in &args[2..] {
         let mesh = read_splash_ply(path);
@@ -161,6 +169,29 @@ fn main() {
             t1.euler_characteristic,
             100.0 * (v1 / v0 - 1.0),
         );
+        if let Some(aabb) = clip {
+            let start = Instant::now();
+            let clipped = clip_to_box(&mesh, aabb).unwrap();
+            let t = topology(&clipped);
+            println!(
+                "  clipped: {} faces, closed manifold {}, components {}, volume {:.6} of {:.6}, {:.3} s",
+                clipped.triangles.len(),
+                t.is_closed_manifold(),
+                t.components,
+                signed_volume(&clipped),
+                v0,
+                start.elapsed().as_secs_f64()
+            );
+        }
+        if let Some(v) = min_component {
+            let (kept, dropped) =
+                drop_small_components(&mesh, v * f64::from(spacing).powi(3)).unwrap();
+            println!(
+                "  components below {v} r³: {dropped} dropped, {} left, closed manifold {}",
+                component_volumes(&kept).len(),
+                topology(&kept).is_closed_manifold()
+            );
+        }
         before_sum += mesh.triangles.len();
         after_sum += out.triangles.len();
         count += 1;
