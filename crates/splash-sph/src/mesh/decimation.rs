@@ -3,9 +3,10 @@
 //!
 //! Each vertex carries the area-weighted quadric of the planes of its original faces; an edge
 //! collapses to the point minimising the merged quadric. The collapses run in passes: every
-//! candidate edge is priced and checked in parallel against the mesh as the pass found it, then
-//! the cheapest ones are taken greedily as long as their stars share no triangle, so the checks
-//! stay true and the result does not depend on the thread count. A collapse is refused when
+//! candidate edge is priced and checked in parallel against the mesh as the pass found it, the
+//! cheapest ones are taken greedily as long as their stars share no triangle (so the checks stay
+//! true), the distance checks, the dearest, run in parallel on those taken only, and the result
+//! does not depend on the thread count. A collapse is refused when
 //! - the root-mean-square distance of the new point to the merged planes exceeds `max_error`;
 //! - the new point, or the centroid of a triangle it makes, lies farther than `max_error` from
 //!   every original triangle (exact point-to-triangle distance through a grid of the original
@@ -349,15 +350,9 @@ impl<'a> Decimation<'a> {
             return None;
         }
         let new = p.as_dvec3();
-        let mut centroids = [DVec3::ZERO; 2 * MAX_STAR];
-        let mut new_triangles = 0;
         let mut worst_before = f64::INFINITY;
         let mut worst_after = f64::INFINITY;
-        for (&t, moved) in sa.iter().map(|t| (t, a)).chain(sb.iter().map(|t| (t, b))) {
-            let tri = self.triangles[t as usize];
-            if tri.contains(&a) && tri.contains(&b) {
-                continue;
-            }
+        for (tri, moved) in self.surviving(a, b) {
             let before = corners(tri, &self.positions);
             let n0 = doubled_area(before);
             let mut after = before;
@@ -366,35 +361,49 @@ impl<'a> Decimation<'a> {
             if n1.dot(n0) <= MIN_NORMAL_COSINE * n0.length() * n1.length() {
                 return None;
             }
-            centroids[new_triangles] = (after[0] + after[1] + after[2]) / 3.0;
-            new_triangles += 1;
             worst_before = worst_before.min(quality(before, n0));
             worst_after = worst_after.min(quality(after, n1));
         }
         if worst_after < worst_before.min(MIN_QUALITY) {
             return None;
         }
-        if !self.surface.within(new, self.max_error) {
-            return None;
-        }
-        if !centroids[..new_triangles]
-            .iter()
-            .all(|&c| self.surface.within(c, self.max_error))
-        {
-            return None;
-        }
         Some(cost as f32)
+    }
+
+    /// The triangles around the edge `a b` that survive its collapse, with the end they hold.
+    fn surviving(&self, a: u32, b: u32) -> impl Iterator<Item = ([u32; 3], u32)> + '_ {
+        let (sa, sb) = (self.stars.of(a), self.stars.of(b));
+        sa.iter()
+            .map(move |&t| (t, a))
+            .chain(sb.iter().map(move |&t| (t, b)))
+            .map(|(t, moved)| (self.triangles[t as usize], moved))
+            .filter(move |(tri, _)| !(tri.contains(&a) && tri.contains(&b)))
+    }
+
+    /// The guarantee, checked last as the dearest test: the collapse point of `a b` and the
+    /// centroids of the triangles it makes lie within `max_error` of the original surface.
+    fn on_surface(&self, a: u32, b: u32) -> bool {
+        let (_, p) = self.target(a, b);
+        let new = p.as_dvec3();
+        self.surface.within(new, self.max_error)
+            && self.surviving(a, b).all(|(tri, moved)| {
+                let mut after = corners(tri, &self.positions);
+                after[tri.iter().position(|&v| v == moved).unwrap()] = new;
+                self.surface
+                    .within((after[0] + after[1] + after[2]) / 3.0, self.max_error)
+            })
     }
 
     fn run(&mut self) {
         let n = self.positions.len();
         // Per corner slot (triangle × 3 + corner: the edge from that corner to the next), the
-        // cost its last check found, infinite when refused. The check depends only on the
-        // stars of the edge's ends, so it holds until a collapse touches one of them.
+        // cost its last check found, infinite when refused. The checks depend only on the
+        // stars of the edge's ends, so their verdict holds until a collapse changes one.
         let mut costs = vec![f32::INFINITY; 3 * self.triangles.len()];
-        // The pass that last locked each vertex: a vertex of the star of a collapse taken in
-        // that pass (so also every vertex whose star that collapse changed).
+        // The pass that last locked each vertex (a vertex of the star of a collapse taken in
+        // it), and the pass that last changed its star (a vertex of a collapse made in it).
         let mut locked = vec![0u32; n];
+        let mut changed = vec![0u32; n];
         let mut pass = 0u32;
         loop {
             pass += 1;
@@ -414,10 +423,10 @@ impl<'a> Decimation<'a> {
                         if t[0] == DEAD || a >= b {
                             continue;
                         }
-                        let touched = pass == 1
-                            || locked[a as usize] == pass - 1
-                            || locked[b as usize] == pass - 1;
-                        if touched {
+                        if pass == 1
+                            || changed[a as usize] == pass - 1
+                            || changed[b as usize] == pass - 1
+                        {
                             *cost = this.evaluate(a, b).unwrap_or(f32::INFINITY);
                         }
                         if cost.is_finite() {
@@ -442,12 +451,28 @@ impl<'a> Decimation<'a> {
                         locked[v as usize] = pass;
                     }
                 }
-                taken.push((a, b));
+                taken.push((slot, a, b));
             }
             if taken.is_empty() {
                 break;
             }
-            for (a, b) in taken {
+            // The distance checks only for the collapses taken: a refused one keeps an infinite
+            // cost until a collapse made next to it changes its stars.
+            let this = &*self;
+            let valid: Vec<bool> = taken
+                .par_iter()
+                .map(|&(_, a, b)| this.on_surface(a, b))
+                .collect();
+            for (&(slot, a, b), ok) in taken.iter().zip(valid) {
+                if !ok {
+                    costs[slot] = f32::INFINITY;
+                    continue;
+                }
+                for &s in self.stars.of(a).iter().chain(self.stars.of(b)) {
+                    for v in self.triangles[s as usize] {
+                        changed[v as usize] = pass;
+                    }
+                }
                 self.collapse(a, b);
             }
         }
