@@ -816,6 +816,41 @@ mod tests {
         );
     }
 
+    /// cbd-small frame 40 (a fixture), the splashing frame: decimated at 0.1 r, then clipped
+    /// by a box cutting it on all six sides, then rid of its droplets under 2 r³; every step
+    /// closed and manifold, the decimation within its bound and keeping the volume.
+    #[test]
+    fn real_frame_through_every_step() {
+        let path = crate::tests::common::fixture("frame_0040.ply");
+        let particles = crate::io::read_particles(&path, None).unwrap().positions;
+        let r = 0.014;
+        let mesh = reconstruct(&particles, r);
+        let out = decimate(&mesh, 0.1 * r).unwrap();
+        let (t0, t1) = (topology(&mesh), topology(&out));
+        assert!(t1.is_closed_manifold(), "{t1:?}");
+        assert_eq!(euler_per_component(&out), euler_per_component(&mesh));
+        assert_eq!(t1.components, t0.components);
+        assert!(out.triangles.len() * 10 < mesh.triangles.len());
+        let (v0, v1) = (signed_volume(&mesh), signed_volume(&out));
+        assert!((v1 / v0 - 1.0).abs() < 1e-4, "{v0} -> {v1}");
+        let clipped = crate::mesh::clip_to_box(&out, [0.2, 0.1, 0.1, 1.0, 0.7, 0.7]).unwrap();
+        let t = topology(&clipped);
+        assert!(
+            t.is_closed_manifold() && t.degenerate_triangles == 0,
+            "{t:?}"
+        );
+        assert!(signed_volume(&clipped) > 0.1 * v1 && signed_volume(&clipped) < v1);
+        let r3 = f64::from(r).powi(3);
+        let (kept, dropped) = crate::mesh::drop_small_components(&clipped, 2.0 * r3).unwrap();
+        assert!(dropped > 0);
+        assert!(topology(&kept).is_closed_manifold());
+        let smallest = crate::mesh::topology::component_volumes(&kept)
+            .iter()
+            .map(|c| c.1.abs())
+            .fold(f64::INFINITY, f64::min);
+        assert!(smallest >= 2.0 * r3);
+    }
+
     #[test]
     fn same_mesh_on_one_and_two_threads() {
         let r = 0.1;
