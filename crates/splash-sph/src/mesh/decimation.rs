@@ -325,15 +325,6 @@ impl<'a> Decimation<'a> {
         if !(3..=MAX_STAR).contains(&new_degree) || sa.len() > MAX_STAR || sb.len() > MAX_STAR {
             return None;
         }
-        let (q, p) = self.target(a, b);
-        let cost = if q.w > 0.0 {
-            (q.eval(p.as_dvec3() - self.origin) / q.w).max(0.0)
-        } else {
-            0.0
-        };
-        if cost > self.max_error * self.max_error {
-            return None;
-        }
         // Link condition: on closed fans, the ring of `a` is the corner after `a` in each of its
         // triangles, each neighbour once.
         let ring = |v: u32, star: &[u32]| {
@@ -347,6 +338,15 @@ impl<'a> Decimation<'a> {
         let (ra, rb) = (&ra[..sa.len()], &rb[..sb.len()]);
         let shared = ra.iter().filter(|&&x| x != b && rb.contains(&x)).count();
         if shared != 2 {
+            return None;
+        }
+        let (q, p) = self.target(a, b);
+        let cost = if q.w > 0.0 {
+            (q.eval(p.as_dvec3() - self.origin) / q.w).max(0.0)
+        } else {
+            0.0
+        };
+        if cost > self.max_error * self.max_error {
             return None;
         }
         let new = p.as_dvec3();
