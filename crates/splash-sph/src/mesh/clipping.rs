@@ -22,8 +22,8 @@ use spade::{ConstrainedDelaunayTriangulation, Point2, Triangulation};
 /// volume of its solid intersected with the box. A mesh inside the box comes back unchanged.
 ///
 /// Where vertices lie on a box plane to within a millionth of the mesh's size, that plane is
-/// moved out by a few millionths so that no triangle degenerates; the output can then reach
-/// that far past the box. Normals of the vertices on a cut are interpolated along the cut
+/// moved out by a few millionths (at most 128) so that no triangle degenerates; the output
+/// can then reach that far past the box. Normals of the vertices on a cut are interpolated along the cut
 /// edge (the side surface's normals, so a renderer shades the cap's rim smooth).
 ///
 /// Errors: a box with a minimum above its maximum or non-finite bounds, a mesh referencing
@@ -59,15 +59,25 @@ fn cut(mesh: &TriMesh, axis: usize, upper: bool, bound: f64) -> Result<Option<Tr
         .iter()
         .fold(0.0f64, |m, v| m.max(f64::from(v.abs().max_element())));
     let gap = 1e-6 * extent.max(bound.abs()).max(f64::MIN_POSITIVE);
-    // Move the plane outwards until no vertex lies on it: every edge then crosses it at an
-    // interior point, away from its ends.
+    // Move the plane outwards, by at most 64 steps of two gaps, to where the fewest vertices
+    // (none, almost always) lie on it: every edge then crosses it at an interior point, away
+    // from its ends.
+    let on_plane = |shift: f64| {
+        mesh.vertices
+            .iter()
+            .filter(|&&v| (beyond(v) - shift).abs() < gap)
+            .count()
+    };
     let mut shift = 0.0;
-    while mesh
-        .vertices
-        .iter()
-        .any(|&v| (beyond(v) - shift).abs() < gap)
-    {
-        shift += 2.0 * gap;
+    let mut fewest = on_plane(0.0);
+    for step in 1..=64 {
+        if fewest == 0 {
+            break;
+        }
+        let count = on_plane(2.0 * gap * f64::from(step));
+        if count < fewest {
+            (shift, fewest) = (2.0 * gap * f64::from(step), count);
+        }
     }
     let plane = bound + sign * shift;
     let side: Vec<f64> = mesh.vertices.iter().map(|&v| beyond(v) - shift).collect();
