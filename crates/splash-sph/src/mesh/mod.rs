@@ -1,13 +1,21 @@
 //! Triangle meshes: the output of every engine.
 
 pub mod adjacency;
+pub mod clipping;
+pub mod components;
 pub mod correction;
+pub mod decimation;
 pub(crate) mod marching_cubes;
 pub mod post;
 pub mod quality;
 pub mod smoothing;
+mod stars;
 pub mod topology;
 pub mod volume;
+
+pub use clipping::clip_to_box;
+pub use components::drop_small_components;
+pub use decimation::decimate;
 
 use glam::Vec3;
 

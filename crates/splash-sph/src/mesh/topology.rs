@@ -232,20 +232,20 @@ pub fn normal_agreement(mesh: &TriMesh) -> f64 {
 }
 
 /// Disjoint sets over vertex indices, with path halving and union by size.
-struct UnionFind {
+pub(super) struct UnionFind {
     parent: Vec<u32>,
     size: Vec<u32>,
 }
 
 impl UnionFind {
-    fn new(n: usize) -> Self {
+    pub(super) fn new(n: usize) -> Self {
         Self {
             parent: (0..n as u32).collect(),
             size: vec![1; n],
         }
     }
 
-    fn find(&mut self, mut v: u32) -> u32 {
+    pub(super) fn find(&mut self, mut v: u32) -> u32 {
         while self.parent[v as usize] != v {
             let grandparent = self.parent[self.parent[v as usize] as usize];
             self.parent[v as usize] = grandparent;
@@ -254,7 +254,7 @@ impl UnionFind {
         v
     }
 
-    fn union(&mut self, a: u32, b: u32) {
+    pub(super) fn union(&mut self, a: u32, b: u32) {
         let (mut a, mut b) = (self.find(a), self.find(b));
         if a == b {
             return;
