@@ -151,6 +151,25 @@ struct ConfigArgs {
     /// the mesh is smoothed and each part given the volume of the particles inside it).
     #[arg(long)]
     raw: bool,
+
+    /// Decimate the mesh (quadric edge collapses) keeping every vertex and triangle centre
+    /// within this distance of the full surface: 0.1r (a tenth of the spacing) or a length.
+    /// Closed and manifold, components and volume kept
+    #[arg(long, value_name = "LENGTH")]
+    decimate: Option<String>,
+
+    /// Drop droplets and other parts enclosing less than V particle volumes (V r³; after the
+    /// default volume restoration a droplet of n particles holds n r³)
+    #[arg(long, value_name = "V")]
+    min_component: Option<f64>,
+
+    /// Keep only the mesh inside this box; the cuts are capped, so it stays closed
+    #[arg(
+        long,
+        value_name = "MINX,MINY,MINZ,MAXX,MAXY,MAXZ",
+        allow_hyphen_values = true
+    )]
+    mesh_aabb: Option<String>,
 }
 
 impl ConfigArgs {
@@ -192,6 +211,9 @@ impl ConfigArgs {
                 splash_sph::parse_aabb,
             )?,
             raw: self.raw.then_some(true),
+            mesh_aabb: parsed(&self.mesh_aabb, "--mesh-aabb", splash_sph::parse_aabb)?,
+            min_component: self.min_component,
+            decimate: parsed(&self.decimate, "--decimate", Length::parse)?,
         };
         Ok(config.apply(&overrides)?)
     }

@@ -57,6 +57,10 @@ struct Output {
 /// its next calls). ``max_memory``: the heap a frame may plan to use (every engine checks
 /// it), in bytes or as ``"8G"``. ``raw=True``: the field's exact isosurface, without the
 /// default post-processing (smoothing, each part given its particles' volume N·r³).
+/// ``decimate``: a length (``"0.1r"`` or a number) within which every vertex and triangle
+/// centre of the decimated mesh stays of the full surface. ``min_component``: drop parts
+/// enclosing fewer than this many particle volumes r³. ``mesh_aabb``: six numbers (min x, min
+/// y, min z, max x, max y, max z); the mesh is clipped to that box and its cuts capped.
 ///
 /// ``config``: a TOML file's path (as ``splash recon --config`` reads) or a dict shaped like
 /// it (see ``default_config``). Its ``output.format`` and ``output.up_axis`` become the
@@ -82,7 +86,8 @@ struct Output {
 #[allow(clippy::too_many_arguments)]
 #[pyfunction]
 #[pyo3(signature = (positions, spacing=None, *, cell=None, field=None, engine=None, normals=None,
-    correct=None, threads=None, max_memory=None, config=None, attributes=None, raw=None))]
+    correct=None, threads=None, max_memory=None, config=None, attributes=None, raw=None,
+    decimate=None, min_component=None, mesh_aabb=None))]
 pub fn reconstruct<'py>(
     py: Python<'py>,
     positions: &Bound<'py, PyAny>,
@@ -97,6 +102,9 @@ pub fn reconstruct<'py>(
     config: Option<&Bound<'py, PyAny>>,
     attributes: Option<&Bound<'py, PyAny>>,
     raw: Option<bool>,
+    decimate: Option<Bound<'py, PyAny>>,
+    min_component: Option<f64>,
+    mesh_aabb: Option<Vec<f32>>,
 ) -> PyResult<Mesh> {
     let overrides = Overrides {
         spacing,
@@ -108,6 +116,9 @@ pub fn reconstruct<'py>(
         threads,
         max_memory,
         raw,
+        decimate,
+        min_component,
+        mesh_aabb,
     };
     let config = settings::resolve(config, overrides)?;
     if config.spacing.is_none() {

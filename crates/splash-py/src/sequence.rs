@@ -60,7 +60,8 @@ pub fn frame_number(path: PathBuf) -> Option<u64> {
 #[pyo3(signature = (inputs, output, *, progress=None, frames=None, shard=None,
     skip_existing=false, fail_fast=false, attributes=None, input_format=None, format=None,
     up_axis=None, spacing=None, cell=None, field=None, engine=None, normals=None, correct=None,
-    threads=None, max_memory=None, config=None))]
+    threads=None, max_memory=None, config=None, raw=None, decimate=None, min_component=None,
+    mesh_aabb=None))]
 pub fn recon_sequence<'py>(
     py: Python<'py>,
     inputs: &Bound<'py, PyAny>,
@@ -83,6 +84,10 @@ pub fn recon_sequence<'py>(
     threads: Option<i64>,
     max_memory: Option<Bound<'py, PyAny>>,
     config: Option<&Bound<'py, PyAny>>,
+    raw: Option<bool>,
+    decimate: Option<Bound<'py, PyAny>>,
+    min_component: Option<f64>,
+    mesh_aabb: Option<Vec<f32>>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let overrides = Overrides {
         spacing,
@@ -93,6 +98,10 @@ pub fn recon_sequence<'py>(
         correct,
         threads,
         max_memory,
+        raw,
+        decimate,
+        min_component,
+        mesh_aabb,
     };
     let mut config = settings::resolve(config, overrides)?;
     if let Some(names) = attribute_names(attributes)? {

@@ -22,6 +22,9 @@ pub struct Overrides<'py> {
     pub threads: Option<i64>,
     pub max_memory: Option<Bound<'py, PyAny>>,
     pub raw: Option<bool>,
+    pub decimate: Option<Bound<'py, PyAny>>,
+    pub min_component: Option<f64>,
+    pub mesh_aabb: Option<Vec<f32>>,
 }
 
 /// `config` (None, a TOML file's path or a dict) with `overrides` applied, validated.
@@ -51,7 +54,28 @@ pub fn resolve(config: Option<&Bound<'_, PyAny>>, overrides: Overrides<'_>) -> P
         threads,
         max_memory,
         raw,
+        decimate,
+        min_component,
+        mesh_aabb,
     } = overrides;
+    let length = |value: Bound<'_, PyAny>, key: &str| match value.extract::<String>() {
+        Ok(text) => Length::parse(&text).map_err(to_py),
+        Err(_) => Ok(Length::World(value.extract().map_err(|_| {
+            PyTypeError::new_err(format!(
+                "{key} must be a length such as \"r/2\" or a number"
+            ))
+        })?)),
+    };
+    let decimate = decimate.map(|d| length(d, "decimate")).transpose()?;
+    let mesh_aabb = match mesh_aabb {
+        None => None,
+        Some(b) => Some(<[f32; 6]>::try_from(b.as_slice()).map_err(|_| {
+            PyValueError::new_err(format!(
+                "mesh_aabb must be six numbers (min x, min y, min z, max x, max y, max z), got {}",
+                b.len()
+            ))
+        })?),
+    };
     let cell = match cell {
         None => None,
         Some(cell) => Some(match cell.extract::<String>() {
@@ -105,6 +129,9 @@ pub fn resolve(config: Option<&Bound<'_, PyAny>>, overrides: Overrides<'_>) -> P
         threads,
         max_memory,
         raw,
+        decimate,
+        min_component,
+        mesh_aabb,
         ..Default::default()
     };
     config.apply(&overrides).map_err(to_py)

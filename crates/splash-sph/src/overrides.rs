@@ -40,6 +40,12 @@ pub struct Overrides {
     pub particle_aabb: Option<[f32; 6]>,
     /// `post.raw`: the field's exact isosurface, without post-processing.
     pub raw: Option<bool>,
+    /// `post.mesh_aabb`.
+    pub mesh_aabb: Option<[f32; 6]>,
+    /// `post.min_component`, in particle volumes r³.
+    pub min_component: Option<f64>,
+    /// `post.decimate`.
+    pub decimate: Option<Length>,
 }
 
 impl Config {
@@ -65,6 +71,9 @@ impl Config {
         }
         self.particle_aabb = o.particle_aabb.or(self.particle_aabb);
         self.post.raw = o.raw.unwrap_or(self.post.raw);
+        self.post.mesh_aabb = o.mesh_aabb.or(self.post.mesh_aabb);
+        self.post.min_component = o.min_component.or(self.post.min_component);
+        self.post.decimate = o.decimate.or(self.post.decimate);
         self.validate()?;
         Ok(self)
     }

@@ -93,13 +93,19 @@ impl Reconstructor {
             };
             let mut out = recon::reconstruct(positions, &self.params, reborrowed)?;
             let post = &self.config.post;
-            if !post.raw && !out.mesh.is_empty() {
+            let asked = !post.raw
+                || post.mesh_aabb.is_some()
+                || post.min_component.is_some()
+                || post.decimate.is_some();
+            if asked && !out.mesh.is_empty() {
                 let (r, cell) = (self.params.spacing, self.params.cell);
                 let mut stages = Stages::start(out.stats, observer);
                 stages.run(Stage::Post, || {
                     postprocess(&mut out.mesh, positions, r, cell, post)
-                });
+                })?;
                 out.stats = stages.stats;
+                out.stats.triangles = out.mesh.triangles.len();
+                out.stats.vertices = out.mesh.vertices.len();
             }
             Ok(out)
         })

@@ -140,6 +140,10 @@ def reconstruct(
     max_memory: Union[str, int, None] = None,
     config: Union[_Path, Mapping[str, Any], None] = None,
     attributes: Optional[Mapping[str, _Array]] = None,
+    raw: Optional[bool] = None,
+    decimate: Union[str, float, None] = None,
+    min_component: Optional[float] = None,
+    mesh_aabb: Optional[Sequence[float]] = None,
 ) -> Mesh:
     """The closed surface mesh of SPH particles.
 
@@ -323,6 +327,10 @@ def recon_sequence(
     threads: Optional[int] = None,
     max_memory: Union[str, int, None] = None,
     config: Union[_Path, Mapping[str, Any], None] = None,
+    raw: Optional[bool] = None,
+    decimate: Union[str, float, None] = None,
+    min_component: Optional[float] = None,
+    mesh_aabb: Optional[Sequence[float]] = None,
 ) -> RunReport:
     """Reconstructs a sequence of particle files into mesh files, as ``splash recon`` does:
     the same frames, output names, shards, restarts and bytes.

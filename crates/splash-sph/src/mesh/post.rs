@@ -2,16 +2,18 @@
 //! component's volume brought to that of the particles inside it (N_c·r³) by offsets along
 //! the normals interleaved with smoothing, the triangles evened out by tangential relaxation,
 //! and the normals recomputed. `[post]` in the configuration; `raw = true` keeps the exact
-//! isosurface.
+//! isosurface. Then, where asked: the mesh clipped to a box ([`clip_to_box`]), components
+//! below a volume dropped ([`drop_small_components`]) and the mesh decimated ([`decimate`]).
 
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
-use super::TriMesh;
 use super::adjacency::VertexFaces;
 use super::smoothing::{relax_tangentially, taubin};
 use super::volume::{Components, Measures, normals_and_measures, particles_inside, restore};
+use super::{TriMesh, clip_to_box, decimate, drop_small_components};
 use crate::error::Result;
+use crate::length::Length;
 
 /// `[post]`: what happens to the mesh after the engine. Defaults measured on cbd-small (21
 /// frames) and cbd-large frame 23 at cell r/2 (issue 25).
@@ -41,6 +43,17 @@ pub struct PostConfig {
     /// Final volume steps, which bring each component within a fraction of a percent of its
     /// target (default 3).
     pub volume_steps: u32,
+    /// Keep only the mesh inside this box `[min x, min y, min z, max x, max y, max z]`, the cuts
+    /// capped so that it stays closed (default none). Applies with `raw` too.
+    pub mesh_aabb: Option<[f32; 6]>,
+    /// Drop the components enclosing less than this many particle volumes r³ (default none:
+    /// keep every droplet). After the volume restoration a droplet of n particles holds n r³;
+    /// with `raw` a lone particle's SSP07 sphere holds about 3.6 r³.
+    pub min_component: Option<f64>,
+    /// Decimate with quadric edge collapses (Garland & Heckbert 1997) keeping every vertex and
+    /// every triangle's centroid within this distance of the undecimated surface, e.g. "0.1r"
+    /// (default none). Applies with `raw` too.
+    pub decimate: Option<Length>,
 }
 
 impl Default for PostConfig {
@@ -54,6 +67,9 @@ impl Default for PostConfig {
             max_offset: 0.25,
             relax_iterations: 10,
             volume_steps: 3,
+            mesh_aabb: None,
+            min_component: None,
+            decimate: None,
         }
     }
 }
@@ -71,6 +87,22 @@ impl PostConfig {
                 self.lambda
             );
         }
+        if let Some(b) = &self.mesh_aabb
+            && !(0..3).all(|i| b[i].is_finite() && b[i + 3].is_finite() && b[i] < b[i + 3])
+        {
+            bail_config!(
+                "post.mesh_aabb must be six finite numbers MINX, MINY, MINZ, MAXX, MAXY, MAXZ \
+                 with each minimum below its maximum"
+            );
+        }
+        if let Some(v) = self.min_component
+            && !(v.is_finite() && v >= 0.0)
+        {
+            bail_config!("post.min_component ({v}) must be a volume of at least 0 r³");
+        }
+        if let Some(d) = self.decimate {
+            d.check_positive("post.decimate")?;
+        }
         if !(self.max_offset > 0.0 && self.max_offset <= 1.0) {
             bail_config!(
                 "post.max_offset ({}) must lie in (0, 1] spacings",
@@ -82,17 +114,44 @@ impl PostConfig {
 }
 
 /// Post-processes `mesh`, the surface of `particles` at spacing `spacing` reconstructed with
-/// cells of `cell`, in the current rayon pool. Keeps the triangles (and so the topology);
-/// moves the vertices and recomputes the normals (when the mesh has normals). The same mesh
-/// gives the same bytes on any number of threads.
+/// cells of `cell`, in the current rayon pool: smoothing and volume restoration (unless
+/// `raw`), then the box, the small components and the decimation where `config` asks for
+/// them. The same mesh gives the same bytes on any number of threads.
 pub fn postprocess(
     mesh: &mut TriMesh,
     particles: &[Vec3],
     spacing: f32,
     cell: f32,
     config: &PostConfig,
+) -> Result<()> {
+    if !config.raw {
+        smooth_and_restore(mesh, particles, spacing, cell, config);
+    }
+    // Clipped after smoothing, so that the caps stay flat; components dropped after clipping,
+    // which can leave small pieces; decimated last, against the mesh that would be written.
+    if let Some(aabb) = config.mesh_aabb {
+        *mesh = clip_to_box(mesh, aabb)?;
+    }
+    if let Some(v) = config.min_component {
+        *mesh = drop_small_components(mesh, v * f64::from(spacing).powi(3))?.0;
+    }
+    if let Some(d) = config.decimate {
+        *mesh = decimate(mesh, d.resolve(spacing))?;
+    }
+    Ok(())
+}
+
+/// Smooths `mesh` and restores each component's volume (see the module's header). Keeps the
+/// triangles (and so the topology); moves the vertices and recomputes the normals (when the
+/// mesh has normals).
+fn smooth_and_restore(
+    mesh: &mut TriMesh,
+    particles: &[Vec3],
+    spacing: f32,
+    cell: f32,
+    config: &PostConfig,
 ) {
-    if config.raw || mesh.triangles.is_empty() {
+    if mesh.triangles.is_empty() {
         return;
     }
     let rings = VertexFaces::new(mesh.vertices.len(), &mesh.triangles);

@@ -183,3 +183,81 @@ fn a_real_splashing_frame_stays_closed_manifold_and_outward() {
     let error = signed_volume(&post) / (particles.len() as f64 * 0.014f64.powi(3)) - 1.0;
     assert!(error.abs() < 0.02, "{error}");
 }
+
+fn configured(particles: &[Vec3], post: PostConfig) -> TriMesh {
+    let config = Config {
+        spacing: Some(R),
+        cell: Length::Spacings(0.5),
+        post,
+        ..Config::default()
+    };
+    Reconstructor::new(config)
+        .unwrap()
+        .reconstruct(particles)
+        .unwrap()
+        .mesh
+}
+
+#[test]
+fn min_component_drops_a_lone_particle_and_keeps_a_ball_of_fifty() {
+    // A ball of 50 particles (the lattice points nearest its centre) and one particle 2 m away.
+    let mut ball = lattice_box(6);
+    let centre = Vec3::splat(2.5 * R);
+    ball.sort_by(|a, b| a.distance(centre).total_cmp(&b.distance(centre)));
+    ball.truncate(50);
+    let mut particles = ball.clone();
+    particles.push(Vec3::new(2.0, 0.0, 0.0));
+    let kept = configured(&particles, PostConfig::default());
+    assert_eq!(topology(&kept).components, 2);
+    let dropped = configured(
+        &particles,
+        PostConfig {
+            min_component: Some(2.0),
+            ..PostConfig::default()
+        },
+    );
+    let t = topology(&dropped);
+    assert_eq!(t.components, 1, "{t:?}");
+    assert!(t.is_closed_manifold());
+    assert!(dropped.vertices.iter().all(|v| v.x < 1.0));
+    // The ball that stays holds its 50 particles' volume.
+    assert!(
+        volume_error(&dropped, 50).abs() < 0.02,
+        "{}",
+        volume_error(&dropped, 50)
+    );
+}
+
+#[test]
+fn a_mesh_box_and_decimation_asked_in_the_configuration_keep_the_mesh_closed() {
+    let particles = lattice_box(12);
+    let full = configured(&particles, PostConfig::default());
+    // Cut the box of particles in half along x: the cap is flat at x = 0.55.
+    let cut = 5.5 * R;
+    let clipped = configured(
+        &particles,
+        PostConfig {
+            mesh_aabb: Some([-10.0, -10.0, -10.0, cut, 10.0, 10.0]),
+            ..PostConfig::default()
+        },
+    );
+    let t = topology(&clipped);
+    assert!(t.is_closed_manifold(), "{t:?}");
+    assert!(clipped.vertices.iter().all(|v| v.x <= cut + 1e-4));
+    let ratio = signed_volume(&clipped) / signed_volume(&full);
+    assert!((0.45..0.55).contains(&ratio), "{ratio}");
+
+    let decimated = configured(
+        &particles,
+        PostConfig {
+            decimate: Some(Length::Spacings(0.1)),
+            ..PostConfig::default()
+        },
+    );
+    let t = topology(&decimated);
+    assert!(t.is_closed_manifold(), "{t:?}");
+    assert!(decimated.triangles.len() * 2 < full.triangles.len());
+    assert_eq!(decimated.normals.len(), decimated.vertices.len());
+    let change = signed_volume(&decimated) / signed_volume(&full) - 1.0;
+    assert!(change.abs() < 0.01, "{change}");
+}
