@@ -12,14 +12,22 @@ use crate::{Config, Length, Reconstructor};
 const R: f32 = 0.1;
 
 fn mesh(particles: &[Vec3], raw: bool, threads: usize) -> TriMesh {
-    let config = Config {
-        spacing: Some(R),
-        threads: Some(threads),
-        cell: Length::Spacings(0.5),
-        post: PostConfig {
+    configured(
+        particles,
+        Some(threads),
+        PostConfig {
             raw,
             ..PostConfig::default()
         },
+    )
+}
+
+fn configured(particles: &[Vec3], threads: Option<usize>, post: PostConfig) -> TriMesh {
+    let config = Config {
+        spacing: Some(R),
+        threads,
+        cell: Length::Spacings(0.5),
+        post,
         ..Config::default()
     };
     Reconstructor::new(config)
@@ -184,20 +192,6 @@ fn a_real_splashing_frame_stays_closed_manifold_and_outward() {
     assert!(error.abs() < 0.02, "{error}");
 }
 
-fn configured(particles: &[Vec3], post: PostConfig) -> TriMesh {
-    let config = Config {
-        spacing: Some(R),
-        cell: Length::Spacings(0.5),
-        post,
-        ..Config::default()
-    };
-    Reconstructor::new(config)
-        .unwrap()
-        .reconstruct(particles)
-        .unwrap()
-        .mesh
-}
-
 #[test]
 fn min_component_drops_a_lone_particle_and_keeps_a_ball_of_fifty() {
     // A ball of 50 particles (the lattice points nearest its centre) and one particle 2 m away.
@@ -207,10 +201,11 @@ fn min_component_drops_a_lone_particle_and_keeps_a_ball_of_fifty() {
     ball.truncate(50);
     let mut particles = ball.clone();
     particles.push(Vec3::new(2.0, 0.0, 0.0));
-    let kept = configured(&particles, PostConfig::default());
+    let kept = configured(&particles, None, PostConfig::default());
     assert_eq!(topology(&kept).components, 2);
     let dropped = configured(
         &particles,
+        None,
         PostConfig {
             min_component: Some(2.0),
             ..PostConfig::default()
@@ -231,11 +226,12 @@ fn min_component_drops_a_lone_particle_and_keeps_a_ball_of_fifty() {
 #[test]
 fn a_mesh_box_and_decimation_asked_in_the_configuration_keep_the_mesh_closed() {
     let particles = lattice_box(12);
-    let full = configured(&particles, PostConfig::default());
+    let full = configured(&particles, None, PostConfig::default());
     // Cut the box of particles in half along x: the cap is flat at x = 0.55.
     let cut = 5.5 * R;
     let clipped = configured(
         &particles,
+        None,
         PostConfig {
             mesh_aabb: Some([-10.0, -10.0, -10.0, cut, 10.0, 10.0]),
             ..PostConfig::default()
@@ -249,6 +245,7 @@ fn a_mesh_box_and_decimation_asked_in_the_configuration_keep_the_mesh_closed() {
 
     let decimated = configured(
         &particles,
+        None,
         PostConfig {
             decimate: Some(Length::Spacings(0.1)),
             ..PostConfig::default()
