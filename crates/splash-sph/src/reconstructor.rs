@@ -104,6 +104,7 @@ impl Reconstructor {
                     postprocess(&mut out.mesh, positions, r, cell, post)
                 })?;
                 out.stats = stages.stats;
+                out.stats.heap_peak = out.stats.stage_heap.max();
                 out.stats.triangles = out.mesh.triangles.len();
                 out.stats.vertices = out.mesh.vertices.len();
             }
