@@ -102,6 +102,12 @@ mod tests {
         let config = Config {
             spacing: Some(r),
             cell: Length::parse("r/2").unwrap(),
+            // The field's exact isosurface, whose droplet is swollen (the default post-processing
+            // gives it r³: tests/post.rs).
+            post: crate::mesh::post::PostConfig {
+                raw: true,
+                ..Default::default()
+            },
             ..Config::default()
         };
         let mesh = Reconstructor::new(config)
