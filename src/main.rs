@@ -88,7 +88,8 @@ struct ConfigArgs {
     cell: Option<String>,
 
     /// Vertex normals: field (the field's gradient, default), grid (differences of the
-    /// sampled grid: faster), or none.
+    /// sampled grid: faster), or none. Post-processed meshes (all but --raw) get area-weighted
+    /// normals of the smoothed surface unless none.
     #[arg(long)]
     normals: Option<String>,
 

@@ -217,7 +217,7 @@ pub struct FrameStats {
     pub iso: Option<crate::iso::stats::IsoStats>,
 }
 
-/// What the correction step (Marching Correctors, Sec. III-E) did to the mesh's vertices:
+/// What the correction step (Marching Correctors, Sec. III-D2) did to the mesh's vertices:
 /// shifts along their edges as fractions of the edge, and the field's |f − iso| at the
 /// vertices before and after, in the field's units.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Serialize)]

@@ -40,10 +40,11 @@ pub struct Config {
     pub surface_particles: SurfaceParticles,
     /// How far the band of sampled vertices reaches around them.
     pub band: BandConfig,
-    /// Where the mesh's vertex normals come from.
+    /// Where the mesh's vertex normals come from; a post-processed mesh gets area-weighted
+    /// normals of its smoothed surface unless this is `none`.
     pub normals: Normals,
     /// Newton steps that move each vertex along its cube edge onto the field's exact
-    /// isosurface (Marching Correctors, Sec. III-E; the paper uses a few); 0, the default,
+    /// isosurface (Marching Correctors, Sec. III-D2; the paper uses a few); 0, the default,
     /// keeps Marching Cubes' linear interpolation.
     pub correct: u32,
     /// The Marching Slices engine's blocks.

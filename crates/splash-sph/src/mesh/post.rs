@@ -116,16 +116,19 @@ impl PostConfig {
 /// Post-processes `mesh`, the surface of `particles` at spacing `spacing` reconstructed with
 /// cells of `cell`, in the current rayon pool: smoothing and volume restoration (unless
 /// `raw`), then the box, the small components and the decimation where `config` asks for
-/// them. The same mesh gives the same bytes on any number of threads.
+/// them. `normals`: whether the smoothed mesh gets (area-weighted) vertex normals; the engine's
+/// would no longer fit the moved vertices. The same mesh gives the same bytes on any number of
+/// threads.
 pub fn postprocess(
     mesh: &mut TriMesh,
     particles: &[Vec3],
     spacing: f32,
     cell: f32,
     config: &PostConfig,
+    normals: bool,
 ) -> Result<()> {
     if !config.raw {
-        smooth_and_restore(mesh, particles, spacing, cell, config);
+        smooth_and_restore(mesh, particles, spacing, cell, config, normals);
     }
     // Clipped after smoothing, so that the caps stay flat; components dropped after clipping,
     // which can leave small pieces; decimated last, against the mesh that would be written.
@@ -150,6 +153,7 @@ fn smooth_and_restore(
     spacing: f32,
     cell: f32,
     config: &PostConfig,
+    wants_normals: bool,
 ) {
     if mesh.triangles.is_empty() {
         return;
@@ -169,7 +173,6 @@ fn smooth_and_restore(
         lambda,
         mu,
     );
-    let wants_normals = !mesh.normals.is_empty();
     let normals = &mut mesh.normals;
     normals.resize(vertices.len(), Vec3::ZERO);
     let mut measures = Measures::default();

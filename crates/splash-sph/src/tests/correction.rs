@@ -1,4 +1,4 @@
-//! `correct = N` (Marching Correctors, Sec. III-E): every vertex ends far closer to the field's
+//! `correct = N` (Marching Correctors, Sec. III-D2): every vertex ends far closer to the field's
 //! isosurface than linear interpolation puts it, as the field evaluated at the vertex on its
 //! own says; it stays on its cube edge; the triangles, the engines' agreement and the
 //! independence of the thread count stay as they were.

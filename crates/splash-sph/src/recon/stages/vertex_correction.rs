@@ -1,5 +1,5 @@
 //! `correct = N`: every engine's Marching Cubes vertices moved along their cube edges onto the
-//! field's exact isosurface, by N safeguarded Newton steps (Marching Correctors, Sec. III-E,
+//! field's exact isosurface, by N safeguarded Newton steps (Marching Correctors, Sec. III-D2,
 //! [`CrossedEdge::correct`]).
 //!
 //! Runs on the finished mesh, so it is the same for every engine: a vertex's edge is read back
