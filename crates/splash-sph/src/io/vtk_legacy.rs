@@ -132,17 +132,8 @@ fn parse_any(data: &[u8], mesh: bool) -> Result<(Particles, Vec<[u32; 3]>)> {
                 let (n, size) = (count(1)?, count(2)?);
                 if c.peek_keyword().as_deref() == Some("OFFSETS") {
                     // Version 5: n offsets, then `size` connectivity entries.
-                    for part in ["OFFSETS", "CONNECTIVITY"] {
-                        let (at, line) = c.line()?;
-                        let mut words = line.split_whitespace();
-                        if !words.next().is_some_and(|w| w.eq_ignore_ascii_case(part)) {
-                            bail_format!(
-                                "expected {part} at byte offset {at}, found '{}'",
-                                short(line)
-                            );
-                        }
-                        let num = num_type(words.next().unwrap_or(""), at)?;
-                        let len = if part == "OFFSETS" { n } else { size };
+                    for (part, len) in [("OFFSETS", n), ("CONNECTIVITY", size)] {
+                        let (at, num) = c.array_header(part)?;
                         c.skip_values(len, num, at)?;
                     }
                 } else {
@@ -324,6 +315,20 @@ impl<'a> Cursor<'a> {
     }
 
     /// The first word of the next non-blank line, upper case, without consuming it.
+    /// The header line of a version-5 cell array (`OFFSETS vtktypeint64`): where it is and the
+    /// number type of its values.
+    fn array_header(&mut self, part: &str) -> Result<(usize, Num)> {
+        let (at, line) = self.line()?;
+        let mut words = line.split_whitespace();
+        if !words.next().is_some_and(|w| w.eq_ignore_ascii_case(part)) {
+            bail_format!(
+                "expected {part} at byte offset {at}, found '{}'",
+                short(line)
+            );
+        }
+        Ok((at, num_type(words.next().unwrap_or(""), at)?))
+    }
+
     fn peek_keyword(&self) -> Option<String> {
         let mut probe = Cursor {
             data: self.data,
@@ -406,15 +411,7 @@ impl<'a> Cursor<'a> {
         let corners = if self.peek_keyword().as_deref() == Some("OFFSETS") {
             let mut arrays = Vec::with_capacity(2);
             for (part, len) in [("OFFSETS", n), ("CONNECTIVITY", size)] {
-                let (at, line) = self.line()?;
-                let mut words = line.split_whitespace();
-                if !words.next().is_some_and(|w| w.eq_ignore_ascii_case(part)) {
-                    bail_format!(
-                        "expected {part} at byte offset {at}, found '{}'",
-                        short(line)
-                    );
-                }
-                let num = num_type(words.next().unwrap_or(""), at)?;
+                let (at, num) = self.array_header(part)?;
                 arrays.push(self.indices(len, num, at)?);
             }
             // n offsets bound n − 1 polygons: 0, 3, 6, …
