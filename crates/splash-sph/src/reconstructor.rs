@@ -99,11 +99,7 @@ impl Reconstructor {
             };
             let mut out = recon::reconstruct(positions, &self.params, reborrowed)?;
             let post = &self.config.post;
-            let asked = !post.raw
-                || post.mesh_aabb.is_some()
-                || post.min_component.is_some()
-                || post.decimate.is_some();
-            if asked && !out.mesh.is_empty() {
+            if post.changes_mesh() && !out.mesh.is_empty() {
                 let (r, cell) = (self.params.spacing, self.params.cell);
                 let normals = self.config.normals != Normals::None;
                 let mut stages = Stages::start(out.stats, observer);

@@ -75,6 +75,15 @@ impl Default for PostConfig {
 }
 
 impl PostConfig {
+    /// Whether [`postprocess`] would change a mesh: false only for `raw` without a box, a
+    /// smallest component or a decimation.
+    pub fn changes_mesh(&self) -> bool {
+        !self.raw
+            || self.mesh_aabb.is_some()
+            || self.min_component.is_some()
+            || self.decimate.is_some()
+    }
+
     /// Checks the ranges the TOML types cannot express, naming the key.
     pub fn validate(&self) -> Result<()> {
         if !(self.lambda > 0.0 && self.lambda < 1.0) {
