@@ -270,7 +270,7 @@ impl UnionFind {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use std::f32::consts::TAU;
+    use crate::tests::common::torus;
 
     /// Builds a mesh whose normals point away from `center` (outward for convex shapes).
     fn mesh(vertices: Vec<Vec3>, triangles: Vec<[u32; 3]>, center: Vec3) -> TriMesh {
@@ -326,40 +326,6 @@ mod tests {
                 .copied()
                 .chain(b.triangles.iter().map(|t| t.map(|i| i + shift)))
                 .collect(),
-        }
-    }
-
-    /// Torus around the z axis: radii `big` and `small`, `n` x `m` quads split in two.
-    fn torus(n: u32, m: u32, big: f32, small: f32) -> TriMesh {
-        let mut vertices = Vec::new();
-        let mut normals = Vec::new();
-        for i in 0..n {
-            let u = TAU * i as f32 / n as f32;
-            for j in 0..m {
-                let w = TAU * j as f32 / m as f32;
-                let normal = Vec3::new(w.cos() * u.cos(), w.cos() * u.sin(), w.sin());
-                vertices.push(Vec3::new(big * u.cos(), big * u.sin(), 0.0) + small * normal);
-                normals.push(normal);
-            }
-        }
-        let index = |i: u32, j: u32| (i % n) * m + (j % m);
-        let mut triangles = Vec::new();
-        for i in 0..n {
-            for j in 0..m {
-                let (a, b, c, d) = (
-                    index(i, j),
-                    index(i + 1, j),
-                    index(i + 1, j + 1),
-                    index(i, j + 1),
-                );
-                triangles.push([a, b, c]);
-                triangles.push([a, c, d]);
-            }
-        }
-        TriMesh {
-            vertices,
-            normals,
-            triangles,
         }
     }
 
@@ -486,7 +452,7 @@ mod tests {
     #[test]
     fn torus_has_euler_zero() {
         let (big, small) = (2.0f32, 0.5f32);
-        let m = torus(48, 24, big, small);
+        let m = torus(48, 24, big, small, 0.0);
         let t = topology(&m);
         assert_eq!(t.vertices, 48 * 24);
         assert_eq!(t.edges, 3 * 48 * 24);
@@ -564,7 +530,7 @@ mod tests {
     #[test]
     fn large_torus_is_fast_and_exact() {
         // About 2 M triangles, the size of a fine reconstruction.
-        let m = torus(1000, 1000, 2.0, 0.5);
+        let m = torus(1000, 1000, 2.0, 0.5, 0.0);
         let start = std::time::Instant::now();
         let t = topology(&m);
         let elapsed = start.elapsed();

@@ -2,6 +2,8 @@
 //! line tests (particle sets, fixtures, real frames), meshes compared up to rounding, and
 //! parameters and reconstructions reached from inside the library.
 
+use std::f32::consts::TAU;
+
 use glam::{IVec3, Vec3};
 use rustc_hash::FxHashMap;
 
@@ -151,4 +153,39 @@ pub fn offsets(a: &TriMesh, b: &TriMesh, cell: f32) -> Vec<f32> {
                 .fold(f32::INFINITY, f32::min)
         })
         .collect()
+}
+
+/// Torus around the z axis with its normals: radii `big` and `small`, `n` x `m` quads split in
+/// two, the rings at angles (i + `phase`)·2π/n.
+pub fn torus(n: u32, m: u32, big: f32, small: f32, phase: f32) -> TriMesh {
+    let mut vertices = Vec::new();
+    let mut normals = Vec::new();
+    for i in 0..n {
+        let u = TAU * (i as f32 + phase) / n as f32;
+        for j in 0..m {
+            let w = TAU * j as f32 / m as f32;
+            let normal = Vec3::new(w.cos() * u.cos(), w.cos() * u.sin(), w.sin());
+            vertices.push(Vec3::new(big * u.cos(), big * u.sin(), 0.0) + small * normal);
+            normals.push(normal);
+        }
+    }
+    let index = |i: u32, j: u32| (i % n) * m + (j % m);
+    let mut triangles = Vec::new();
+    for i in 0..n {
+        for j in 0..m {
+            let (a, b, c, d) = (
+                index(i, j),
+                index(i + 1, j),
+                index(i + 1, j + 1),
+                index(i, j + 1),
+            );
+            triangles.push([a, b, c]);
+            triangles.push([a, c, d]);
+        }
+    }
+    TriMesh {
+        vertices,
+        normals,
+        triangles,
+    }
 }
