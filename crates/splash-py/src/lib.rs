@@ -8,6 +8,7 @@ mod iso;
 mod mesh;
 mod particles;
 mod pools;
+mod post;
 mod preview;
 mod read_mesh;
 mod recon;
@@ -86,6 +87,7 @@ fn native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(sequence::recon_sequence, m)?)?;
     m.add_function(wrap_pyfunction!(sequence::frame_number, m)?)?;
     m.add_function(wrap_pyfunction!(iso::iso, m)?)?;
+    m.add_function(wrap_pyfunction!(post::postprocess, m)?)?;
     m.add_function(wrap_pyfunction!(preview::preview, m)?)?;
     m.add_function(wrap_pyfunction!(particles::read_particles, m)?)?;
     m.add_function(wrap_pyfunction!(read_mesh::read_mesh, m)?)?;

@@ -60,6 +60,30 @@ impl Mesh {
         }
     }
 
+    /// The mesh as the arrays hold it now (copied: they may have been edited).
+    pub fn arrays(&self, py: Python<'_>) -> PyResult<TriMesh> {
+        Ok(TriMesh {
+            vertices: arrays::points(self.vertices.bind(py).as_any(), "mesh.vertices")?.into_vec(),
+            normals: arrays::points(self.normals.bind(py).as_any(), "mesh.normals")?.into_vec(),
+            triangles: arrays::triangles(self.faces.bind(py).as_any(), "mesh.faces")?,
+        })
+    }
+
+    /// The report dict (shared, not copied).
+    pub fn report<'py>(&self, py: Python<'py>) -> Bound<'py, PyDict> {
+        self.report.bind(py).clone()
+    }
+
+    /// The attributes dict (shared, not copied).
+    pub fn attributes<'py>(&self, py: Python<'py>) -> Bound<'py, PyDict> {
+        self.attributes.bind(py).clone()
+    }
+
+    /// The `[output]` choices: format and up axis.
+    pub fn output(&self) -> (Option<MeshFormat>, Option<UpAxis>) {
+        (self.format, self.up_axis)
+    }
+
     /// The format `path` is written in: `format`, else the configuration's, else the one its
     /// extension implies, else OBJ; refused when it contradicts the extension (as the CLI does).
     fn format_for(&self, path: &std::path::Path, format: Option<&str>) -> PyResult<MeshFormat> {
@@ -108,13 +132,7 @@ impl Mesh {
             Some(a) => Some(UpAxis::parse(a).map_err(to_py)?),
             None => self.up_axis,
         };
-        let vertices = self.vertices.bind(py);
-        let normals = self.normals.bind(py);
-        let mut mesh = TriMesh {
-            vertices: arrays::points(vertices.as_any(), "mesh.vertices")?.into_vec(),
-            normals: arrays::points(normals.as_any(), "mesh.normals")?.into_vec(),
-            triangles: arrays::triangles(self.faces.bind(py).as_any(), "mesh.faces")?,
-        };
+        let mut mesh = self.arrays(py)?;
         // Every attribute, where the format has room for them: (V,) arrays as numbers, (V, 3)
         // arrays as vectors.
         let mut named: Vec<(String, Attribute)> = Vec::new();

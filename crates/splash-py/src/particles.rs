@@ -33,13 +33,18 @@ pub struct Particles {
 }
 
 impl Particles {
+    /// The positions (copied: the array may have been edited or replaced).
+    pub(crate) fn positions(&self, py: Python<'_>) -> PyResult<Vec<Vec3>> {
+        Ok(arrays::points(self.positions.bind(py).as_any(), "positions")?.into_vec())
+    }
+
     /// Positions and every attribute by name, as the library takes a frame (copied: the
     /// arrays may have been edited or replaced since the file was read).
     pub(crate) fn columns(
         &self,
         py: Python<'_>,
     ) -> PyResult<(Vec<Vec3>, BTreeMap<String, Attribute>)> {
-        let positions = arrays::points(self.positions.bind(py).as_any(), "positions")?.into_vec();
+        let positions = self.positions(py)?;
         let mut columns = BTreeMap::new();
         for (name, values) in self.attributes.bind(py).iter() {
             let name: String = name.extract()?;

@@ -250,7 +250,7 @@ fn report<'py>(
 
 /// The float whose shortest decimal form is `x`'s (0.014, not 0.014000000432133675), so that
 /// the report gives back the spacing as it was passed.
-fn as_written(x: f32) -> f64 {
+pub(crate) fn as_written(x: f32) -> f64 {
     x.to_string()
         .parse()
         .expect("a float's decimal form parses")

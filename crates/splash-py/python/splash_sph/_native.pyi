@@ -168,7 +168,13 @@ def reconstruct(
     ``correct``: Newton steps that move each vertex along its cube edge onto the field's
     exact isosurface (3 is plenty; 0, the default, keeps linear interpolation). ``threads``: worker threads, all cores by default; the mesh does not depend on it (each
     calling thread keeps its workers for its next calls). ``max_memory``: the heap a
-    frame may plan to use (every engine checks it), in bytes or as ``"8G"``.
+    frame may plan to use (every engine checks it), in bytes or as ``"8G"``. ``raw=True``:
+    the field's exact isosurface, without the default post-processing (smoothing, each part
+    given its particles' volume N·r³; ``postprocess`` runs it on any mesh). ``decimate``: a
+    length (``"0.1r"`` or a number) within which every vertex and triangle centre of the
+    decimated mesh stays of the full surface. ``min_component``: drop parts enclosing fewer
+    than this many particle volumes r³. ``mesh_aabb``: six numbers (min x, min y, min z, max
+    x, max y, max z); the mesh is clipped to that box and its cuts capped.
 
     ``config``: a TOML file's path (as ``splash recon --config`` reads) or a dict shaped like
     it (see ``default_config``). Its ``output.format`` and ``output.up_axis`` become the
@@ -189,6 +195,65 @@ def reconstruct(
     parallel. Raises ValueError for a bad array, bad settings (naming the key or value),
     non-finite coordinates (naming the particle) or a grid over the memory limit; OSError
     when the config file cannot be read.
+    """
+
+def postprocess(
+    mesh: Union[Mesh, MeshArrays, Any, "tuple[_Array, _Array]"],
+    *,
+    particles: Union[Particles, _Array, None] = None,
+    spacing: Optional[float] = None,
+    cell: Union[str, float, None] = None,
+    config: Union[_Path, Mapping[str, Any], None] = None,
+    raw: Optional[bool] = None,
+    smoothing_iterations: Optional[int] = None,
+    lambda_: Optional[float] = None,
+    mu: Optional[float] = None,
+    volume_rounds: Optional[int] = None,
+    max_offset: Optional[float] = None,
+    relax_iterations: Optional[int] = None,
+    volume_steps: Optional[int] = None,
+    mesh_aabb: Optional[Sequence[float]] = None,
+    min_component: Optional[float] = None,
+    decimate: Union[str, float, None] = None,
+    threads: Optional[int] = None,
+) -> Mesh:
+    """A post-processed copy of a closed triangle mesh: the default post-processing of
+    ``reconstruct`` (Taubin smoothing, each closed part's volume restored, tangential
+    relaxation), then the box, the small parts and the decimation where asked.
+
+    ``mesh``: a ``Mesh`` (from ``reconstruct`` or ``iso``), a ``MeshArrays`` (``read_mesh``),
+    any object with ``vertices`` and ``faces`` arrays, or a ``(vertices, faces)`` pair:
+    vertices an (V, 3) floating-point array, faces an (F, 3) integer array of vertex indices.
+    The mesh must be closed, manifold and consistently wound, as every mesh splash writes (the
+    volume, the inside and the box caps of an open surface are not defined); ValueError says
+    how many boundary, non-manifold and wrongly wound edges it has otherwise, or which
+    triangle references a missing vertex, or which vertex is not finite.
+
+    ``particles``: the particles the mesh encloses, an (N, 3) array or a ``Particles``: each
+    closed part's volume is brought to N_c·r³ for the N_c particles inside it, as
+    ``reconstruct`` does (``postprocess(reconstruct(x, r, raw=True), particles=x)`` gives
+    ``reconstruct(x, r)``'s vertices and faces, bit for bit). Without particles each closed
+    part keeps the volume it encloses on input: volume-true smoothing of any mesh.
+
+    ``spacing``: the particle spacing r, the unit of ``max_offset``, ``decimate`` and
+    ``min_component``; by default the config's, else the ``Mesh``'s ``report["spacing"]``.
+    ``cell``: the reconstruction's cell (it places the particles' rays); by default the
+    ``Mesh``'s ``report["cell"]``, else the config's (``"r/2"``).
+
+    The post-processing settings (``[post]`` of the config; None keeps the config's, the
+    defaults by default): ``raw=True`` skips smoothing and volume restoration;
+    ``smoothing_iterations`` (10), ``lambda_`` (0.5) and ``mu`` (-0.53): Taubin's λ|μ pairs;
+    ``volume_rounds`` (6), ``max_offset`` (0.25 r per step), ``relax_iterations`` (10),
+    ``volume_steps`` (3); ``mesh_aabb``, ``min_component`` and ``decimate`` as in
+    ``reconstruct``. ``config``: a TOML file's path or a dict, as ``reconstruct`` takes it.
+    ``threads``: worker threads, all cores by default; the result does not depend on it.
+
+    Returns a new ``Mesh``: normals when the input has them (area-weighted where vertices
+    moved), the input ``Mesh``'s attributes when neither ``mesh_aabb``, ``min_component`` nor
+    ``decimate`` is set (smoothing moves the vertices but keeps them; those three change
+    them), and the ``Mesh``'s output format and up axis. Its ``report``: ``vertices``,
+    ``triangles``, ``spacing``, ``cell`` (None without particles) and ``times`` (``post``,
+    ``total``, seconds). The input is not changed. The GIL is released while working.
     """
 
 def iso(

@@ -4,15 +4,19 @@
 //! and the normals recomputed. `[post]` in the configuration; `raw = true` keeps the exact
 //! isosurface. Then, where asked: the mesh clipped to a box ([`clip_to_box`]), components
 //! below a volume dropped ([`drop_small_components`]) and the mesh decimated ([`decimate`]).
+//! [`postprocess_mesh`] runs the same on any closed mesh, checked first, with each component
+//! keeping its own volume when there are no particles.
 
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
 use super::adjacency::VertexFaces;
 use super::smoothing::{relax_tangentially, taubin};
+use super::stars::validate;
+use super::topology::topology;
 use super::volume::{Components, Measures, normals_and_measures, particles_inside, restore};
 use super::{TriMesh, clip_to_box, decimate, drop_small_components};
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::length::Length;
 
 /// `[post]`: what happens to the mesh after the engine. Defaults measured on cbd-small (21
@@ -127,7 +131,8 @@ impl PostConfig {
 /// `raw`), then the box, the small components and the decimation where `config` asks for
 /// them. `normals`: whether the smoothed mesh gets (area-weighted) vertex normals; the engine's
 /// would no longer fit the moved vertices. The same mesh gives the same bytes on any number of
-/// threads.
+/// threads. The mesh is trusted to be an engine's (closed, manifold, indices in range): see
+/// [`postprocess_mesh`] for a mesh from elsewhere.
 pub fn postprocess(
     mesh: &mut TriMesh,
     particles: &[Vec3],
@@ -136,8 +141,95 @@ pub fn postprocess(
     config: &PostConfig,
     normals: bool,
 ) -> Result<()> {
+    let volumes = Volumes::Particles { particles, cell };
+    run(mesh, spacing, &volumes, config, normals)
+}
+
+/// What [`postprocess_mesh`] brings each closed component's volume to.
+#[derive(Debug, Clone, Copy)]
+pub enum Volumes<'a> {
+    /// N_c·r³ for the N_c of `particles` inside the component (by ray parity; `cell` sizes the
+    /// rays' bins and their tiny shift off the grid planes: pass the reconstruction's cell to
+    /// get its bytes). Components holding none, and cavities, keep their own volume.
+    Particles {
+        /// The particles the mesh encloses.
+        particles: &'a [Vec3],
+        /// The Marching Cubes cell of the reconstruction, in world units.
+        cell: f32,
+    },
+    /// The volume the component enclosed before smoothing: volume-true smoothing of any mesh.
+    Kept,
+}
+
+/// [`postprocess`] for a mesh from anywhere: each closed component's volume brought to
+/// `volumes`, lengths of `config` (`max_offset`, `decimate`, `min_component`) in units of
+/// `spacing`. The mesh must be closed, manifold and consistently wound (each edge shared by
+/// exactly two triangles that walk it in opposite directions), as every mesh splash writes:
+/// the volume of an open surface, its inside for the particles' rays, and the caps of a box
+/// are not defined. Triangles that repeat a vertex are allowed (they enclose nothing).
+/// `normals`: whether the result gets vertex normals (area-weighted where the vertices
+/// moved).
+///
+/// Errors ([`Error::Input`], naming what is wrong): triangles referencing missing vertices,
+/// non-finite vertices or particles, normals neither absent nor one per vertex, a surface with
+/// boundary, non-manifold or inconsistently wound edges (counted); [`Error::Config`]: a
+/// `spacing` or `cell` that is not a positive finite length, or a `config` out of range.
+pub fn postprocess_mesh(
+    mesh: &mut TriMesh,
+    spacing: f32,
+    volumes: Volumes<'_>,
+    config: &PostConfig,
+    normals: bool,
+) -> Result<()> {
+    config.validate()?;
+    if !(spacing.is_finite() && spacing > 0.0) {
+        bail_config!("the spacing ({spacing}) must be a positive finite length");
+    }
+    if let Volumes::Particles { particles, cell } = volumes {
+        if !(cell.is_finite() && cell > 0.0) {
+            bail_config!("the cell ({cell}) must be a positive finite length");
+        }
+        if let Some(i) = particles.iter().position(|p| !p.is_finite()) {
+            return Err(Error::input(format!(
+                "particle {i} has a non-finite coordinate"
+            )));
+        }
+    }
+    validate(mesh)?;
+    if mesh.vertices.len() > 1 << 31 {
+        return Err(Error::limit(format!(
+            "mesh of {} vertices is too large to check (at most 2^31)",
+            mesh.vertices.len()
+        )));
+    }
+    let t = topology(mesh);
+    if !t.is_closed_manifold() {
+        return Err(Error::input(format!(
+            "the mesh is not closed and consistently wound: {} boundary edges (used by one \
+             triangle), {} non-manifold edges (by three or more), {} edges whose two triangles \
+             wind the same way; post-processing needs the surface of a solid",
+            t.boundary_edges, t.non_manifold_edges, t.inconsistent_edges
+        )));
+    }
+    if !normals {
+        mesh.normals = Vec::new();
+    } else if mesh.normals.is_empty() && config.raw {
+        // Smoothing would compute them; the raw path's stages keep the ones there are.
+        mesh.normals = super::stars::area_weighted_normals(&mesh.vertices, &mesh.triangles);
+    }
+    run(mesh, spacing, &volumes, config, normals)
+}
+
+/// The stages of [`postprocess`] and [`postprocess_mesh`].
+fn run(
+    mesh: &mut TriMesh,
+    spacing: f32,
+    volumes: &Volumes<'_>,
+    config: &PostConfig,
+    normals: bool,
+) -> Result<()> {
     if !config.raw {
-        smooth_and_restore(mesh, particles, spacing, cell, config, normals);
+        smooth_and_restore(mesh, volumes, spacing, config, normals);
     }
     // Clipped after smoothing, so that the caps stay flat; components dropped after clipping,
     // which can leave small pieces; decimated last, against the mesh that would be written.
@@ -158,9 +250,8 @@ pub fn postprocess(
 /// mesh has normals).
 fn smooth_and_restore(
     mesh: &mut TriMesh,
-    particles: &[Vec3],
+    volumes: &Volumes<'_>,
     spacing: f32,
-    cell: f32,
     config: &PostConfig,
     wants_normals: bool,
 ) {
@@ -187,24 +278,26 @@ fn smooth_and_restore(
     let mut measures = Measures::default();
     normals_and_measures(vertices, triangles, &rings, normals, &mut measures);
 
-    let targets: Vec<f64> = if config.volume_rounds + config.volume_steps > 0 {
-        let inside = particles_inside(
-            &components,
-            &raw_volumes,
-            vertices,
-            triangles,
-            particles,
-            cell,
-        );
-        let r3 = f64::from(spacing).powi(3);
-        // Bubbles (negative volume) and blobs without a particle keep their raw volume.
-        raw_volumes
-            .iter()
-            .zip(&inside)
-            .map(|(&(v, _), &n)| if v > 0.0 && n > 0 { n as f64 * r3 } else { v })
-            .collect()
-    } else {
-        Vec::new()
+    let targets: Vec<f64> = match volumes {
+        _ if config.volume_rounds + config.volume_steps == 0 => Vec::new(),
+        Volumes::Particles { particles, cell } => {
+            let inside = particles_inside(
+                &components,
+                &raw_volumes,
+                vertices,
+                triangles,
+                particles,
+                *cell,
+            );
+            let r3 = f64::from(spacing).powi(3);
+            // Bubbles (negative volume) and blobs without a particle keep their raw volume.
+            raw_volumes
+                .iter()
+                .zip(&inside)
+                .map(|(&(v, _), &n)| if v > 0.0 && n > 0 { n as f64 * r3 } else { v })
+                .collect()
+        }
+        Volumes::Kept => raw_volumes.iter().map(|&(v, _)| v).collect(),
     };
     let max_step = config.max_offset * spacing;
     let volume_steps =

@@ -1,12 +1,13 @@
 //! Post-processing (mesh::post) on analytic particle sets and a real frame: the particles'
-//! volume, flat faces and corners kept, topology kept, the same bytes on 1 and 2 threads.
+//! volume, flat faces and corners kept, topology kept, the same bytes on 1 and 2 threads;
+//! `postprocess_mesh` on meshes from elsewhere: the same bytes, volumes kept, bad meshes refused.
 
 use glam::Vec3;
 
-use super::common::{lattice_ball, shared_data};
+use super::common::{lattice_ball, shared_data, torus};
 use crate::mesh::TriMesh;
-use crate::mesh::post::PostConfig;
-use crate::mesh::topology::{normal_agreement, signed_volume, topology};
+use crate::mesh::post::{PostConfig, Volumes, postprocess_mesh};
+use crate::mesh::topology::{component_volumes, normal_agreement, signed_volume, topology};
 use crate::{Config, Length, Reconstructor};
 
 const R: f32 = 0.1;
@@ -257,4 +258,84 @@ fn a_mesh_box_and_decimation_asked_in_the_configuration_keep_the_mesh_closed() {
     assert_eq!(decimated.normals.len(), decimated.vertices.len());
     let change = signed_volume(&decimated) / signed_volume(&full) - 1.0;
     assert!(change.abs() < 0.01, "{change}");
+}
+
+#[test]
+fn postprocess_mesh_on_the_raw_mesh_gives_the_reconstructors_bytes() {
+    let mut particles = lattice_ball(Vec3::ZERO, 6.0 * R, R);
+    particles.extend(lattice_ball(Vec3::new(1.5, 0.2, 0.0), 2.0 * R, R));
+    let mut raw = mesh(&particles, true, 2);
+    let volumes = Volumes::Particles {
+        particles: &particles,
+        cell: 0.5 * R,
+    };
+    postprocess_mesh(&mut raw, R, volumes, &PostConfig::default(), true).unwrap();
+    assert_eq!(raw, mesh(&particles, false, 2));
+}
+
+#[test]
+fn postprocess_mesh_without_particles_keeps_each_components_volume() {
+    // A ball and a torus (genus 1), apart, each keeping its own volume while smoothing
+    // moves every vertex.
+    let mut input = mesh(&lattice_ball(Vec3::ZERO, 5.0 * R, R), true, 2);
+    let ring = torus(48, 24, 1.0, 0.3, 0.5);
+    let offset = input.vertices.len() as u32;
+    input
+        .vertices
+        .extend(ring.vertices.iter().map(|v| *v + Vec3::new(3.0, 0.0, 0.0)));
+    input.normals.clear();
+    input
+        .triangles
+        .extend(ring.triangles.iter().map(|t| t.map(|i| i + offset)));
+    let mut post = input.clone();
+    postprocess_mesh(&mut post, R, Volumes::Kept, &PostConfig::default(), true).unwrap();
+    assert_topology_kept(&input, &post);
+    let (before, after) = (component_volumes(&input), component_volumes(&post));
+    for (b, a) in before.iter().zip(&after) {
+        assert!((a.1 / b.1 - 1.0).abs() < 1e-3, "{before:?} -> {after:?}");
+    }
+    assert!(
+        input
+            .vertices
+            .iter()
+            .zip(&post.vertices)
+            .any(|(a, b)| a.distance(*b) > 1e-3 * R),
+        "smoothing moved nothing"
+    );
+}
+
+#[test]
+fn postprocess_mesh_refuses_open_and_broken_meshes_naming_what_is_wrong() {
+    let closed = mesh(&lattice_ball(Vec3::ZERO, 3.0 * R, R), true, 2);
+    let config = PostConfig::default();
+    let run = |mut m: TriMesh| {
+        postprocess_mesh(&mut m, R, Volumes::Kept, &config, true)
+            .unwrap_err()
+            .to_string()
+    };
+    let mut open = closed.clone();
+    open.triangles.pop();
+    assert!(run(open).contains("3 boundary edges"));
+    let mut doubled = closed.clone();
+    doubled.triangles.push(closed.triangles[0]);
+    assert!(run(doubled).contains("3 non-manifold edges"));
+    let mut flipped = closed.clone();
+    flipped.triangles[0].swap(0, 1);
+    assert!(run(flipped).contains("3 edges whose two triangles wind the same way"));
+    let mut missing = closed.clone();
+    missing.triangles[5][1] = closed.vertices.len() as u32;
+    assert!(run(missing).contains("triangle 5 references vertex"));
+    let mut infinite = closed.clone();
+    infinite.vertices[7].y = f32::NAN;
+    assert!(run(infinite).contains("vertex 7 is not finite"));
+    let mut m = closed.clone();
+    let err = postprocess_mesh(&mut m, 0.0, Volumes::Kept, &config, true).unwrap_err();
+    assert!(matches!(err, crate::Error::Config(_)), "{err}");
+    let bad = [Vec3::new(0.0, f32::INFINITY, 0.0)];
+    let volumes = Volumes::Particles {
+        particles: &bad,
+        cell: R,
+    };
+    let err = postprocess_mesh(&mut m, R, volumes, &config, true).unwrap_err();
+    assert!(err.to_string().contains("particle 0"), "{err}");
 }
