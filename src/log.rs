@@ -10,7 +10,8 @@
 //!   status is 2 for a usage error, else 1;
 //! - `"frame"`: `time` (UTC, RFC 3339), `frame` (number or null), `input`, `output`, `status`
 //!   (`"ok"` or `"error"`), and `particles`, `seconds` and the command's figures
-//!   ([`FrameFigures::json`]: recon's `triangles`, `vertices`; preview's `build_ms`,
+//!   ([`FrameFigures::json`]: recon's `triangles`, `vertices`, `times` (seconds: `read`,
+//!   `reconstruction`, of which `post`, and `write`; `post` is 0 under `--raw` alone); preview's `build_ms`,
 //!   `render_ms`, `rays_per_second`, `hits`) or `error`;
 //! - `"summary"`: `written`, `skipped`, `failed` (a list of `{frame, input, error}`),
 //!   `not_attempted`, `ok` (true when every frame of the job has its output).
@@ -120,6 +121,17 @@ impl FrameFigures for FrameStats {
         fields.insert(
             "particles_outside_box".into(),
             self.particles_outside_box.into(),
+        );
+        let t = self.timings;
+        let ms = |d: std::time::Duration| (d.as_secs_f64() * 1e3).round() / 1e3;
+        fields.insert(
+            "times".into(),
+            json!({
+                "read": ms(t.read),
+                "reconstruction": ms(t.reconstruction()),
+                "post": ms(t.post),
+                "write": ms(t.write),
+            }),
         );
         if let Some(iso) = &self.iso {
             fields.insert("iso".into(), json!(iso));

@@ -100,6 +100,26 @@ fn recon_report_counts_match_the_ball_and_its_mesh() {
     assert!(ratio > 0.1 && ratio < 0.9, "{ratio}");
     assert!(frame["heap_peak"].as_f64().unwrap() > 0.0);
     assert!(frame["t_scalar_field"].as_f64().unwrap() > 0.0);
+    // The stages, post-processing (on by default) among them, add up to the total.
+    let t = |key: &str| frame[key].as_f64().unwrap_or_else(|| panic!("no {key}"));
+    assert!(t("t_post") > 0.0 && t("heap_post") > 0.0);
+    let stages: f64 = [
+        "t_read",
+        "t_handler_array",
+        "t_surface_particles",
+        "t_band",
+        "t_scalar_field",
+        "t_triangulation",
+        "t_post",
+        "t_write",
+    ]
+    .iter()
+    .map(|k| t(k))
+    .sum();
+    assert!(
+        (stages - t("t_total")).abs() <= 1e-6 * t("t_total"),
+        "{frame}"
+    );
     // The averages of one frame are the frame; the report states the machine, build, config.
     assert_eq!(report["average"]["triangles"], faces as f64);
     assert!(report["machine"]["cores"].as_u64().unwrap() >= 1);
@@ -110,11 +130,57 @@ fn recon_report_counts_match_the_ball_and_its_mesh() {
     let rows: Vec<&str> = csv.lines().filter(|l| !l.starts_with('#')).collect();
     assert_eq!(rows.len(), 3, "header, frame, average:\n{csv}");
     assert!(rows[2].contains(",average,"), "{csv}");
+    assert!(
+        rows[0].contains(",t_triangulation,t_post,t_write,"),
+        "{csv}"
+    );
     let md = fs::read_to_string(dir.join("report.md")).unwrap();
     assert!(
-        md.contains("**average**") && md.contains("| t_sf [s] |"),
+        md.contains("**average**") && md.contains("| t_sf [s] |") && md.contains("| t_post [s] |"),
         "{md}"
     );
+    // The JSON log's frame event has the stage times too; --raw runs no post-processing: its
+    // time is 0 in the report and the log.
+    for raw in [false, true] {
+        let raw_report = dir.join("raw.json");
+        let mut args = vec![
+            "recon".to_string(),
+            s(&input),
+            "--spacing".into(),
+            "0.01".into(),
+            "--cell".into(),
+            "r".into(),
+            "-o".into(),
+            s(&mesh),
+            "--report".into(),
+            s(&raw_report),
+            "--log-format".into(),
+            "json".into(),
+        ];
+        if raw {
+            args.push("--raw".into());
+        }
+        let (ok, _, err) = splash(&args.iter().map(String::as_str).collect::<Vec<_>>());
+        assert!(ok, "{err}");
+        let event: Value = err
+            .lines()
+            .filter_map(|l| serde_json::from_str::<Value>(l).ok())
+            .find(|e| e["event"] == "frame")
+            .unwrap_or_else(|| panic!("no frame event: {err}"));
+        let times = &event["times"];
+        let t = |key: &str| times[key].as_f64().unwrap_or_else(|| panic!("{event}"));
+        assert!(t("post") <= t("reconstruction"), "{event}");
+        let sum = t("read") + t("reconstruction") + t("write");
+        assert!(
+            (sum - event["seconds"].as_f64().unwrap()).abs() < 0.0025,
+            "{event}"
+        );
+        let report: Value =
+            serde_json::from_str(&fs::read_to_string(&raw_report).unwrap()).unwrap();
+        let post = report["frames"][0]["t_post"].as_f64().unwrap();
+        assert_eq!(post == 0.0, raw, "{report}");
+        assert_eq!(report["frames"][0]["heap_post"] == 0.0, raw, "{report}");
+    }
     fs::remove_dir_all(&dir).unwrap();
 }
 

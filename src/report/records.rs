@@ -45,6 +45,9 @@ pub struct Figures {
     pub t_scalar_field: f64,
     /// t_tri.
     pub t_triangulation: f64,
+    /// Post-processing the mesh (`[post]`: smoothing, volumes, box, small parts, decimation);
+    /// 0 when it did not run (`--raw` without `--mesh-aabb`, `--min-component`, `--decimate`).
+    pub t_post: f64,
     pub t_write: f64,
     pub t_total: f64,
     /// Exact peak heap of the reconstruction (counting allocator), input particles excluded.
@@ -56,6 +59,7 @@ pub struct Figures {
     pub heap_band: f64,
     pub heap_scalar_field: f64,
     pub heap_triangulation: f64,
+    pub heap_post: f64,
     /// Peak resident set size of the process (VmHWM) after the frame.
     pub peak_rss: f64,
     /// The slices engine's blocks (zeros for the other engines): count, most slices cached at
@@ -98,6 +102,7 @@ impl Figures {
             t_band: secs(t.band),
             t_scalar_field: secs(t.scalar_field),
             t_triangulation: secs(t.triangulation),
+            t_post: secs(t.post),
             t_write: secs(t.write),
             t_total: secs(t.read + t.reconstruction() + t.write),
             heap_peak: s.heap_peak as f64,
@@ -107,6 +112,7 @@ impl Figures {
             heap_band: h.band as f64,
             heap_scalar_field: h.scalar_field as f64,
             heap_triangulation: h.triangulation as f64,
+            heap_post: h.post as f64,
             peak_rss: s.peak_rss as f64,
             slices_blocks: s.slices.blocks as f64,
             slices_peak_slices: s.slices.peak_slices as f64,
@@ -347,11 +353,11 @@ impl Report {
             },
             self.threads_used
         );
-        out += "| frame | engine | cell | #particles | surf/total particles | grid res. | surf/total vertices | #triangles | t_sp [s] | t_sf [s] | t_tri [s] | total [s] | peak heap | peak RSS |\n";
-        out += "|---|---|---|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+        out += "| frame | engine | cell | #particles | surf/total particles | grid res. | surf/total vertices | #triangles | t_sp [s] | t_sf [s] | t_tri [s] | t_post [s] | total [s] | peak heap | peak RSS |\n";
+        out += "|---|---|---|---:|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
         let row = |name: &str, engine: &str, cell: &str, f: &Figures| {
             format!(
-                "| {name} | {engine} | {cell} | {:.0} | {:.3} | {:.0} × {:.0} × {:.0} | {:.3} | {:.0} | {:.3} | {:.3} | {:.3} | {:.3} | {} | {} |\n",
+                "| {name} | {engine} | {cell} | {:.0} | {:.3} | {:.0} × {:.0} × {:.0} | {:.3} | {:.0} | {:.3} | {:.3} | {:.3} | {:.3} | {:.3} | {} | {} |\n",
                 f.particles,
                 f.surface_particle_ratio,
                 f.grid_res_x,
@@ -362,6 +368,7 @@ impl Report {
                 f.t_surface_particles,
                 f.t_scalar_field,
                 f.t_triangulation,
+                f.t_post,
                 f.t_total,
                 human(f.heap_peak as u64),
                 human(f.peak_rss as u64),

@@ -75,9 +75,11 @@ struct Output {
 /// ``triangles``, ...), ``spacing`` and ``cell`` in world units, ``engine``, ``field``,
 /// ``threads``, ``correction`` (with ``correct``: vertices ``moved``, their ``shift_mean`` and
 /// ``shift_max`` in edge lengths, |f − iso| ``residual_before_mean``/``_max`` and
-/// ``residual_after_mean``/``_max``), and ``times``: seconds per stage (``handler_array``, ``surface_particles``,
-/// ``band``, ``scalar_field``, ``triangulation``, their sum ``reconstruction``,
-/// ``attributes``, and ``total`` for all the native work).
+/// ``residual_after_mean``/``_max``), and ``times``: seconds per stage (``handler_array``,
+/// ``surface_particles``, ``band``, ``scalar_field``, ``triangulation``, ``post`` (the
+/// post-processing; 0 with ``raw=True`` and no ``decimate``, ``min_component`` or
+/// ``mesh_aabb``), their sum ``reconstruction``, ``attributes``, and ``total`` for all the
+/// native work).
 ///
 /// The GIL is released while the library works: Python threads can reconstruct frames in
 /// parallel. Raises ValueError for a bad array, bad settings (naming the key or value),
@@ -210,6 +212,7 @@ fn report<'py>(
         ("band", t.band),
         ("scalar_field", t.scalar_field),
         ("triangulation", t.triangulation),
+        ("post", t.post),
         ("reconstruction", t.reconstruction()),
         ("attributes", out.interpolation),
         ("total", out.total),

@@ -49,7 +49,9 @@ pub fn frame_number(path: PathBuf) -> Option<u64> {
 /// ``failed`` (the failed frames' reports), ``not_attempted``, ``ok`` (every frame of this job
 /// has its mesh), ``spacing``, ``warnings`` (strings) and ``frames``: a report per frame
 /// attempted, with ``frame`` (number or None), ``input``, ``output``, ``status`` (``"ok"`` or
-/// ``"error"``), and ``particles``, ``triangles``, ``vertices``, ``seconds``, or ``error``.
+/// ``"error"``), and ``particles``, ``triangles``, ``vertices``, ``seconds`` and ``times``
+/// (seconds: ``read``, ``reconstruction`` (of which ``post``: 0 with ``raw=True`` alone) and
+/// ``write``, which add up to ``seconds``), or ``error``.
 ///
 /// A failing frame does not raise: it is in ``failed``. Raises ValueError for bad settings,
 /// inputs that select no frame or outputs that collide, OSError when an output directory
@@ -169,6 +171,17 @@ fn frame_report<'py>(py: Python<'py>, o: &FrameOutcome) -> PyResult<Bound<'py, P
             d.set_item("triangles", s.triangles)?;
             d.set_item("vertices", s.vertices)?;
             d.set_item("seconds", seconds(s))?;
+            let t = &s.timings;
+            let times = PyDict::new(py);
+            for (name, d) in [
+                ("read", t.read),
+                ("reconstruction", t.reconstruction()),
+                ("post", t.post),
+                ("write", t.write),
+            ] {
+                times.set_item(name, d.as_secs_f64())?;
+            }
+            d.set_item("times", times)?;
         }
         Err(e) => {
             d.set_item("status", "error")?;

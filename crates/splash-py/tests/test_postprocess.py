@@ -261,3 +261,18 @@ def test_bad_meshes_and_settings_raise_value_error_naming_what_is_wrong():
         splash_sph.postprocess((vertices, faces))
     with pytest.raises(TypeError, match="mesh must be"):
         splash_sph.postprocess(vertices)
+
+
+def test_reconstruct_times_the_post_stage_and_raw_skips_it():
+    x = ball(R, 0.6)
+    stages = ("handler_array", "surface_particles", "band", "scalar_field", "triangulation",
+              "post")
+    for raw in (False, True):
+        t = splash_sph.reconstruct(x, R, raw=raw).report["times"]
+        assert all(t[k] >= 0 for k in stages)
+        assert sum(t[k] for k in stages) == pytest.approx(t["reconstruction"], rel=1e-9)
+        assert t["post"] <= t["reconstruction"] <= t["total"]
+        assert (t["post"] == 0) == raw, t
+    # Asked for on a raw mesh, the box is post-processing too.
+    boxed = splash_sph.reconstruct(x, R, raw=True, mesh_aabb=[-1, -1, -1, 0, 1, 1])
+    assert boxed.report["times"]["post"] > 0

@@ -116,3 +116,18 @@ def test_frame_numbers_are_the_last_digits_of_the_name():
     assert splash_sph.frame_number(Path("run2/fluid.0007.bgeo.gz")) == 7
     assert splash_sph.frame_number("mesh/f10b.obj") == 10
     assert splash_sph.frame_number("fluid.ply") is None
+
+
+def test_frames_report_their_stage_times_post_among_them(sim, tmp_path):
+    for raw in (False, True):
+        report = splash_sph.recon_sequence(sim, f"{tmp_path}/{raw}/", raw=raw, threads=2)
+        for f in report["frames"]:
+            t = f["times"]
+            assert set(t) == {"read", "reconstruction", "post", "write"}
+            assert all(v >= 0 for v in t.values())
+            assert t["post"] <= t["reconstruction"]
+            assert sum(t[k] for k in ("read", "reconstruction", "write")) == pytest.approx(
+                f["seconds"], rel=1e-9
+            )
+            # --raw alone runs no post-processing: its stage takes no time.
+            assert (t["post"] == 0) == raw, t

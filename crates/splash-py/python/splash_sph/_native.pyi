@@ -188,8 +188,9 @@ def reconstruct(
     ``Mesh.report`` holds the counts (``particles``, ``surface_particles``, ``vertices``,
     ``triangles``, ...), ``spacing`` and ``cell`` in world units, ``engine``, ``field``,
     ``threads``, and ``times``: seconds per stage (``handler_array``, ``surface_particles``,
-    ``band``, ``scalar_field``, ``triangulation``, their sum ``reconstruction``,
-    ``attributes``, and ``total`` for all the native work).
+    ``band``, ``scalar_field``, ``triangulation``, ``post`` (the post-processing; 0 with
+    ``raw=True`` and no ``decimate``, ``min_component`` or ``mesh_aabb``), their sum
+    ``reconstruction``, ``attributes``, and ``total`` for all the native work).
 
     The GIL is released while the library works: Python threads can reconstruct frames in
     parallel. Raises ValueError for a bad array, bad settings (naming the key or value),
@@ -352,6 +353,8 @@ class FrameReport(TypedDict, total=False):
     triangles: int
     vertices: int
     seconds: float
+    # read, reconstruction (of which post: 0 with raw=True alone), write; they add up to seconds
+    times: Dict[str, float]
     error: str  # status "error" only
 
 class RunReport(TypedDict):
