@@ -18,7 +18,7 @@ mod settings;
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 
-use crate::settings::Overrides;
+use crate::settings::{Overrides, options_function};
 
 /// The particle spacing r estimated from the particles' number density.
 ///
@@ -47,36 +47,14 @@ fn default_config(py: Python<'_>) -> PyResult<Bound<'_, PyAny>> {
     settings::to_dict(py, &splash_sph::Config::default())
 }
 
+options_function! {
 /// The configuration that ``reconstruct`` would use with the same ``config`` and keyword
 /// arguments, as TOML text (what ``splash config show`` prints; save it to reuse it with
 /// ``splash recon --config``). Raises ValueError as ``reconstruct`` does for bad settings.
-#[allow(clippy::too_many_arguments)]
-#[pyfunction]
-#[pyo3(signature = (config=None, *, spacing=None, cell=None, field=None, engine=None,
-    normals=None, correct=None, threads=None, max_memory=None))]
-fn config_toml<'py>(
-    config: Option<&Bound<'py, PyAny>>,
-    spacing: Option<f32>,
-    cell: Option<Bound<'py, PyAny>>,
-    field: Option<String>,
-    engine: Option<String>,
-    normals: Option<String>,
-    correct: Option<i64>,
-    threads: Option<i64>,
-    max_memory: Option<Bound<'py, PyAny>>,
-) -> PyResult<String> {
-    let overrides = Overrides {
-        spacing,
-        cell,
-        field,
-        engine,
-        normals,
-        correct,
-        threads,
-        max_memory,
-        ..Overrides::default()
-    };
-    Ok(settings::resolve(config, overrides)?.to_toml())
+fn config_toml<'py>(config: Option<&Bound<'py, PyAny>>, spacing: Option<f32>)
+    signature(config=None, *, spacing=None,) then() -> PyResult<String>, |options| {
+    Ok(settings::resolve(config, Overrides { spacing, ..options })?.to_toml())
+}
 }
 
 /// Closed triangle meshes from SPH particles (native part; use the ``splash_sph`` package).

@@ -14,7 +14,7 @@ use crate::arrays::{self, Points};
 use crate::errors::to_py;
 use crate::mesh::Mesh;
 use crate::pools;
-use crate::settings::{self, Overrides};
+use crate::settings::{self, Overrides, options_function};
 
 /// A per-particle attribute to carry onto the vertices. Scalars ride in the x of a vector:
 /// the interpolation is a weighted mean per component.
@@ -33,6 +33,7 @@ struct Output {
     total: Duration,
 }
 
+options_function! {
 /// The closed surface mesh of SPH particles.
 ///
 /// ``positions``: an (N, 3) floating-point array, C- or F-ordered or a strided view. A
@@ -85,43 +86,14 @@ struct Output {
 /// parallel. Raises ValueError for a bad array, bad settings (naming the key or value),
 /// non-finite coordinates (naming the particle) or a grid over the memory limit; OSError when
 /// the config file cannot be read.
-#[allow(clippy::too_many_arguments)]
-#[pyfunction]
-#[pyo3(signature = (positions, spacing=None, *, cell=None, field=None, engine=None, normals=None,
-    correct=None, threads=None, max_memory=None, config=None, attributes=None, raw=None,
-    decimate=None, min_component=None, mesh_aabb=None))]
-pub fn reconstruct<'py>(
+fn reconstruct<'py>(
     py: Python<'py>,
     positions: &Bound<'py, PyAny>,
     spacing: Option<f32>,
-    cell: Option<Bound<'py, PyAny>>,
-    field: Option<String>,
-    engine: Option<String>,
-    normals: Option<String>,
-    correct: Option<i64>,
-    threads: Option<i64>,
-    max_memory: Option<Bound<'py, PyAny>>,
-    config: Option<&Bound<'py, PyAny>>,
-    attributes: Option<&Bound<'py, PyAny>>,
-    raw: Option<bool>,
-    decimate: Option<Bound<'py, PyAny>>,
-    min_component: Option<f64>,
-    mesh_aabb: Option<Vec<f32>>,
-) -> PyResult<Mesh> {
-    let overrides = Overrides {
-        spacing,
-        cell,
-        field,
-        engine,
-        normals,
-        correct,
-        threads,
-        max_memory,
-        raw,
-        decimate,
-        min_component,
-        mesh_aabb,
-    };
+) signature(positions, spacing=None, *,)
+    then(config: Option<&Bound<'py, PyAny>>, attributes: Option<&Bound<'py, PyAny>>) post
+    -> PyResult<Mesh>, |options| {
+    let overrides = Overrides { spacing, ..options };
     let config = settings::resolve(config, overrides)?;
     if config.spacing.is_none() {
         return Err(PyValueError::new_err(
@@ -159,6 +131,7 @@ pub fn reconstruct<'py>(
         format,
         up_axis,
     ))
+}
 }
 
 fn run(

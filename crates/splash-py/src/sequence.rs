@@ -13,7 +13,7 @@ use splash_sph::{FrameStats, InputFormat, MeshFormat, OutputConfig, UpAxis};
 
 use crate::errors::to_py;
 use crate::pools;
-use crate::settings::{self, Overrides};
+use crate::settings::{self, Overrides, options_function};
 
 /// The frame number of a file: the last run of digits in its name without the extension
 /// (``frame_0042.ply`` → 42, ``fluid.0007.bgeo.gz`` → 7), as ``splash recon`` numbers and
@@ -23,6 +23,7 @@ pub fn frame_number(path: PathBuf) -> Option<u64> {
     frames::path_frame_number(&path)
 }
 
+options_function! {
 /// Reconstructs a sequence of particle files into mesh files, as ``splash recon`` does.
 ///
 /// ``inputs``: a particle file, a directory of them (its frame sequence), a glob pattern
@@ -57,14 +58,7 @@ pub fn frame_number(path: PathBuf) -> Option<u64> {
 /// inputs that select no frame or outputs that collide, OSError when an output directory
 /// cannot be written, before any frame is reconstructed. The GIL is released between
 /// ``progress`` calls.
-#[allow(clippy::too_many_arguments)]
-#[pyfunction]
-#[pyo3(signature = (inputs, output, *, progress=None, frames=None, shard=None,
-    skip_existing=false, fail_fast=false, attributes=None, input_format=None, format=None,
-    up_axis=None, spacing=None, cell=None, field=None, engine=None, normals=None, correct=None,
-    threads=None, max_memory=None, config=None, raw=None, decimate=None, min_component=None,
-    mesh_aabb=None))]
-pub fn recon_sequence<'py>(
+fn recon_sequence<'py>(
     py: Python<'py>,
     inputs: &Bound<'py, PyAny>,
     output: &Bound<'py, PyAny>,
@@ -78,33 +72,12 @@ pub fn recon_sequence<'py>(
     format: Option<String>,
     up_axis: Option<String>,
     spacing: Option<f32>,
-    cell: Option<Bound<'py, PyAny>>,
-    field: Option<String>,
-    engine: Option<String>,
-    normals: Option<String>,
-    correct: Option<i64>,
-    threads: Option<i64>,
-    max_memory: Option<Bound<'py, PyAny>>,
-    config: Option<&Bound<'py, PyAny>>,
-    raw: Option<bool>,
-    decimate: Option<Bound<'py, PyAny>>,
-    min_component: Option<f64>,
-    mesh_aabb: Option<Vec<f32>>,
-) -> PyResult<Bound<'py, PyDict>> {
-    let overrides = Overrides {
-        spacing,
-        cell,
-        field,
-        engine,
-        normals,
-        correct,
-        threads,
-        max_memory,
-        raw,
-        decimate,
-        min_component,
-        mesh_aabb,
-    };
+) signature(inputs, output, *, progress=None, frames=None, shard=None, skip_existing=false,
+    fail_fast=false, attributes=None, input_format=None, format=None, up_axis=None,
+    spacing=None,)
+    then(config: Option<&Bound<'py, PyAny>>) post
+    -> PyResult<Bound<'py, PyDict>>, |options| {
+    let overrides = Overrides { spacing, ..options };
     let mut config = settings::resolve(config, overrides)?;
     if let Some(names) = attribute_names(attributes)? {
         config.output.attributes = OutputConfig::parse_attributes(&names).map_err(to_py)?;
@@ -156,6 +129,7 @@ pub fn recon_sequence<'py>(
     }
     let report = run.map_err(to_py)?;
     run_report(py, &report, &events)
+}
 }
 
 /// The frame's report as `progress` and the run report give it.

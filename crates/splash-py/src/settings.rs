@@ -10,6 +10,70 @@ use splash_sph::{Bytes, Config, Engine, Length, Normals};
 
 use crate::errors::to_py;
 
+/// Defines a `#[pyfunction]` that takes the keyword arguments overriding the configuration,
+/// named and typed here only: after the function's own parameters (`signature` gives their
+/// part of the Python signature, up to and with the `*`) come `cell` … `max_memory`, then the
+/// `then` parameters (keyword arguments defaulting to None), then, with `post`, `raw` …
+/// `mesh_aabb`. The body sees them as `$options`, an [`Overrides`] whose `spacing` is None
+/// (each function places that argument itself: positional in `reconstruct`).
+macro_rules! options_function {
+    (
+        $(#[$meta:meta])*
+        fn $name:ident<'py>($($param:ident: $ty:ty),* $(,)?)
+            signature($($sig:tt)*) then($($then:ident: $then_ty:ty),*) post
+            -> $ret:ty, |$options:ident| $body:block
+    ) => {
+        options_function!(@emit $(#[$meta])* $name ($($param: $ty),*) ($($sig)*)
+            ($($then: $then_ty),*)
+            (raw: Option<bool>, decimate: Option<Bound<'py, PyAny>>, min_component: Option<f64>,
+             mesh_aabb: Option<Vec<f32>>) $ret, $options $body);
+    };
+    (
+        $(#[$meta:meta])*
+        fn $name:ident<'py>($($param:ident: $ty:ty),* $(,)?)
+            signature($($sig:tt)*) then($($then:ident: $then_ty:ty),*)
+            -> $ret:ty, |$options:ident| $body:block
+    ) => {
+        options_function!(@emit $(#[$meta])* $name ($($param: $ty),*) ($($sig)*)
+            ($($then: $then_ty),*) () $ret, $options $body);
+    };
+    (@emit $(#[$meta:meta])* $name:ident ($($param:ident: $ty:ty),*) ($($sig:tt)*)
+        ($($then:ident: $then_ty:ty),*) ($($post:ident: $post_ty:ty),*) $ret:ty,
+        $options:ident $body:block) => {
+        $(#[$meta])*
+        #[allow(clippy::too_many_arguments)]
+        #[pyo3::pyfunction]
+        #[pyo3(signature = ($($sig)* cell=None, field=None, engine=None, normals=None,
+            correct=None, threads=None, max_memory=None $(, $then=None)* $(, $post=None)*))]
+        pub fn $name<'py>(
+            $($param: $ty,)*
+            cell: Option<Bound<'py, PyAny>>,
+            field: Option<String>,
+            engine: Option<String>,
+            normals: Option<String>,
+            correct: Option<i64>,
+            threads: Option<i64>,
+            max_memory: Option<Bound<'py, PyAny>>,
+            $($then: $then_ty,)*
+            $($post: $post_ty,)*
+        ) -> $ret {
+            let $options = $crate::settings::Overrides {
+                cell,
+                field,
+                engine,
+                normals,
+                correct,
+                threads,
+                max_memory,
+                $($post,)*
+                ..Default::default()
+            };
+            $body
+        }
+    };
+}
+pub(crate) use options_function;
+
 /// The keyword arguments that override the configuration; None leaves its value.
 #[derive(Default)]
 pub struct Overrides<'py> {
@@ -44,20 +108,7 @@ pub fn resolve(config: Option<&Bound<'_, PyAny>>, overrides: Overrides<'_>) -> P
             }
         },
     };
-    let Overrides {
-        spacing,
-        cell,
-        field,
-        engine,
-        normals,
-        correct,
-        threads,
-        max_memory,
-        raw,
-        decimate,
-        min_component,
-        mesh_aabb,
-    } = overrides;
+    let o = overrides;
     let length = |value: Bound<'_, PyAny>, key: &str| match value.extract::<String>() {
         Ok(text) => Length::parse(&text).map_err(to_py),
         Err(_) => Ok(Length::World(value.extract().map_err(|_| {
@@ -66,8 +117,8 @@ pub fn resolve(config: Option<&Bound<'_, PyAny>>, overrides: Overrides<'_>) -> P
             ))
         })?)),
     };
-    let decimate = decimate.map(|d| length(d, "decimate")).transpose()?;
-    let mesh_aabb = match mesh_aabb {
+    let decimate = o.decimate.map(|d| length(d, "decimate")).transpose()?;
+    let mesh_aabb = match o.mesh_aabb {
         None => None,
         Some(b) => Some(<[f32; 6]>::try_from(b.as_slice()).map_err(|_| {
             PyValueError::new_err(format!(
@@ -76,7 +127,7 @@ pub fn resolve(config: Option<&Bound<'_, PyAny>>, overrides: Overrides<'_>) -> P
             ))
         })?),
     };
-    let cell = match cell {
+    let cell = match o.cell {
         None => None,
         Some(cell) => Some(match cell.extract::<String>() {
             Ok(text) => Length::parse(&text).map_err(to_py)?,
@@ -85,14 +136,14 @@ pub fn resolve(config: Option<&Bound<'_, PyAny>>, overrides: Overrides<'_>) -> P
             })?),
         }),
     };
-    let threads = match threads {
+    let threads = match o.threads {
         None => None,
         Some(n) => Some(usize::try_from(n).ok().filter(|&n| n > 0).ok_or_else(|| {
             PyValueError::new_err(format!("threads must be at least 1, got {n}"))
         })?),
     };
     // Out-of-range counts are refused by validate, naming the key.
-    let correct = match correct {
+    let correct = match o.correct {
         None => None,
         Some(n) => Some(u32::try_from(n).map_err(|_| {
             PyValueError::new_err(format!(
@@ -100,7 +151,7 @@ pub fn resolve(config: Option<&Bound<'_, PyAny>>, overrides: Overrides<'_>) -> P
             ))
         })?),
     };
-    let max_memory = match max_memory {
+    let max_memory = match o.max_memory {
         None => None,
         Some(m) => Some(match m.extract::<String>() {
             Ok(text) => Bytes::parse(&text).map_err(to_py)?,
@@ -112,15 +163,17 @@ pub fn resolve(config: Option<&Bound<'_, PyAny>>, overrides: Overrides<'_>) -> P
         }),
     };
     let overrides = splash_sph::Overrides {
-        field,
-        spacing,
+        field: o.field,
+        spacing: o.spacing,
         cell,
-        engine: engine
+        engine: o
+            .engine
             .as_deref()
             .map(Engine::parse)
             .transpose()
             .map_err(to_py)?,
-        normals: normals
+        normals: o
+            .normals
             .as_deref()
             .map(Normals::parse)
             .transpose()
@@ -128,9 +181,9 @@ pub fn resolve(config: Option<&Bound<'_, PyAny>>, overrides: Overrides<'_>) -> P
         correct,
         threads,
         max_memory,
-        raw,
+        raw: o.raw,
         decimate,
-        min_component,
+        min_component: o.min_component,
         mesh_aabb,
         ..Default::default()
     };
