@@ -70,13 +70,13 @@ pub fn postprocess<'py>(
     cell: Option<Bound<'py, PyAny>>,
     config: Option<&Bound<'py, PyAny>>,
     raw: Option<bool>,
-    smoothing_iterations: Option<u32>,
+    smoothing_iterations: Option<i64>,
     lambda_: Option<f32>,
     mu: Option<f32>,
-    volume_rounds: Option<u32>,
+    volume_rounds: Option<i64>,
     max_offset: Option<f32>,
-    relax_iterations: Option<u32>,
-    volume_steps: Option<u32>,
+    relax_iterations: Option<i64>,
+    volume_steps: Option<i64>,
     mesh_aabb: Option<Vec<f32>>,
     min_component: Option<f64>,
     decimate: Option<Bound<'py, PyAny>>,
@@ -95,11 +95,27 @@ pub fn postprocess<'py>(
     };
     let mut config = settings::resolve(config, overrides)?;
     let post = &mut config.post;
-    let set = |slot: &mut u32, value: Option<u32>| *slot = value.unwrap_or(*slot);
-    set(&mut post.smoothing_iterations, smoothing_iterations);
-    set(&mut post.volume_rounds, volume_rounds);
-    set(&mut post.relax_iterations, relax_iterations);
-    set(&mut post.volume_steps, volume_steps);
+    // Counts: a negative or huge one is refused naming its keyword.
+    let set = |slot: &mut u32, value: Option<i64>, name: &str| -> PyResult<()> {
+        if let Some(v) = value {
+            *slot = u32::try_from(v).map_err(|_| {
+                PyValueError::new_err(format!("{name} must be a count from 0, got {v}"))
+            })?;
+        }
+        Ok(())
+    };
+    set(
+        &mut post.smoothing_iterations,
+        smoothing_iterations,
+        "smoothing_iterations",
+    )?;
+    set(&mut post.volume_rounds, volume_rounds, "volume_rounds")?;
+    set(
+        &mut post.relax_iterations,
+        relax_iterations,
+        "relax_iterations",
+    )?;
+    set(&mut post.volume_steps, volume_steps, "volume_steps")?;
     post.lambda = lambda_.unwrap_or(post.lambda);
     post.mu = mu.unwrap_or(post.mu);
     post.max_offset = max_offset.unwrap_or(post.max_offset);

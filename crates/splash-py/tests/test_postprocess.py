@@ -250,6 +250,7 @@ def test_bad_meshes_and_settings_raise_value_error_naming_what_is_wrong():
         ((vertices, faces[:, :2]), {}, "shape (F, 3)"),
         ((vertices[:, :2], faces), {}, "shape (N, 3)"),
         ((vertices, faces), {"mu": -0.1}, "post.mu"),
+        ((vertices, faces), {"volume_steps": -1}, "volume_steps must be a count from 0, got -1"),
         ((vertices, faces), {"mesh_aabb": [0, 0, 0, 1, 1]}, "six numbers"),
         ((vertices, faces), {"particles": np.full((1, 3), np.inf, np.float32)}, "particle 0"),
     ]
