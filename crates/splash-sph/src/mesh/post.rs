@@ -173,7 +173,8 @@ pub enum Volumes<'a> {
 /// Errors ([`Error::Input`], naming what is wrong): triangles referencing missing vertices,
 /// non-finite vertices or particles, normals neither absent nor one per vertex, a surface with
 /// boundary, non-manifold or inconsistently wound edges (counted); [`Error::Config`]: a
-/// `spacing` or `cell` that is not a positive finite length, or a `config` out of range.
+/// `spacing` or `cell` that is not a positive finite length, or a `config` out of range;
+/// [`Error::Limit`]: a mesh beyond 2^31 vertices.
 pub fn postprocess_mesh(
     mesh: &mut TriMesh,
     spacing: f32,
