@@ -158,14 +158,14 @@ def reconstruct(scene, render, depsgraph=None):
             _remember(key, arrays, settings.cache_mb * 1e6)
     except ValueError as e:
         raise LiveError(f"frame {frame}: {e}") from None
-    meshdata.fill(surface.data, *arrays)
+    in_place = meshdata.fill(surface.data, *arrays)
     _state["shown"] = (surface.name, key)
     surface.matrix_world = source.matrix_world
     seconds = time.perf_counter() - started
     settings.status = (
         f"frame {frame}: {len(positions)} particles, {len(arrays[1])} triangles, "
         f"{seconds:.2f} s ({'render' if render else 'viewport'}"
-        f"{', cached' if cached else ''})"
+        f"{', cached' if cached else ''}{', in place' if in_place else ''})"
     )
     settings.error = ""
     return surface

@@ -340,12 +340,20 @@ def test_post(live, splash_sph, command, ui):
         same = np.array_equal(v, want.vertices) and np.array_equal(f, want.faces)
         check(same, f"live with {post}: the package's mesh ({len(f)} triangles)")
         check(closed(f), f"live with {post}: closed and manifold")
+        bpy.context.evaluated_depsgraph_get()  # as a redraw would
+        corners = np.array(surface.bound_box)
+        check(
+            np.allclose(corners.min(0), v.min(0), atol=1e-6)
+            and np.allclose(corners.max(0), v.max(0), atol=1e-6),
+            f"live with {post}: the object's bounds are the new mesh's",
+        )
         return v, f
 
     q.raw = True
     v_raw, f_raw = shown(raw=True)
     q.raw = False
     v_def, f_def = shown()
+    check("in place" in s.status, f"raw to post-processed: the mesh updated in place ({s.status})")
     check(
         (len(v_raw), len(f_raw)) == (len(v_def), len(f_def)),
         f"raw and post-processed: the same counts ({len(v_raw)} vertices, {len(f_raw)} faces)",
