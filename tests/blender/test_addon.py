@@ -499,6 +499,19 @@ def test_command(command, ui):
         == ("'my sim/'", True, "2r", "zb05", "out/"),
         "the pasted line sets the panel",
     )
+    post = "splash recon x --raw --decimate 0.2r --min-component 3 --mesh-aabb 0,0,0,1,1,1"
+    check(bpy.ops.splash.paste_command(line=post) == {"FINISHED"}, "paste post-processing")
+    q = s.render
+    check(
+        (q.raw, q.use_decimate, abs(q.decimate - 0.2) < 1e-6, q.use_min_component,
+         q.min_component, s.clip_object) == (True, True, True, True, 3.0, None),
+        "the pasted line sets raw, decimate and the smallest component, not the box",
+    )  # fmt: skip
+    bpy.ops.splash.paste_command(line=other)
+    check(
+        (q.raw, q.use_decimate, q.use_min_component) == (False, False, False),
+        "a line without them turns them off",
+    )
     try:
         bpy.ops.splash.paste_command(line="ls -l")
         check(False, "a line that is not splash recon is refused")
