@@ -13,7 +13,9 @@ ENGINES = ("narrow-band", "full-gather", "scatter", "slices")
 
 def to_command(s):
     """`splash recon …` for settings `s`: input, output, spacing, cell, field, normals,
-    engine, velocity (bool), up_axis ("" or "y"/"z")."""
+    engine, velocity (bool), up_axis ("" or "y"/"z"), and post-processing: raw (bool),
+    decimate (in r) and min_component (in r³), None when off, mesh_aabb (six numbers) or
+    None."""
     words = ["splash", "recon", s.get("input") or "PARTICLES"]
     if s.get("spacing"):
         # Blender keeps it as a float32: 7 digits say all it holds.
@@ -21,6 +23,14 @@ def to_command(s):
     words += ["--cell", s["cell"], "--field", s["field"], "--normals", s["normals"]]
     if s.get("engine", "narrow-band") != "narrow-band":
         words += ["--engine", s["engine"]]
+    if s.get("raw"):
+        words.append("--raw")
+    if s.get("decimate") is not None:
+        words += ["--decimate", f"{s['decimate']:.7g}r"]
+    if s.get("min_component") is not None:
+        words += ["--min-component", f"{s['min_component']:.7g}"]
+    if s.get("mesh_aabb") is not None:
+        words += ["--mesh-aabb", ",".join(f"{x:.7g}" for x in s["mesh_aabb"])]
     if s.get("velocity"):
         # OBJ has no room for velocities.
         words += ["--attributes", "velocity", "--format", "ply"]
@@ -47,12 +57,12 @@ def from_command(line):
     if not words or words[0] != "recon":
         raise CommandError("expected a 'splash recon …' command line")
     words = words[1:]
-    out, ignored, inputs = {}, [], []
+    out, ignored, inputs, decimate = {}, [], [], []
     takes_value = {
         "--spacing", "--particle-radius", "--cell", "--field", "--normals", "--engine",
         "--attributes", "--up-axis", "-o", "--output", "--format", "--config", "--threads",
         "--frames", "--shard", "--max-memory", "--input-format", "--particle-aabb",
-        "--block", "--log-format", "--report",
+        "--block", "--log-format", "--report", "--decimate", "--min-component", "--mesh-aabb",
     }  # fmt: skip
     i = 0
     while i < len(words):
@@ -65,6 +75,10 @@ def from_command(line):
                 raise CommandError(f"{word} needs a value")
             value = words[i + 1]
             i += 2
+        elif word == "--raw":
+            out["raw"] = True
+            i += 1
+            continue
         else:
             if word.startswith("-"):
                 ignored.append(word)
@@ -89,23 +103,43 @@ def from_command(line):
             out["velocity"] = any(n in ("velocity", "velocities", "vel", "v") for n in names)
         elif word == "--up-axis":
             out["up_axis"] = _choice(word, value.lower(), ("y", "z"))
+        elif word == "--decimate":
+            decimate.append(value)
+        elif word == "--min-component":
+            out["min_component"] = _number(word, value, positive=False)
         elif word in ("-o", "--output"):
             out["output"] = value
         else:
             ignored.append(f"{word} {value}")
     if inputs:
         out["input"] = " ".join(shlex.quote(w) for w in inputs)
+    if decimate:
+        # The panel holds it in r: a plain length needs the line's spacing.
+        out["decimate"] = _in_spacings("--decimate", decimate[-1], out.get("spacing"))
     return out, ignored
 
 
-def _number(option, value):
+def _number(option, value, positive=True):
     try:
         number = float(value)
     except ValueError:
         raise CommandError(f"{option} {value}: expected a number") from None
-    if not number > 0:
-        raise CommandError(f"{option} {value}: expected a positive number")
+    if not (number > 0 if positive else number >= 0):
+        sign = "positive" if positive else "non-negative"
+        raise CommandError(f"{option} {value}: expected a {sign} number")
     return number
+
+
+def _in_spacings(option, value, spacing):
+    """A length as spacings r: "0.1r" and "r" as written, a plain length divided by the
+    line's --spacing."""
+    text = value.strip().lower()
+    if text.endswith("r"):
+        return _number(option, text[:-1] or "1")
+    if spacing is None:
+        raise CommandError(f"{option} {value}: the panel takes it in spacings r (e.g. 0.1r), "
+                           "or as a length with --spacing on the line")  # fmt: skip
+    return _number(option, text) / spacing
 
 
 def _choice(option, value, choices):

@@ -15,6 +15,7 @@ from collections import OrderedDict
 
 import bpy
 from bpy.app.handlers import persistent
+from mathutils import Vector
 
 from . import meshdata, vendor
 
@@ -46,6 +47,40 @@ def surface_object(scene, source):
     collection = source.users_collection[0] if source.users_collection else scene.collection
     collection.objects.link(obj)
     return obj
+
+
+def post_options(settings, q, source):
+    """The package's post-processing keywords for the settings group `q`: `raw`, `decimate`
+    (a length in r), `min_component` (r³) and `mesh_aabb`, the clip box in `source`'s space."""
+    # Blender keeps floats as float32: 7 digits, as the copied command line writes them.
+    return {
+        "raw": q.raw,
+        "decimate": f"{q.decimate:.7g}r" if q.use_decimate else None,
+        "min_component": float(f"{q.min_component:.7g}") if q.use_min_component else None,
+        "mesh_aabb": clip_box(settings.clip_object, source),
+    }
+
+
+def clip_box(box, source):
+    """(min x, min y, min z, max x, max y, max z): the bounds in `source`'s space (the world's
+    without a source) of the object `box`'s bounding box (an Empty's: its display cube), or
+    None without one. Raises LiveError for a box without volume."""
+    if box is None:
+        return None
+    if box.type == "EMPTY":
+        a = box.empty_display_size
+        corners = [(x, y, z) for x in (-a, a) for y in (-a, a) for z in (-a, a)]
+    else:
+        corners = [tuple(c) for c in box.bound_box]
+    to_source = box.matrix_world
+    if source is not None:
+        to_source = source.matrix_world.inverted() @ to_source
+    points = [to_source @ Vector(c) for c in corners]
+    lo = tuple(float(f"{min(p[i] for p in points):.7g}") for i in range(3))
+    hi = tuple(float(f"{max(p[i] for p in points):.7g}") for i in range(3))
+    if not all(a < b for a, b in zip(lo, hi)):
+        raise LiveError(f"the clip box '{box.name}' is flat: its bounds are {lo} to {hi}")
+    return lo + hi
 
 
 def particles(source, depsgraph):
@@ -82,6 +117,7 @@ def reconstruct(scene, render, depsgraph=None):
             settings.spacing = splash_sph.estimate_spacing(positions)
             log.info("splash: estimated spacing r = %g from frame %d", settings.spacing, frame)
         q = quality(scene, render)
+        post = post_options(settings, q, source)
         key = (
             source.name,
             frame,
@@ -93,6 +129,7 @@ def reconstruct(scene, render, depsgraph=None):
             q.field,
             q.normals,
             q.engine,
+            tuple(post.items()),
         )
         surface = surface_object(scene, source)
         if _state.get("shown") == (surface.name, key) and len(surface.data.vertices):
@@ -114,20 +151,21 @@ def reconstruct(scene, render, depsgraph=None):
                 normals=q.normals,
                 engine=q.engine,
                 attributes=None if velocities is None else {"velocity": velocities},
+                **post,
             )
             normals = mesh.normals if len(mesh.normals) else None
             arrays = (mesh.vertices, mesh.faces, normals, dict(mesh.attributes))
             _remember(key, arrays, settings.cache_mb * 1e6)
     except ValueError as e:
         raise LiveError(f"frame {frame}: {e}") from None
-    meshdata.fill(surface.data, *arrays)
+    in_place = meshdata.fill(surface.data, *arrays)
     _state["shown"] = (surface.name, key)
     surface.matrix_world = source.matrix_world
     seconds = time.perf_counter() - started
     settings.status = (
         f"frame {frame}: {len(positions)} particles, {len(arrays[1])} triangles, "
         f"{seconds:.2f} s ({'render' if render else 'viewport'}"
-        f"{', cached' if cached else ''})"
+        f"{', cached' if cached else ''}{', in place' if in_place else ''})"
     )
     settings.error = ""
     return surface

@@ -32,7 +32,7 @@ ENGINES = [
 ]
 
 
-def _quality(cell, field, normals):
+def _quality(cell, field, normals, raw):
     """A settings group with its own defaults (viewport and render differ)."""
     return type(
         f"SPLASH_PG_quality_{field}_{cell.replace('/', '_')}",
@@ -47,15 +47,55 @@ def _quality(cell, field, normals):
                 "field": EnumProperty(name="Field", items=FIELDS, default=field),
                 "normals": EnumProperty(name="Normals", items=NORMALS, default=normals),
                 "engine": EnumProperty(name="Engine", items=ENGINES, default="narrow-band"),
+                "raw": BoolProperty(
+                    name="Raw isosurface",
+                    default=raw,
+                    description="The field's exact isosurface (--raw): no smoothing, no volume "
+                    "restoration. Off: smoothed, each part given its particles' volume (at the "
+                    "viewport's coarse settings a third more time per frame)",
+                ),
+                "use_decimate": BoolProperty(
+                    name="Decimate",
+                    default=False,
+                    description="Fewer triangles (--decimate): quadric edge collapses keeping "
+                    "the mesh within the tolerance of the full surface, closed and manifold",
+                ),
+                "decimate": FloatProperty(
+                    name="Tolerance (r)",
+                    default=0.1,
+                    min=1e-4,
+                    soft_max=1.0,
+                    precision=3,
+                    description="Largest distance of a vertex or triangle centre from the full "
+                    "surface, in spacings r",
+                ),
+                "use_min_component": BoolProperty(
+                    name="Drop droplets",
+                    default=False,
+                    description="Drop the parts of the surface enclosing less than the volume "
+                    "below (--min-component)",
+                ),
+                "min_component": FloatProperty(
+                    name="Smallest volume (r³)",
+                    default=2.0,
+                    min=0.0,
+                    soft_max=100.0,
+                    precision=2,
+                    description="In particle volumes r³: after the volume restoration a droplet "
+                    "of n particles holds n r³; a raw lone particle's SSP07 sphere about 3.6 r³",
+                ),
             }
         },
     )
 
 
 # Custom split normals cost Blender about 4 s per million triangles to set up (Blender 3.4):
-# the viewport shades smooth with Blender's own vertex normals instead.
-ViewportQuality = _quality("r", "density", "none")
-RenderQuality = _quality("r/2", "ssp07", "field")
+# the viewport shades smooth with Blender's own vertex normals instead. Post-processing
+# adds a third to the package's time at the viewport's settings (cbd-small, CPU 0.051 ->
+# 0.068 s/frame), which 24 fps cannot spare: the viewport shows the raw isosurface by
+# default, renders the post-processed one.
+ViewportQuality = _quality("r", "density", "none", raw=True)
+RenderQuality = _quality("r/2", "ssp07", "field", raw=False)
 
 
 def _poll_particles(_self, obj):
@@ -102,6 +142,14 @@ class SPLASH_PG_live(bpy.types.PropertyGroup):
     )
     viewport: PointerProperty(type=ViewportQuality)
     render: PointerProperty(type=RenderQuality)
+    clip_object: PointerProperty(
+        name="Clip box",
+        type=bpy.types.Object,
+        description="Keep only the surface inside this object's bounding box (--mesh-aabb), "
+        "its cuts capped so that it stays closed; an Empty with the Cube display shows the box. "
+        "The box is axis-aligned in the particle object's space: the bounds of this object's "
+        "box there. Viewport and render alike; none: no clipping",
+    )
     input_path: StringProperty(
         name="Particle files",
         default="",

@@ -10,8 +10,10 @@ from . import command, live, sequence
 
 
 def _settings(scene):
+    """The render settings as `command.to_command` takes them."""
     s = scene.splash
     q = s.render
+    post = live.post_options(s, q, s.source)
     return {
         "input": s.input_path,
         "output": s.output_path,
@@ -21,6 +23,11 @@ def _settings(scene):
         "normals": q.normals,
         "engine": q.engine,
         "velocity": s.velocity,
+        "raw": q.raw,
+        "decimate": q.decimate if q.use_decimate else None,
+        "min_component": q.min_component if q.use_min_component else None,
+        # The box is in the particle object's space, the files' coordinates.
+        "mesh_aabb": post["mesh_aabb"],
     }
 
 
@@ -60,7 +67,11 @@ class SPLASH_OT_copy_command(bpy.types.Operator):
     bl_label = "Copy as CLI command"
 
     def execute(self, context):
-        line = command.to_command(_settings(context.scene))
+        try:
+            line = command.to_command(_settings(context.scene))
+        except live.LiveError as e:
+            self.report({"ERROR"}, f"splash: {e}")
+            return {"CANCELLED"}
         context.window_manager.clipboard = line
         self.report({"INFO"}, line)
         return {"FINISHED"}
@@ -93,6 +104,15 @@ class SPLASH_OT_paste_command(bpy.types.Operator):
         for key in ("cell", "field", "normals", "engine"):
             if key in parsed:
                 setattr(s.render, key, parsed[key])
+        # Post-processing options are off unless the line names them, as in the CLI.
+        q = s.render
+        q.raw = parsed.get("raw", False)
+        q.use_decimate = "decimate" in parsed
+        q.use_min_component = "min_component" in parsed
+        if q.use_decimate:
+            q.decimate = parsed["decimate"]
+        if q.use_min_component:
+            q.min_component = parsed["min_component"]
         if ignored:
             self.report({"WARNING"}, "splash: not in the panel, ignored: " + ", ".join(ignored))
         else:
@@ -169,8 +189,15 @@ class VIEW3D_PT_splash(bpy.types.Panel):
         for title, q in (("Viewport", s.viewport), ("Render", s.render)):
             col = box.column(align=True)
             col.label(text=title)
-            for key in ("cell", "field", "normals", "engine"):
+            for key in ("cell", "field", "normals", "engine", "raw"):
                 col.prop(q, key)
+            for use, key in (("use_decimate", "decimate"), ("use_min_component", "min_component")):
+                row = col.row(align=True)
+                row.prop(q, use)
+                sub = row.row(align=True)
+                sub.active = getattr(q, use)
+                sub.prop(q, key, text="")
+        box.prop(s, "clip_object")
         row = box.row(align=True)
         row.operator("splash.reconstruct").render = False
         row.operator("splash.reconstruct", text="Render settings").render = True

@@ -1,12 +1,16 @@
 """Live mode's time per frame at the viewport and the render settings, in headless Blender:
 
-    blender -b --factory-startup --python tests/blender/bench_live.py -- \
+    blender -b --factory-startup --python tests/blender/bench_live.py -- \\
         --addon target/splash_blender.zip --particles ../shared/data/cbd-small --spacing 0.014
 
-Each particle frame is loaded into one object's vertices (with its velocity attribute, as a
-sequence loader would), then the add-on's frame update runs without a cache; the time in
-the package's `reconstruct` within it is printed apart from the rest (particles out of
-Blender, the mesh into it).
+(or `python tests/blender/bench_live.py -- …` with the `bpy` module). Each particle frame is
+loaded into one object's vertices (with its velocity attribute, as a sequence loader would),
+then the add-on's frame update runs without a cache, and the depsgraph is evaluated as a
+redraw would (Blender builds the new mesh's normals and bounds there). End to end is the sum;
+it is split into the package's `reconstruct`, the particles out of Blender
+(`live.particles`), the mesh into it (`meshdata.fill`), that evaluation, and the rest (the
+particle object's own evaluation, the cache key, the panel's status). `--repeat N` runs the
+frames N times; `--modes viewport` skips the render settings.
 """
 
 import argparse
@@ -21,36 +25,44 @@ args = argparse.ArgumentParser()
 args.add_argument("--addon")
 args.add_argument("--particles", required=True)
 args.add_argument("--spacing", type=float, required=True)
+args.add_argument("--repeat", type=int, default=1)
+args.add_argument("--modes", default="viewport,render")
 args = args.parse_args(sys.argv[sys.argv.index("--") + 1 :] if "--" in sys.argv else [])
 if args.addon:
     bpy.ops.preferences.addon_install(filepath=args.addon)
 bpy.ops.preferences.addon_enable(module="splash_blender")
-from splash_blender import live, vendor  # noqa: E402
+from splash_blender import live, meshdata, vendor  # noqa: E402
 
 splash_sph = vendor.splash_sph()
-inside = [0.0]
-_reconstruct = splash_sph.reconstruct
+inside = {}
 
 
-def timed_reconstruct(*a, **k):
-    started = time.perf_counter()
-    try:
-        return _reconstruct(*a, **k)
-    finally:
-        inside[0] += time.perf_counter() - started
+def timed(name, function):
+    def call(*a, **k):
+        started, cpu = time.perf_counter(), time.process_time()
+        try:
+            return function(*a, **k)
+        finally:
+            inside[name] = inside.get(name, 0.0) + time.perf_counter() - started
+            inside[name + " cpu"] = inside.get(name + " cpu", 0.0) + time.process_time() - cpu
+
+    return call
 
 
-splash_sph.reconstruct = timed_reconstruct
+splash_sph.reconstruct = timed("package", splash_sph.reconstruct)
+live.particles = timed("particles out", live.particles)
+meshdata.fill = timed("mesh in", meshdata.fill)
 scene = bpy.context.scene
 source = bpy.data.objects.new("particles", bpy.data.meshes.new("particles"))
 scene.collection.objects.link(source)
 s = scene.splash
 s.source, s.spacing, s.cache_mb = source, args.spacing, 0
 files = sorted(f for f in os.listdir(args.particles) if f.endswith(".ply"))
-times = {"viewport": [], "render": []}
-triangles = {"viewport": [], "render": []}
-package = {"viewport": [], "render": []}
-for name in files:
+modes = args.modes.split(",")
+parts = ("package", "particles out", "mesh in", "evaluation", "rest")
+rows = {mode: [] for mode in modes}
+triangles = {mode: [] for mode in modes}
+for name in files * args.repeat:
     p = splash_sph.read_particles(os.path.join(args.particles, name))
     source.data.clear_geometry()
     source.data.vertices.add(len(p))
@@ -58,21 +70,34 @@ for name in files:
     if "velocity" in p:
         a = source.data.attributes.new("velocity", "FLOAT_VECTOR", "POINT")
         a.data.foreach_set("vector", p["velocity"].ravel())
-    for mode, render in (("viewport", False), ("render", True)):
-        inside[0] = 0.0
-        started = time.perf_counter()
-        ok = live.update(scene, render=render)
-        times[mode].append(time.perf_counter() - started)
-        package[mode].append(inside[0])
+    for mode in modes:
+        inside.clear()
+        started, cpu = time.perf_counter(), time.process_time()
+        ok = live.update(scene, render=mode == "render")
+        updated = time.perf_counter()
+        bpy.context.evaluated_depsgraph_get()
+        inside["evaluation"] = time.perf_counter() - updated
+        total = time.perf_counter() - started
+        cpu = time.process_time() - cpu
         assert ok, s.error
+        inside["rest"] = total - sum(inside.get(k, 0.0) for k in parts[:-1])
+        # CPU seconds of every thread (the package's workers too): less swayed by a busy
+        # machine than the wall clock.
+        cpus = [cpu, inside.get("package cpu", 0.0)]
+        rows[mode].append([total] + [inside.get(k, 0.0) for k in parts] + cpus)
         triangles[mode].append(len(live.surface_object(scene, source).data.polygons))
     print(f"{name}: {len(p)} particles; {s.status}")
-for mode in times:
-    t, pk = np.array(times[mode]), np.array(package[mode])
+print(f"Blender {bpy.app.version_string}, {len(files)} frames x {args.repeat}")
+for mode in modes:
+    t = np.array(rows[mode])
     q = live.quality(scene, mode == "render")
     print(
-        f"live {mode} (cell {q.cell}, {q.field}, normals {q.normals}): {len(t)} frames, "
-        f"mean {t.mean():.3f} s/frame (min {t.min():.3f}, max {t.max():.3f}); in the "
-        f"package's reconstruct {pk.mean():.3f} s, Blender's side (particles out, mesh in) "
-        f"{(t - pk).mean():.3f} s; {min(triangles[mode])}-{max(triangles[mode])} triangles"
+        f"live {mode} (cell {q.cell}, {q.field}, normals {q.normals}, "
+        f"{'raw' if getattr(q, 'raw', False) else 'post-processed'}): "
+        f"mean {t[:, 0].mean():.3f} s/frame (median {np.median(t[:, 0]):.3f}, min "
+        f"{t[:, 0].min():.3f}, max {t[:, 0].max():.3f}); "
+        + ", ".join(f"{k} {t[:, i + 1].mean():.4f}" for i, k in enumerate(parts))
+        + f"; Blender's side {(t[:, 0] - t[:, 1]).mean():.3f} s; CPU {t[:, -2].mean():.3f} s "
+        f"(package {t[:, -1].mean():.3f}, Blender's side {(t[:, -2] - t[:, -1]).mean():.3f}); "
+        f"{min(triangles[mode])}-{max(triangles[mode])} triangles"
     )

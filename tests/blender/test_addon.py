@@ -7,7 +7,8 @@ SPLASH_TEST_DIR (a scratch directory) in the environment. It installs and enable
 imports 3-frame sequences that `splash recon` writes as PLY, VTU and OBJ (two real frames of
 fixtures/ and a ball of particles moving at one known velocity), steps the frames and checks
 counts, normals and velocities against the files, checks live mode against the package,
-errors in the UI, the command line round trip, and renders with Workbench and Cycles
+its post-processing options (raw, decimate, smallest component, clip box) by what each
+does to the mesh, errors in the UI, the command line round trip, and renders with Workbench and Cycles
 (motion blur by velocity). Any failure exits Blender with status 1.
 """
 
@@ -199,8 +200,14 @@ def test_live(live, splash_sph, command, ui):
     s = scene.splash
     s.source, s.spacing = source, SPACING
     check(
-        (s.viewport.cell, s.viewport.field, s.viewport.normals) == ("r", "density", "none"),
-        "viewport defaults: coarse cell, fast field, Blender's normals",
+        (s.viewport.cell, s.viewport.field, s.viewport.normals, s.viewport.raw)
+        == ("r", "density", "none", True),
+        "viewport defaults: coarse cell, fast field, Blender's normals, raw isosurface",
+    )
+    check(
+        (s.render.raw, s.render.use_decimate, s.render.use_min_component, s.clip_object)
+        == (False, False, False, None),
+        "render defaults: post-processed, no decimation, no droplets dropped, no clip box",
     )
     s.render.cell, s.render.field, s.render.normals = "r/2", "ssp07", "field"
     s.enabled = True  # reconstructs at once with the viewport settings
@@ -211,7 +218,7 @@ def test_live(live, splash_sph, command, ui):
             live.update(scene, render=rendering), f"live ({'render' if rendering else 'viewport'})"
         )
         want = splash_sph.reconstruct(
-            p.positions, SPACING, cell=q.cell, field=q.field, normals=q.normals,
+            p.positions, SPACING, cell=q.cell, field=q.field, normals=q.normals, raw=q.raw,
             attributes={"velocity": p["velocity"]},
         )  # fmt: skip
         v, f = mesh_arrays(surface)
@@ -252,7 +259,7 @@ def test_live(live, splash_sph, command, ui):
     counts = {}
     for rendering, q in ((False, s.viewport), (True, s.render)):
         mesh = splash_sph.reconstruct(
-            p.positions, SPACING, cell=q.cell, field=q.field, normals=q.normals
+            p.positions, SPACING, cell=q.cell, field=q.field, normals=q.normals, raw=q.raw
         )
         counts[rendering] = len(mesh.faces)
     s.source = source
@@ -280,7 +287,7 @@ def test_live(live, splash_sph, command, ui):
     check(len(points.data.vertices) == len(p), "the particle object follows the frame")
     want = splash_sph.reconstruct(
         p.positions, SPACING, cell=s.viewport.cell, field=s.viewport.field, normals="none",
-        attributes={"velocity": p["velocity"]},
+        raw=s.viewport.raw, attributes={"velocity": p["velocity"]},
     )  # fmt: skip
     v, f = mesh_arrays(live.surface_object(scene, points))
     check(np.array_equal(f, want.faces), "live on the imported particles: the package's mesh")
@@ -291,6 +298,166 @@ def test_live(live, splash_sph, command, ui):
         "live on the imported particles: their velocity",
     )
     s.enabled = False
+
+
+def closed(faces):
+    """Whether every edge of the triangles `faces` is shared by exactly two of them, once in
+    each direction (closed, manifold and consistently wound)."""
+    a = faces.astype(np.int64)
+    half = np.concatenate([a[:, [0, 1]], a[:, [1, 2]], a[:, [2, 0]]])
+    n = int(a.max()) + 1
+    forward = np.sort(half[:, 0] * n + half[:, 1])
+    backward = np.sort(half[:, 1] * n + half[:, 0])
+    return len(np.unique(forward)) == len(forward) and np.array_equal(forward, backward)
+
+
+def test_post(live, splash_sph, command, ui):
+    """The panel's post-processing options, each against the package's own mesh and for the
+    change it makes: raw, decimate, smallest component, clip box; and the command line."""
+    scene = bpy.context.scene
+    s = scene.splash
+    p = splash_sph.read_particles(os.path.join(REPO, "fixtures/frame_0040.ply"))
+    lo, hi = p.positions.min(0), p.positions.max(0)
+    # A lone particle 12 r beyond the fluid: a droplet of its own.
+    droplet = np.array([hi[0] + 12 * SPACING, (lo[1] + hi[1]) / 2, (lo[2] + hi[2]) / 2])
+    positions = np.vstack([p.positions, droplet]).astype(np.float32)
+    me = bpy.data.meshes.new("post_particles")
+    me.vertices.add(len(positions))
+    me.vertices.foreach_set("co", positions.ravel())
+    source = bpy.data.objects.new("post_particles", me)
+    source.location = (1.0, 2.0, 3.0)  # the clip box is taken in the particles' space
+    scene.collection.objects.link(source)
+    s.source, s.spacing, s.velocity, s.enabled = source, SPACING, False, False
+    q = s.render
+    q.cell, q.field, q.normals = "r", "ssp07", "none"
+    surface = live.surface_object(scene, source)
+
+    def shown(**post):
+        check(live.update(scene, render=True), f"live with {post or 'defaults'}: {s.error}")
+        v, f = mesh_arrays(surface)
+        want = splash_sph.reconstruct(positions, SPACING, cell="r", field="ssp07",
+                                      normals="none", **post)  # fmt: skip
+        same = np.array_equal(v, want.vertices) and np.array_equal(f, want.faces)
+        check(same, f"live with {post}: the package's mesh ({len(f)} triangles)")
+        check(closed(f), f"live with {post}: closed and manifold")
+        bpy.context.evaluated_depsgraph_get()  # as a redraw would
+        corners = np.array(surface.bound_box)
+        check(
+            np.allclose(corners.min(0), v.min(0), atol=1e-6)
+            and np.allclose(corners.max(0), v.max(0), atol=1e-6),
+            f"live with {post}: the object's bounds are the new mesh's",
+        )
+        return v, f
+
+    q.raw = True
+    v_raw, f_raw = shown(raw=True)
+    q.raw = False
+    v_def, f_def = shown()
+    check("in place" in s.status, f"raw to post-processed: the mesh updated in place ({s.status})")
+    check(
+        (len(v_raw), len(f_raw)) == (len(v_def), len(f_def)),
+        f"raw and post-processed: the same counts ({len(v_raw)} vertices, {len(f_raw)} faces)",
+    )
+    moved = np.linalg.norm(v_raw - v_def, axis=1)
+    check(moved.max() > 0.05 * SPACING, f"post-processing moves the vertices ({moved.max():.2g})")
+
+    q.use_decimate, q.decimate = True, 0.1
+    _, f_dec = shown(decimate="0.1r")
+    check(len(f_dec) < 0.9 * len(f_def), f"decimate 0.1 r: {len(f_def)} -> {len(f_dec)} faces")
+    q.use_decimate = False
+
+    def near_droplet(v):
+        return int(np.sum(np.linalg.norm(v - droplet, axis=1) < 3 * SPACING))
+
+    check(near_droplet(v_def) > 0, f"the droplet has a surface ({near_droplet(v_def)} vertices)")
+    q.use_min_component, q.min_component = True, 2.0
+    v_min, f_min = shown(min_component=2.0)
+    check(near_droplet(v_min) == 0, "smallest component 2 r³: the lone droplet dropped")
+    check(len(f_def) > len(f_min) > 0.9 * len(f_def), "... and the fluid kept")
+    q.use_min_component = False
+
+    centre = (lo + hi) / 2
+    empty = bpy.data.objects.new("post_box", None)
+    empty.empty_display_type = "CUBE"
+    empty.empty_display_size = float(0.3 * (hi - lo).min())
+    empty.location = Vector(centre.tolist()) + source.location
+    scene.collection.objects.link(empty)
+    bpy.context.view_layer.update()  # the objects' matrix_world
+    s.clip_object = empty
+    a = empty.empty_display_size
+    box = live.clip_box(empty, source)
+    check(
+        np.allclose(box, (*(centre - a), *(centre + a)), atol=1e-6),
+        "the clip box in the particles' space",
+    )
+    v_box, f_box = shown(mesh_aabb=box)
+    inside = np.all((v_box >= np.array(box[:3]) - 1e-5) & (v_box <= np.array(box[3:]) + 1e-5))
+    check(inside and 0 < len(f_box) < len(f_def), f"clip box: {len(f_box)} faces inside")
+
+    # All of them at once, copied as a command line that the CLI runs on the same particles.
+    q.use_decimate, q.use_min_component = True, True
+    v_all, f_all = shown(decimate="0.1r", min_component=2.0, mesh_aabb=box)
+    frame = os.path.join(WORK, "post_particles.ply")
+    write_particles_ply(frame, positions, np.zeros_like(positions))
+    s.input_path, s.output_path = frame, os.path.join(WORK, "cli", "post.ply")
+    line = command.to_command(ui._settings(scene))
+    check("--decimate 0.1r --min-component 2 --mesh-aabb" in line, f"copied: {line}")
+    subprocess.run([SPLASH, *shlex.split(line)[1:], "-q"], check=True)
+    table = ply_table(s.output_path)
+    check(
+        np.array_equal(v_all, np.stack([table[k] for k in "xyz"], 1)),
+        "the copied command line with post-processing writes the live render surface",
+    )
+    parsed, ignored = command.from_command(line)
+    check(
+        (parsed.get("raw"), parsed["decimate"], parsed["min_component"]) == (None, 0.1, 2.0)
+        and any(w.startswith("--mesh-aabb") for w in ignored),
+        f"the line read back: decimate and smallest component, the box ignored ({ignored})",
+    )
+    check(
+        abs(command.from_command("splash recon x --spacing 0.02 --decimate 0.004 --raw")[0]
+            ["decimate"] - 0.2) < 1e-9,
+        "a decimation length read back in spacings",
+    )  # fmt: skip
+    # A box without volume is an error in the panel.
+    empty.scale.z = 0.0
+    bpy.context.view_layer.update()
+    check(not live.update(scene, render=True), "a flat clip box fails")
+    check("flat" in s.error and "post_box" in s.error, f"... and says so ({s.error})")
+    s.clip_object = None
+    q.raw, q.use_decimate, q.use_min_component, q.normals = False, False, False, "field"
+    s.source = None
+
+
+class _Layout:
+    """Records what a panel draws, refusing a property its data does not have (Blender only
+    prints those)."""
+
+    def __init__(self, drawn):
+        self.drawn, self.alert, self.active = drawn, False, True
+
+    def prop(self, data, name, **_):
+        check(name in data.bl_rna.properties, f"the panel draws {type(data).__name__}.{name}")
+        self.drawn.append(name)
+
+    def box(self):
+        return _Layout(self.drawn)
+
+    column = row = lambda self, **_: _Layout(self.drawn)
+
+    def label(self, **_):
+        pass
+
+    def operator(self, *_, **__):
+        return type("Properties", (), {})()
+
+
+def test_panel(ui):
+    drawn = []
+    panel = type("Panel", (), {"layout": _Layout(drawn)})()
+    ui.VIEW3D_PT_splash.draw(panel, bpy.context)
+    want = {"raw", "use_decimate", "decimate", "use_min_component", "min_component", "clip_object"}
+    check(want <= set(drawn), f"the panel shows the post-processing options ({sorted(want)})")
 
 
 def test_errors(sequence):
@@ -331,6 +498,19 @@ def test_command(command, ui):
         (s.input_path, abs(s.spacing - 0.02) < 1e-7, s.render.cell, s.render.field, s.output_path)
         == ("'my sim/'", True, "2r", "zb05", "out/"),
         "the pasted line sets the panel",
+    )
+    post = "splash recon x --raw --decimate 0.2r --min-component 3 --mesh-aabb 0,0,0,1,1,1"
+    check(bpy.ops.splash.paste_command(line=post) == {"FINISHED"}, "paste post-processing")
+    q = s.render
+    check(
+        (q.raw, q.use_decimate, abs(q.decimate - 0.2) < 1e-6, q.use_min_component,
+         q.min_component, s.clip_object) == (True, True, True, True, 3.0, None),
+        "the pasted line sets raw, decimate and the smallest component, not the box",
+    )  # fmt: skip
+    bpy.ops.splash.paste_command(line=other)
+    check(
+        (q.raw, q.use_decimate, q.use_min_component) == (False, False, False),
+        "a line without them turns them off",
     )
     try:
         bpy.ops.splash.paste_command(line="ls -l")
@@ -422,6 +602,8 @@ def main():
     seqs = test_sequences(sequence, particles)
     test_errors(sequence)
     test_live(live, splash_sph, command, ui)
+    test_post(live, splash_sph, command, ui)
+    test_panel(ui)
     test_command(command, ui)
     test_renders(seqs)
 

@@ -1,0 +1,66 @@
+#!/usr/bin/env bash
+# Blender live mode's time per frame (tests/blender/bench_live.py) over runs, optionally against
+# the add-on of another git revision with the same splash_sph package, so that the add-on's own
+# change is what differs. Runs alternate (this, other, this, …); the table gives per settings
+# group the median over runs of the mean end-to-end s/frame, Blender's side (wall and CPU) and
+# the package's CPU.
+#
+#   bench/live.sh -n 3 --vs 4405cf0 ../shared/data/cbd-small 0.014
+#   BPY_PYTHON=/path/venv/bin/python bench/live.sh ../shared/data/cbd-small 0.014
+#
+# Environment: BLENDER (default blender), or BPY_PYTHON, a Python with the `bpy` module
+# (`pip install "bpy==4.5.*"`). Builds the add-on with scripts/build-blender-addon (maturin).
+set -euo pipefail
+cd "$(dirname "$0")/.."
+runs=1 vs=""
+while [ $# -gt 2 ]; do
+    case "$1" in
+        -n) runs=$2; shift 2 ;;
+        --vs) vs=$2; shift 2 ;;
+        *) echo "usage: bench/live.sh [-n RUNS] [--vs REV] PARTICLES SPACING" >&2; exit 2 ;;
+    esac
+done
+[ $# -eq 2 ] || { echo "usage: bench/live.sh [-n RUNS] [--vs REV] PARTICLES SPACING" >&2; exit 2; }
+particles=$(realpath "$1") spacing=$2
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+scripts/build-blender-addon "$work/this.zip" >/dev/null
+names=(this)
+if [ -n "$vs" ]; then
+    # The other revision's add-on files with this build's package.
+    mkdir -p "$work/other"
+    (cd "$work/other" && unzip -q "$work/this.zip" && rm -f splash_blender/*.py)
+    for f in $(git ls-tree --name-only "$vs" blender/splash_blender/ | grep '\.py$'); do
+        git show "$vs:$f" >"$work/other/splash_blender/$(basename "$f")"
+    done
+    (cd "$work/other" && zip -qr "$work/other.zip" splash_blender)
+    names+=(other)
+fi
+export BLENDER_USER_CONFIG="$work/config" BLENDER_USER_SCRIPTS="$work/scripts"
+for run in $(seq "$runs"); do
+    for name in "${names[@]}"; do
+        rm -rf "$work/config" "$work/scripts"
+        bench_args=(-- --addon "$work/$name.zip" --particles "$particles" --spacing "$spacing")
+        if [ -n "${BPY_PYTHON:-}" ]; then
+            "$BPY_PYTHON" tests/blender/bench_live.py "${bench_args[@]}"
+        else
+            "${BLENDER:-blender}" -b --factory-startup --python tests/blender/bench_live.py \
+                "${bench_args[@]}"
+        fi 2>&1 | grep -E '^(Blender [0-9]|live )' | sed "s/^/$name run $run: /" | tee -a "$work/log"
+    done
+done
+python3 - "$work/log" <<'PY'
+import re, statistics, sys
+rows = {}
+for line in open(sys.argv[1]):
+    m = re.match(r"(\w+) run \d+: live (\w+) .*?mean ([\d.]+) s/frame.*?Blender's side ([\d.]+) s; "
+                 r"CPU [\d.]+ s \(package ([\d.]+), Blender's side ([\d.]+)\)", line)
+    if m:
+        rows.setdefault((m[1], m[2]), []).append([float(x) for x in m.groups()[2:]])
+print("| add-on | settings | runs | end to end s/frame | Blender's side | its CPU | package CPU |")
+print("|---|---|---|---|---|---|---|")
+for (name, mode), values in sorted(rows.items()):
+    med = [statistics.median(c) for c in zip(*values)]
+    print(f"| {name} | {mode} | {len(values)} | {med[0]:.3f} | {med[1]:.3f} | {med[3]:.3f} | "
+          f"{med[2]:.3f} |")
+PY
