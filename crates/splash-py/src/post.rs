@@ -44,8 +44,9 @@ use crate::settings::{self, Overrides};
 ///
 /// The post-processing settings (``[post]`` of the config; None keeps the config's, the
 /// defaults by default): ``raw=True`` skips smoothing and volume restoration;
-/// ``smoothing_iterations`` (10), ``lambda_`` (0.5) and ``mu`` (−0.53): Taubin's λ|μ pairs;
-/// ``volume_rounds`` (6), ``max_offset`` (0.25 r per step), ``relax_iterations`` (10),
+/// ``smoothing_iterations`` (10), ``lambda_`` (0.6) and ``mu`` (−0.64): Taubin's λ|μ pairs;
+/// ``volume_rounds`` (9), ``max_offset`` (0.25 r per step), ``refine_angle`` (0: off; in
+/// degrees, bisects the edges where the surface bends more), ``relax_iterations`` (10),
 /// ``volume_steps`` (3); ``mesh_aabb``, ``min_component`` and ``decimate`` as in
 /// ``reconstruct``. ``config``: a TOML file's path or a dict, as ``reconstruct`` takes it.
 /// ``threads``: worker threads, all cores by default; the result does not depend on it.
@@ -60,7 +61,7 @@ use crate::settings::{self, Overrides};
 #[pyfunction]
 #[pyo3(signature = (mesh, *, particles=None, spacing=None, cell=None, config=None, raw=None,
     smoothing_iterations=None, lambda_=None, mu=None, volume_rounds=None, max_offset=None,
-    relax_iterations=None, volume_steps=None, mesh_aabb=None, min_component=None,
+    refine_angle=None, relax_iterations=None, volume_steps=None, mesh_aabb=None, min_component=None,
     decimate=None, threads=None))]
 pub fn postprocess<'py>(
     py: Python<'py>,
@@ -75,6 +76,7 @@ pub fn postprocess<'py>(
     mu: Option<f32>,
     volume_rounds: Option<i64>,
     max_offset: Option<f32>,
+    refine_angle: Option<f32>,
     relax_iterations: Option<i64>,
     volume_steps: Option<i64>,
     mesh_aabb: Option<Vec<f32>>,
@@ -119,6 +121,7 @@ pub fn postprocess<'py>(
     post.lambda = lambda_.unwrap_or(post.lambda);
     post.mu = mu.unwrap_or(post.mu);
     post.max_offset = max_offset.unwrap_or(post.max_offset);
+    post.refine_angle = refine_angle.unwrap_or(post.refine_angle);
     post.validate().map_err(to_py)?;
 
     let input = MeshInput::of(mesh)?;

@@ -211,6 +211,7 @@ def postprocess(
     mu: Optional[float] = None,
     volume_rounds: Optional[int] = None,
     max_offset: Optional[float] = None,
+    refine_angle: Optional[float] = None,
     relax_iterations: Optional[int] = None,
     volume_steps: Optional[int] = None,
     mesh_aabb: Optional[Sequence[float]] = None,
@@ -243,8 +244,9 @@ def postprocess(
 
     The post-processing settings (``[post]`` of the config; None keeps the config's, the
     defaults by default): ``raw=True`` skips smoothing and volume restoration;
-    ``smoothing_iterations`` (10), ``lambda_`` (0.5) and ``mu`` (-0.53): Taubin's λ|μ pairs;
-    ``volume_rounds`` (6), ``max_offset`` (0.25 r per step), ``relax_iterations`` (10),
+    ``smoothing_iterations`` (10), ``lambda_`` (0.6) and ``mu`` (-0.64): Taubin's λ|μ pairs;
+    ``volume_rounds`` (9), ``max_offset`` (0.25 r per step), ``refine_angle`` (0: off; in
+    degrees, bisects the edges where the surface bends more), ``relax_iterations`` (10),
     ``volume_steps`` (3); ``mesh_aabb``, ``min_component`` and ``decimate`` as in
     ``reconstruct``. ``config``: a TOML file's path or a dict, as ``reconstruct`` takes it.
     ``threads``: worker threads, all cores by default; the result does not depend on it.

@@ -8,6 +8,7 @@ pub mod decimation;
 pub(crate) mod marching_cubes;
 pub mod post;
 pub mod quality;
+pub mod refinement;
 pub mod smoothing;
 mod stars;
 pub mod topology;
