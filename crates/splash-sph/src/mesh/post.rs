@@ -10,6 +10,7 @@ use serde::{Deserialize, Serialize};
 
 use super::adjacency::VertexFaces;
 use super::smoothing::{relax_tangentially, taubin};
+use super::stars::area_weighted_normals;
 use super::volume::{Components, Measures, normals_and_measures, particles_inside, restore};
 use super::{TriMesh, clip_to_box, decimate, drop_small_components};
 use crate::error::Result;
@@ -148,7 +149,13 @@ pub fn postprocess(
         *mesh = drop_small_components(mesh, v * f64::from(spacing).powi(3))?.0;
     }
     if let Some(d) = config.decimate {
+        // The decimation gives the new faces area-weighted normals: made here after it, the
+        // old ones freed before it instead of held beside its working arrays.
+        let normals = !std::mem::take(&mut mesh.normals).is_empty();
         *mesh = decimate(mesh, d.resolve(spacing))?;
+        if normals {
+            mesh.normals = area_weighted_normals(&mesh.vertices, &mesh.triangles);
+        }
     }
     Ok(())
 }
