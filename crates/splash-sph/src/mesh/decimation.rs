@@ -535,13 +535,16 @@ impl<'a> Decimation<'a> {
                         }
                     }
                 });
-            // Collected serially into one reused array: no per-thread copies on top of it.
+            // Collected serially into one reused array, counted first so that it is allocated
+            // once at its size: no per-thread copies or growth copies on top of it.
+            let candidate = |c: &f32| c.is_finite() && c.is_sign_positive();
             keys.clear();
+            keys.reserve_exact(costs.iter().filter(|c| candidate(c)).count());
             keys.extend(
                 costs
                     .iter()
                     .enumerate()
-                    .filter(|(_, c)| c.is_finite() && c.is_sign_positive())
+                    .filter(|(_, c)| candidate(c))
                     .map(|(slot, c)| (u64::from(c.to_bits()) << 32) | slot as u64),
             );
             // Costs are non-negative, so their bits sort as the costs do; the slot breaks ties.
