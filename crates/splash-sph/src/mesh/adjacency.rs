@@ -1,5 +1,6 @@
 //! The triangles and neighbours around each vertex of a [`TriMesh`](super::TriMesh), as
-//! compressed rows (CSR): the one-ring that smoothing, vertex normals and component labels read.
+//! compressed rows (CSR): the one-ring that smoothing, vertex normals and component labels read,
+//! and the counting pass that the decimation's working stars share.
 
 /// For vertex `v`, `faces[offsets[v]..offsets[v + 1]]` are the triangles that use it, in
 /// increasing order (so whatever reads them sums in the same order on any thread count), and
@@ -17,33 +18,23 @@ pub struct VertexFaces {
 }
 
 impl VertexFaces {
-    /// The rows of `triangles` over `vertices` vertices. Counting then placing, serially: two
-    /// passes over the indices, no sort (a few ms per million triangles).
+    /// The rows of `triangles` over `vertices` vertices (see [`vertex_rows`]).
     pub fn new(vertices: usize, triangles: &[[u32; 3]]) -> VertexFaces {
         assert!(
             3 * triangles.len() < u32::MAX as usize,
             "at most 2^32 / 3 triangles"
         );
-        let mut offsets = vec![0u32; vertices + 1];
-        for t in triangles {
-            for &v in t {
-                offsets[v as usize + 1] += 1;
-            }
-        }
-        for v in 0..vertices {
-            offsets[v + 1] += offsets[v];
-        }
-        let mut next = offsets.clone();
-        let mut faces = vec![0u32; 3 * triangles.len()];
+        let mut offsets = Vec::new();
+        let mut faces = Vec::new();
         let mut after = vec![0u32; 3 * triangles.len()];
-        for (i, t) in triangles.iter().enumerate() {
-            for k in 0..3 {
-                let slot = &mut next[t[k] as usize];
-                faces[*slot as usize] = i as u32;
-                after[*slot as usize] = t[(k + 1) % 3];
-                *slot += 1;
-            }
-        }
+        vertex_rows(
+            &mut offsets,
+            &mut faces,
+            vertices,
+            triangles,
+            |_| true,
+            |slot, t, k| after[slot] = triangles[t][(k + 1) % 3],
+        );
         VertexFaces {
             offsets,
             faces,
@@ -60,4 +51,45 @@ impl VertexFaces {
     pub fn neighbours(&self, v: usize) -> &[u32] {
         &self.next[self.offsets[v] as usize..self.offsets[v + 1] as usize]
     }
+}
+
+/// The triangles around each vertex as rows: `offsets` gets `vertices + 1` row starts and
+/// `faces`, row after row, the indices of the triangles that `keep` accepts, in increasing
+/// order; `place(slot, triangle, corner)` sees where each corner went, for arrays that run
+/// beside `faces`. Counting then placing, serially: two passes over the indices, no sort (a
+/// few ms per million triangles); the arrays' allocations are reused.
+pub(crate) fn vertex_rows(
+    offsets: &mut Vec<u32>,
+    faces: &mut Vec<u32>,
+    vertices: usize,
+    triangles: &[[u32; 3]],
+    keep: impl Fn(&[u32; 3]) -> bool,
+    mut place: impl FnMut(usize, usize, usize),
+) {
+    offsets.clear();
+    offsets.resize(vertices + 1, 0);
+    for t in triangles.iter().filter(|t| keep(t)) {
+        for &v in t {
+            offsets[v as usize + 1] += 1;
+        }
+    }
+    for v in 0..vertices {
+        offsets[v + 1] += offsets[v];
+    }
+    faces.clear();
+    faces.resize(offsets[vertices] as usize, 0);
+    // Fill from the front of each row, using `offsets[v]` as the cursor, then shift back.
+    for (i, t) in triangles.iter().enumerate() {
+        if !keep(t) {
+            continue;
+        }
+        for (k, &v) in t.iter().enumerate() {
+            let slot = &mut offsets[v as usize];
+            faces[*slot as usize] = i as u32;
+            place(*slot as usize, i, k);
+            *slot += 1;
+        }
+    }
+    offsets.copy_within(0..vertices, 1);
+    offsets[0] = 0;
 }

@@ -14,7 +14,7 @@ use serde::{Deserialize, Serialize};
 use super::adjacency::VertexFaces;
 use super::refinement::refine_bends;
 use super::smoothing::{relax_tangentially, taubin};
-use super::stars::validate;
+use super::stars::{area_weighted_normals, validate};
 use super::topology::topology;
 use super::volume::{Components, Measures, normals_and_measures, particles_inside, restore};
 use super::{TriMesh, clip_to_box, decimate, drop_small_components};
@@ -257,7 +257,13 @@ fn run(
         *mesh = drop_small_components(mesh, v * f64::from(spacing).powi(3))?.0;
     }
     if let Some(d) = config.decimate {
+        // The decimation gives the new faces area-weighted normals: made here after it, the
+        // old ones freed before it instead of held beside its working arrays.
+        let normals = !std::mem::take(&mut mesh.normals).is_empty();
         *mesh = decimate(mesh, d.resolve(spacing))?;
+        if normals {
+            mesh.normals = area_weighted_normals(&mesh.vertices, &mesh.triangles);
+        }
     }
     Ok(())
 }

@@ -2,6 +2,7 @@
 //! and the area-weighted vertex normals of decimation, clipping and component removal.
 
 use super::TriMesh;
+use super::adjacency::vertex_rows;
 use crate::{Error, Result};
 use glam::Vec3;
 
@@ -19,33 +20,14 @@ impl Stars {
     /// Recounts the stars of `vertices` vertices from the triangles whose first index is not
     /// [`DEAD`], reusing the arrays of the previous call.
     pub(crate) fn rebuild(&mut self, vertices: usize, triangles: &[[u32; 3]]) {
-        self.offsets.clear();
-        self.offsets.resize(vertices + 1, 0);
-        for t in triangles.iter().filter(|t| t[0] != DEAD) {
-            for &v in t {
-                self.offsets[v as usize + 1] += 1;
-            }
-        }
-        for i in 0..vertices {
-            self.offsets[i + 1] += self.offsets[i];
-        }
-        self.triangles.clear();
-        self.triangles.resize(self.offsets[vertices] as usize, 0);
-        // Fill from the front of each row, using `offsets[v]` as the cursor, then shift back.
-        for (i, t) in triangles.iter().enumerate() {
-            if t[0] == DEAD {
-                continue;
-            }
-            for &v in t {
-                let slot = &mut self.offsets[v as usize];
-                self.triangles[*slot as usize] = i as u32;
-                *slot += 1;
-            }
-        }
-        for i in (1..=vertices).rev() {
-            self.offsets[i] = self.offsets[i - 1];
-        }
-        self.offsets[0] = 0;
+        vertex_rows(
+            &mut self.offsets,
+            &mut self.triangles,
+            vertices,
+            triangles,
+            |t| t[0] != DEAD,
+            |_, _, _| {},
+        );
     }
 
     /// The triangles around `v`.
