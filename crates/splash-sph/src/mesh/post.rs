@@ -47,8 +47,8 @@ pub struct PostConfig {
     pub max_offset: f32,
     /// Bisect the edges whose two triangles meet at more than this angle, in degrees, after the
     /// volume rounds ([`refine_bends`]; default 0: never). 16 takes cbd-large f23 from 2.57° to
-    /// 1.91° (with 15 relaxation steps) for 25 % more triangles, 1.37× the `raw` run's CPU
-    /// against 1.14× and 156 MiB peak against 102 MiB.
+    /// 1.91° (with 15 relaxation steps) for 25 % more triangles, at 1.53× the `raw` run's wall
+    /// time on 2 threads (default 1.19×) and 156 MiB peak (default 102, `raw` 90).
     pub refine_angle: f32,
     /// Tangential relaxation steps after the volume rounds (default 10: slivers on cbd-large
     /// f23 1.29 % → 0.39 %).
