@@ -1,6 +1,7 @@
 //! Text payloads formatted on all threads: the records (lines) are cut into chunks, a wave of
-//! chunks is formatted in parallel into per-chunk buffers, then written in order, so that the
-//! bytes are those of a serial loop and the memory is one wave, not the whole file.
+//! chunks is formatted in parallel into per-chunk buffers and written in order while the next
+//! wave is formatted, so that the bytes are those of a serial loop and the memory two waves,
+//! not the whole file.
 
 use std::io::{self, Write};
 
@@ -15,7 +16,8 @@ const RECORDS_PER_CHUNK: usize = 4096;
 const CHUNKS_PER_THREAD: usize = 2;
 
 /// Writes records `0..count` in order, record `i` appended to a buffer by `record(i, buffer)`.
-/// The wave's buffers take about `2 × threads × 4096` records' bytes.
+/// Each wave is written while the next one is formatted; the two waves' buffers take about
+/// `2 × 2 × threads × 4096` records' bytes.
 pub(super) fn write_records(
     out: &mut impl Write,
     count: usize,
@@ -23,24 +25,37 @@ pub(super) fn write_records(
 ) -> io::Result<()> {
     let chunks = count.div_ceil(RECORDS_PER_CHUNK);
     let wave = (CHUNKS_PER_THREAD * rayon::current_num_threads()).clamp(1, chunks.max(1));
-    let mut buffers: Vec<Vec<u8>> = vec![Vec::new(); wave];
+    // Formats the chunks from `first` into `buffers`, one each.
+    let format = |first: usize, buffers: &mut [Vec<u8>]| {
+        buffers.par_iter_mut().enumerate().for_each(|(k, buffer)| {
+            buffer.clear();
+            let start = (first + k) * RECORDS_PER_CHUNK;
+            for i in start..count.min(start + RECORDS_PER_CHUNK) {
+                record(i, buffer);
+            }
+        });
+    };
+    let (mut ready, mut next) = (vec![Vec::new(); wave], vec![Vec::new(); wave]);
+    // Chunks formatted in `ready`, not yet written.
+    let mut formatted = 0;
     for first in (0..chunks).step_by(wave) {
         let these = wave.min(chunks - first);
-        buffers[..these]
-            .par_iter_mut()
-            .enumerate()
-            .for_each(|(k, buffer)| {
-                buffer.clear();
-                let start = (first + k) * RECORDS_PER_CHUNK;
-                for i in start..count.min(start + RECORDS_PER_CHUNK) {
-                    record(i, buffer);
-                }
+        if formatted == 0 {
+            format(first, &mut ready[..these]);
+        } else {
+            // The writing stays on this thread (`out` need not be `Send`); the formatting is
+            // spawned onto the current pool.
+            let mut written = Ok(());
+            rayon::in_place_scope(|s| {
+                s.spawn(|_| format(first, &mut next[..these]));
+                written = ready[..formatted].iter().try_for_each(|b| out.write_all(b));
             });
-        for buffer in &buffers[..these] {
-            out.write_all(buffer)?;
+            written?;
+            std::mem::swap(&mut ready, &mut next);
         }
+        formatted = these;
     }
-    Ok(())
+    ready[..formatted].iter().try_for_each(|b| out.write_all(b))
 }
 
 #[cfg(test)]
