@@ -2,7 +2,9 @@
 //! asked for, reconstruct the surface ([`surface`](super::surface)) or extract an isosurface
 //! (Marching Correctors, [`iso`](crate::iso)), turn it upright if asked, write it whole (a
 //! temporary renamed into place). The spacing and the reconstructor are kept from frame to
-//! frame, so that a whole sequence shares one grid and one thread pool.
+//! frame, so that a whole sequence shares one grid and one thread pool. Reading (`Loader`) and
+//! writing (`Writer`) hold only settings, so that a sequence can run them on threads of
+//! their own around the reconstruction (`overlap`).
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
