@@ -2,10 +2,13 @@
 
 use std::io::{self, Write};
 
+use super::float_text::push_f32;
+use super::text_records::write_records;
 use crate::mesh::TriMesh;
 
-/// Writes `v`, then `vn` lines, then 1-based `f` lines (`a//a` when there are normals). `{}`
-/// prints the shortest text that reads back as the same `f32`.
+/// Writes `v`, then `vn` lines, then 1-based `f` lines (`a//a` when there are normals), each
+/// kind formatted on all threads. Coordinates are printed as `{}` prints them: the shortest text
+/// that reads back as the same `f32`.
 pub(super) fn write(mesh: &TriMesh, out: &mut impl Write) -> io::Result<()> {
     writeln!(
         out,
@@ -13,20 +16,31 @@ pub(super) fn write(mesh: &TriMesh, out: &mut impl Write) -> io::Result<()> {
         mesh.vertices.len(),
         mesh.triangles.len()
     )?;
-    for v in &mesh.vertices {
-        writeln!(out, "v {} {} {}", v.x, v.y, v.z)?;
-    }
-    for n in &mesh.normals {
-        writeln!(out, "vn {} {} {}", n.x, n.y, n.z)?;
+    for (key, vectors) in [(&b"v "[..], &mesh.vertices), (b"vn ", &mesh.normals)] {
+        write_records(out, vectors.len(), |i, line| {
+            line.extend_from_slice(key);
+            let v = vectors[i];
+            push_f32(line, v.x);
+            line.push(b' ');
+            push_f32(line, v.y);
+            line.push(b' ');
+            push_f32(line, v.z);
+            line.push(b'\n');
+        })?;
     }
     let with_normals = !mesh.normals.is_empty();
-    for t in &mesh.triangles {
-        let [a, b, c] = t.map(|i| u64::from(i) + 1);
-        if with_normals {
-            writeln!(out, "f {a}//{a} {b}//{b} {c}//{c}")?;
-        } else {
-            writeln!(out, "f {a} {b} {c}")?;
+    write_records(out, mesh.triangles.len(), |i, line| {
+        line.push(b'f');
+        let mut text = itoa::Buffer::new();
+        for corner in mesh.triangles[i] {
+            let index = text.format(u64::from(corner) + 1).as_bytes();
+            line.push(b' ');
+            line.extend_from_slice(index);
+            if with_normals {
+                line.extend_from_slice(b"//");
+                line.extend_from_slice(index);
+            }
         }
-    }
-    Ok(())
+        line.push(b'\n');
+    })
 }

@@ -11,6 +11,8 @@ use ply_rs_bw::ply::{
 };
 use ply_rs_bw::writer::Writer;
 
+use super::float_text::{push_f32, push_int};
+use super::text_records::write_records;
 use super::vertex_attributes::{AttributeValues, VertexAttributes};
 use crate::mesh::TriMesh;
 
@@ -162,25 +164,43 @@ fn flush_full(block: &mut Vec<u8>, out: &mut impl Write) -> io::Result<()> {
     Ok(())
 }
 
+/// One line per vertex, then per face, formatted on all threads; values as `{}` prints them.
 fn write_ascii(
     mesh: &TriMesh,
     arrays: &[(&str, AttributeValues)],
     out: &mut impl Write,
 ) -> io::Result<()> {
-    let mut row = Vec::new();
-    for (i, v) in mesh.vertices.iter().enumerate() {
-        write!(out, "{} {} {}", v.x, v.y, v.z)?;
+    write_records(out, mesh.vertices.len(), |i, line| {
+        let v = mesh.vertices[i];
+        push_f32(line, v.x);
+        for x in [v.y, v.z] {
+            line.push(b' ');
+            push_f32(line, x);
+        }
         if let Some(n) = mesh.normals.get(i) {
-            write!(out, " {} {} {}", n.x, n.y, n.z)?;
+            for x in n.to_array() {
+                line.push(b' ');
+                push_f32(line, x);
+            }
         }
-        attribute_row(arrays, i, &mut row);
-        for x in &row {
-            write!(out, " {x}")?;
+        for (_, values) in arrays {
+            let (row, width) = match values {
+                AttributeValues::Scalar(s) => ([s[i], 0.0, 0.0], 1),
+                AttributeValues::Vector(v) => (v[i].to_array(), 3),
+            };
+            for &x in &row[..width] {
+                line.push(b' ');
+                push_f32(line, x);
+            }
         }
-        writeln!(out)?;
-    }
-    for [a, b, c] in &mesh.triangles {
-        writeln!(out, "3 {a} {b} {c}")?;
-    }
-    Ok(())
+        line.push(b'\n');
+    })?;
+    write_records(out, mesh.triangles.len(), |i, line| {
+        line.push(b'3');
+        for corner in mesh.triangles[i] {
+            line.push(b' ');
+            push_int(line, corner);
+        }
+        line.push(b'\n');
+    })
 }

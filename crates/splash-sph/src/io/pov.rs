@@ -9,6 +9,10 @@
 
 use std::io::{self, Write};
 
+use glam::Vec3;
+
+use super::float_text::{push_f32, push_int};
+use super::text_records::write_records;
 use crate::mesh::TriMesh;
 
 /// The name a `--format pov` file declares its mesh under: `object { SplashMesh … }`.
@@ -26,17 +30,24 @@ pub(super) fn write(mesh: &TriMesh, out: &mut impl Write) -> io::Result<()> {
     }
     writeln!(out, "#declare {POV_OBJECT} = mesh2 {{")?;
     writeln!(out, "  vertex_vectors {{\n    {},", mesh.vertices.len())?;
-    vectors(out, mesh.vertices.iter().map(|v| v.to_array()))?;
+    vectors(out, &mesh.vertices)?;
     if !mesh.normals.is_empty() {
         writeln!(out, "  normal_vectors {{\n    {},", mesh.normals.len())?;
-        vectors(out, mesh.normals.iter().map(|v| v.to_array()))?;
+        vectors(out, &mesh.normals)?;
     }
     writeln!(out, "  face_indices {{\n    {},", mesh.triangles.len())?;
-    let last = mesh.triangles.len() - 1;
-    for (i, [a, b, c]) in mesh.triangles.iter().enumerate() {
-        let comma = if i < last { "," } else { "" };
-        writeln!(out, "    <{a},{b},{c}>{comma}")?;
-    }
+    let triangles = &mesh.triangles;
+    write_records(out, triangles.len(), |i, line| {
+        line.extend_from_slice(b"    <");
+        let [a, b, c] = triangles[i];
+        push_int(line, a);
+        line.push(b',');
+        push_int(line, b);
+        line.push(b',');
+        push_int(line, c);
+        line.push(b'>');
+        end(line, i, triangles.len());
+    })?;
     writeln!(out, "  }}")?;
     // Any direction works for a closed mesh; one that is not along an axis avoids grazing rays
     // along the grid's faces.
@@ -45,12 +56,27 @@ pub(super) fn write(mesh: &TriMesh, out: &mut impl Write) -> io::Result<()> {
 }
 
 /// The body of a `vertex_vectors` or `normal_vectors` block after its count, and its end.
-/// `{}` prints the shortest text that reads back as the same `f32`, never in exponent form.
-fn vectors(out: &mut impl Write, items: impl ExactSizeIterator<Item = [f32; 3]>) -> io::Result<()> {
-    let last = items.len().saturating_sub(1);
-    for (i, [x, y, z]) in items.enumerate() {
-        let comma = if i < last { "," } else { "" };
-        writeln!(out, "    <{x},{y},{z}>{comma}")?;
-    }
+/// Coordinates are printed as `{}` prints them: the shortest text that reads back as the same
+/// `f32`, never in exponent form.
+fn vectors(out: &mut impl Write, vectors: &[Vec3]) -> io::Result<()> {
+    write_records(out, vectors.len(), |i, line| {
+        let v = vectors[i];
+        line.extend_from_slice(b"    <");
+        push_f32(line, v.x);
+        line.push(b',');
+        push_f32(line, v.y);
+        line.push(b',');
+        push_f32(line, v.z);
+        line.push(b'>');
+        end(line, i, vectors.len());
+    })?;
     writeln!(out, "  }}")
+}
+
+/// Ends item `i` of `count`: a comma but after the last.
+fn end(line: &mut Vec<u8>, i: usize, count: usize) {
+    if i + 1 < count {
+        line.push(b',');
+    }
+    line.push(b'\n');
 }

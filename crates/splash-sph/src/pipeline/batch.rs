@@ -4,7 +4,8 @@
 
 use std::path::PathBuf;
 
-use super::{FramePipeline, Plan, Progress, RunReport, run_plan};
+use super::overlap::run_overlapped;
+use super::{FramePipeline, Plan, Progress, RunReport};
 use crate::config::Config;
 use crate::error::Result;
 use crate::frames::{Output, Shard, output_paths};
@@ -51,9 +52,11 @@ impl Batch {
         Ok(plan)
     }
 
-    /// Reconstructs this job's frames in frame order. Errors before the first frame (bad
-    /// settings, outputs that collide or cannot be written) end the run; a frame's error is in
-    /// its outcome.
+    /// Reconstructs this job's frames in frame order, the next frame read and the last mesh
+    /// written while a frame is reconstructed (on two threads besides the caller's workers),
+    /// with the outputs, outcomes and messages of one frame after the other. Errors before the
+    /// first frame (bad settings, outputs that collide or cannot be written) end the run; a
+    /// frame's error is in its outcome.
     pub fn run(&self, progress: &mut dyn Progress) -> Result<RunReport> {
         let plan = self.plan()?;
         let mut pipeline = FramePipeline::new(
@@ -67,11 +70,11 @@ impl Batch {
         if let Some(first) = plan.first {
             pipeline.spacing_from(&self.inputs[..first], progress);
         }
-        Ok(run_plan(
+        Ok(run_overlapped(
             plan,
             self.fail_fast,
             progress,
-            |input, output, progress| pipeline.frame(input, output, progress),
+            &mut pipeline,
         ))
     }
 }
@@ -83,28 +86,7 @@ mod tests {
     use super::*;
     use crate::pipeline::FrameOutcome;
     use crate::reconstructor::Reconstructor;
-
-    /// Balls of particles on a lattice of spacing 0.1 with a velocity, one CSV per frame, the
-    /// radius growing with the frame number.
-    fn frames(dir: &Path) -> Vec<PathBuf> {
-        (1..=3)
-            .map(|f| {
-                let mut text = String::from("x,y,z,vx,vy,vz\n");
-                let radius = 0.3 + 0.1 * f as f32;
-                for (x, y, z) in (-6..=6)
-                    .flat_map(|x| (-6..=6).flat_map(move |y| (-6..=6).map(move |z| (x, y, z))))
-                {
-                    let p = glam::Vec3::new(x as f32, y as f32, z as f32) * 0.1;
-                    if p.length() <= radius {
-                        text += &format!("{},{},{},{},0,{}\n", p.x, p.y, p.z, p.y, f);
-                    }
-                }
-                let path = dir.join(format!("f_{f}.csv"));
-                std::fs::write(&path, text).unwrap();
-                path
-            })
-            .collect()
-    }
+    use crate::tests::common::ball_frames;
 
     #[derive(Default)]
     struct Record(Vec<(usize, usize, bool)>, Vec<f32>);
@@ -142,7 +124,7 @@ mod tests {
     fn shards_and_restarts_write_what_one_run_writes() {
         let dir = std::env::temp_dir().join(format!("splash-batch-{}", std::process::id()));
         std::fs::create_dir_all(dir.join("sim")).unwrap();
-        let inputs = frames(&dir.join("sim"));
+        let inputs = ball_frames(&dir.join("sim"), 3);
         let (whole, sharded) = (dir.join("whole"), dir.join("sharded"));
         let mut seen = Record::default();
         let report = batch(&inputs, &whole, None).run(&mut seen).unwrap();

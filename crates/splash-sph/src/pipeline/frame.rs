@@ -2,11 +2,13 @@
 //! asked for, reconstruct the surface ([`surface`](super::surface)) or extract an isosurface
 //! (Marching Correctors, [`iso`](crate::iso)), turn it upright if asked, write it whole (a
 //! temporary renamed into place). The spacing and the reconstructor are kept from frame to
-//! frame, so that a whole sequence shares one grid and one thread pool.
+//! frame, so that a whole sequence shares one grid and one thread pool. Reading (`Loader`) and
+//! writing (`Writer`) hold only settings, so that a sequence can run them on threads of
+//! their own around the reconstruction (`overlap`).
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 use glam::Vec3;
 
@@ -14,7 +16,7 @@ use super::Progress;
 use crate::attribute_names;
 use crate::config::Config;
 use crate::error::{Error, Result};
-use crate::io::{self, Attribute, InputFormat, MeshFormat, Particles, VertexAttributes};
+use crate::io::{self, Attribute, InputFormat, MeshFormat, Particles, UpAxis, VertexAttributes};
 use crate::iso::{self, IsoRequest};
 use crate::mesh::TriMesh;
 use crate::reconstructor::Reconstructor;
@@ -101,30 +103,51 @@ impl FramePipeline {
         output: &Path,
         progress: &mut dyn Progress,
     ) -> Result<FrameStats> {
-        let start = Instant::now();
-        let mut frame = io::read_particles(input, self.input_format)?;
-        let outside_box = match self.config.particle_aabb {
-            Some(aabb) => frame.retain_in_box(aabb),
-            None => 0,
-        };
-        let Particles {
+        let loaded = self.loader().load(input)?;
+        let made = self.make(input, loaded, progress)?;
+        self.writer().write(output, made)
+    }
+
+    /// What reads this pipeline's frames, on any thread.
+    pub(super) fn loader(&self) -> Loader {
+        Loader {
+            input_format: self.input_format,
+            particle_aabb: self.config.particle_aabb,
+        }
+    }
+
+    /// What writes this pipeline's meshes, on any thread.
+    pub(super) fn writer(&self) -> Writer {
+        Writer {
+            format: self.format,
+            up_axis: self.config.output.up_axis,
+        }
+    }
+
+    /// Frame `input`'s mesh from its particles: the surface reconstructed, or the isosurface.
+    pub(super) fn make(
+        &mut self,
+        input: &Path,
+        loaded: Loaded,
+        progress: &mut dyn Progress,
+    ) -> Result<Made> {
+        let Loaded {
             positions,
             attributes,
-        } = frame;
+            outside_box,
+            read,
+        } = loaded;
         if let Some(request) = &self.iso {
-            let read = start.elapsed();
             let request = request.clone();
-            let mut stats =
-                self.iso_frame(input, output, &request, positions, attributes, progress)?;
-            stats.timings.read = read;
-            stats.particles_outside_box = outside_box;
-            return Ok(stats);
+            let mut made = self.iso_frame(input, &request, positions, attributes, progress)?;
+            made.stats.timings.read = read;
+            made.stats.particles_outside_box = outside_box;
+            return Ok(made);
         }
         let wanted = particle_attributes(input, attributes, &self.config.output.attributes)?;
-        let read = start.elapsed();
         if positions.is_empty() {
             // Nothing to reconstruct, and nothing to estimate a spacing from.
-            let mut empty: Vec<(String, Attribute)> = wanted
+            let named: Vec<(String, Attribute)> = wanted
                 .iter()
                 .map(|(name, a)| {
                     let empty = match a {
@@ -134,11 +157,14 @@ impl FramePipeline {
                     (name.clone(), empty)
                 })
                 .collect();
-            self.write(output, &mut TriMesh::default(), &mut empty)?;
             let mut stats = FrameStats::default();
             stats.timings.read = read;
             stats.particles_outside_box = outside_box;
-            return Ok(stats);
+            return Ok(Made {
+                mesh: TriMesh::default(),
+                named,
+                stats,
+            });
         }
         let r = self.sequence_spacing(input, &positions, progress)?;
         let reconstructor = match &mut self.reconstructor {
@@ -159,28 +185,27 @@ impl FramePipeline {
         let surface = super::surface(reconstructor, &positions, &columns, observer.as_mut())?;
         drop((columns, observer, positions));
         let names = wanted.into_iter().map(|(name, _)| name);
-        let mut named: Vec<(String, Attribute)> = names.zip(surface.attributes).collect();
+        let named: Vec<(String, Attribute)> = names.zip(surface.attributes).collect();
         let mut stats = surface.stats;
         progress.measured(&mut stats);
-        let mut mesh = surface.mesh;
-        let start = Instant::now();
-        self.write(output, &mut mesh, &mut named)?;
         stats.particles_outside_box = outside_box;
         stats.timings.read = read;
-        stats.timings.write = start.elapsed();
-        Ok(stats)
+        Ok(Made {
+            mesh: surface.mesh,
+            named,
+            stats,
+        })
     }
 
-    /// One frame's isosurface, written with its extra attributes.
+    /// One frame's isosurface, with its extra attributes.
     fn iso_frame(
         &mut self,
         input: &Path,
-        output: &Path,
         request: &IsoRequest,
         positions: Vec<Vec3>,
         attributes: BTreeMap<String, Attribute>,
         progress: &mut dyn Progress,
-    ) -> Result<FrameStats> {
+    ) -> Result<Made> {
         let r = match self.spacing {
             None if positions.is_empty() => 1.0,
             _ => self.sequence_spacing(input, &positions, progress)?,
@@ -191,39 +216,21 @@ impl FramePipeline {
         };
         let surface = iso::extract(&positions, attributes, request, &config)
             .map_err(|e| e.context(format_args!("'{}'", input.display())))?;
-        let (mut mesh, mut named) = (surface.mesh, surface.attributes);
-        let start = Instant::now();
-        self.write(output, &mut mesh, &mut named)?;
         let mut stats = FrameStats {
             spacing: r,
             cell: surface.stats.cell,
             particles: positions.len(),
-            triangles: mesh.triangles.len(),
-            vertices: mesh.vertices.len(),
+            triangles: surface.mesh.triangles.len(),
+            vertices: surface.mesh.vertices.len(),
             iso: Some(surface.stats),
             ..FrameStats::default()
         };
-        stats.timings.write = start.elapsed();
         progress.measured(&mut stats);
-        Ok(stats)
-    }
-
-    /// Writes a frame's mesh and its vertex attributes, turned upright if asked, whole or not
-    /// at all.
-    fn write(
-        &self,
-        output: &Path,
-        mesh: &mut TriMesh,
-        named: &mut [(String, Attribute)],
-    ) -> Result<()> {
-        if let Some(axis) = self.config.output.up_axis {
-            axis.rotate_mesh(mesh, named);
-        }
-        let attributes = VertexAttributes {
-            named,
-            ..Default::default()
-        };
-        io::write_mesh_file_with(output, mesh, &attributes, self.format)
+        Ok(Made {
+            mesh: surface.mesh,
+            named: surface.attributes,
+            stats,
+        })
     }
 
     /// The sequence's spacing: the one given or found on an earlier frame, else estimated from
@@ -248,6 +255,81 @@ impl FramePipeline {
         progress.spacing_estimated(input, r);
         self.spacing = Some(r);
         Ok(r)
+    }
+}
+
+/// Reads frames: the particles in the particle box and their attributes. Holds only settings,
+/// so that another thread can read ahead.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Loader {
+    input_format: Option<InputFormat>,
+    particle_aabb: Option<[f32; 6]>,
+}
+
+/// A frame read, waiting for its reconstruction.
+#[derive(Debug)]
+pub(super) struct Loaded {
+    positions: Vec<Vec3>,
+    attributes: BTreeMap<String, Attribute>,
+    outside_box: usize,
+    read: Duration,
+}
+
+impl Loader {
+    pub(super) fn load(&self, input: &Path) -> Result<Loaded> {
+        let start = Instant::now();
+        let mut frame = io::read_particles(input, self.input_format)?;
+        let outside_box = match self.particle_aabb {
+            Some(aabb) => frame.retain_in_box(aabb),
+            None => 0,
+        };
+        let Particles {
+            positions,
+            attributes,
+        } = frame;
+        Ok(Loaded {
+            positions,
+            attributes,
+            outside_box,
+            read: start.elapsed(),
+        })
+    }
+}
+
+/// A frame's mesh and vertex attributes, waiting to be written, with its figures.
+#[derive(Debug)]
+pub(super) struct Made {
+    mesh: TriMesh,
+    named: Vec<(String, Attribute)>,
+    stats: FrameStats,
+}
+
+/// Writes meshes: turned upright if asked, whole or not at all.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Writer {
+    format: MeshFormat,
+    up_axis: Option<UpAxis>,
+}
+
+impl Writer {
+    /// Writes `made` to `output` and returns its figures with the write's time.
+    pub(super) fn write(&self, output: &Path, made: Made) -> Result<FrameStats> {
+        let Made {
+            mut mesh,
+            mut named,
+            mut stats,
+        } = made;
+        let start = Instant::now();
+        if let Some(axis) = self.up_axis {
+            axis.rotate_mesh(&mut mesh, &mut named);
+        }
+        let attributes = VertexAttributes {
+            named: &named,
+            ..Default::default()
+        };
+        io::write_mesh_file_with(output, &mesh, &attributes, self.format)?;
+        stats.timings.write = start.elapsed();
+        Ok(stats)
     }
 }
 

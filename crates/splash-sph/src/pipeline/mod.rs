@@ -2,7 +2,7 @@
 //! reconstruct (Akinci et al. 2012) or isosurface (Marching Correctors) → post-process →
 //! interpolate → write, with an [`Observer`](crate::Observer) for stage times; and the plan
 //! and run of a whole sequence (shards, `skip_existing`, `fail_fast`, progress per frame, a
-//! run report).
+//! run report), its reading and writing overlapped with the reconstruction.
 //!
 //! ```no_run
 //! use splash_sph::frames::{Output, select};
@@ -35,6 +35,7 @@
 
 mod batch;
 mod frame;
+mod overlap;
 mod plan;
 mod run;
 mod surface;

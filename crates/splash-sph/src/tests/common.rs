@@ -189,3 +189,26 @@ pub fn torus(n: u32, m: u32, big: f32, small: f32, phase: f32) -> TriMesh {
         triangles,
     }
 }
+
+/// Frames 1..=`count` of balls of particles on a lattice of spacing 0.1 with a velocity
+/// `(y, 0, frame)`, one CSV per frame (`f_{frame}.csv`) in `dir`, the radius growing with the
+/// frame number.
+pub fn ball_frames(dir: &std::path::Path, count: u32) -> Vec<std::path::PathBuf> {
+    (1..=count)
+        .map(|f| {
+            let mut text = String::from("x,y,z,vx,vy,vz\n");
+            let radius = 0.3 + 0.1 * f as f32;
+            for (x, y, z) in
+                (-6..=6).flat_map(|x| (-6..=6).flat_map(move |y| (-6..=6).map(move |z| (x, y, z))))
+            {
+                let p = Vec3::new(x as f32, y as f32, z as f32) * 0.1;
+                if p.length() <= radius {
+                    text += &format!("{},{},{},{},0,{}\n", p.x, p.y, p.z, p.y, f);
+                }
+            }
+            let path = dir.join(format!("f_{f}.csv"));
+            std::fs::write(&path, text).unwrap();
+            path
+        })
+        .collect()
+}
