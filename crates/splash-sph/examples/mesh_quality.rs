@@ -10,56 +10,9 @@
 
 use std::path::{Path, PathBuf};
 
-use ply_rs_bw::parser::Parser;
-use ply_rs_bw::ply::{DefaultElement, Property};
+use splash_sph::io::read_mesh;
 use splash_sph::mesh::quality::{quality, volume_error};
-use splash_sph::{TriMesh, Vec3, read_particles};
-
-fn read_mesh(path: &Path) -> Result<TriMesh, String> {
-    let file = std::fs::File::open(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    let ply = Parser::<DefaultElement>::new()
-        .read_ply(&mut std::io::BufReader::new(file))
-        .map_err(|e| format!("{}: {e}", path.display()))?;
-    let float = |p: Option<&Property>| match p {
-        Some(Property::Float(v)) => Ok(*v),
-        Some(Property::Double(v)) => Ok(*v as f32),
-        other => Err(format!("{}: a coordinate is {other:?}", path.display())),
-    };
-    let vertices = ply.payload["vertex"]
-        .iter()
-        .map(|e| {
-            Ok(Vec3::new(
-                float(e.get("x"))?,
-                float(e.get("y"))?,
-                float(e.get("z"))?,
-            ))
-        })
-        .collect::<Result<Vec<_>, String>>()?;
-    let indices = |p: &Property| -> Option<Vec<u32>> {
-        match p {
-            Property::ListInt(l) => Some(l.iter().map(|&i| i as u32).collect()),
-            Property::ListUInt(l) => Some(l.clone()),
-            _ => None,
-        }
-    };
-    let triangles = ply.payload["face"]
-        .iter()
-        .map(|e| {
-            let list = e
-                .get("vertex_indices")
-                .or_else(|| e.get("vertex_index"))
-                .and_then(indices)
-                .filter(|l| l.len() == 3)
-                .ok_or_else(|| format!("{}: a face is not a triangle", path.display()))?;
-            Ok([list[0], list[1], list[2]])
-        })
-        .collect::<Result<Vec<_>, String>>()?;
-    Ok(TriMesh {
-        vertices,
-        normals: Vec::new(),
-        triangles,
-    })
-}
+use splash_sph::read_particles;
 
 fn main() -> Result<(), String> {
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -92,7 +45,7 @@ fn main() -> Result<(), String> {
             .map_err(|e| e.to_string())?
             .positions
             .len();
-        let q = quality(&read_mesh(file)?);
+        let q = quality(&read_mesh(file).map_err(|e| e.to_string())?.mesh);
         let error = volume_error(q.volume, n, spacing);
         println!(
             "{name}\t{:+.2}\t{:.3}\t{:.3}\t{}\t{}\t{}\t{}",
