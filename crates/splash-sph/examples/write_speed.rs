@@ -60,7 +60,10 @@ fn time(f: &mut impl FnMut()) -> Duration {
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let mut args = std::env::args().skip(1);
-    let path = PathBuf::from(args.next().ok_or("usage: write_speed MESH.ply [RUNS] [DIR]")?);
+    let path = PathBuf::from(
+        args.next()
+            .ok_or("usage: write_speed MESH.ply [RUNS] [DIR]")?,
+    );
     let runs: usize = args.next().map_or(Ok(15), |n| n.parse())?;
     let dir = args.next().map_or_else(std::env::temp_dir, PathBuf::from);
     let mesh = read_mesh(&path)?.mesh;
@@ -71,7 +74,9 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         mesh.triangles.len(),
         rayon::current_num_threads()
     );
-    println!("| format | bytes | in memory | to a file | serial write! in memory | ratio of minima |");
+    println!(
+        "| format | bytes | in memory | to a file | serial write! in memory | ratio of minima |"
+    );
     println!("|---|---|---|---|---|---|");
     let formats = [
         ("obj", MeshFormat::Obj),
@@ -84,7 +89,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     for (name, format) in formats {
         let mut bytes = Vec::new();
         write_mesh(&mesh, format, &mut bytes)?;
-        let file = dir.join(format!("write-speed-{}.{}", std::process::id(), format.extension()));
+        let file = dir.join(format!(
+            "write-speed-{}.{}",
+            std::process::id(),
+            format.extension()
+        ));
         let (mut memory, mut to_file, mut serial) = (Vec::new(), Vec::new(), Vec::new());
         let mut buffer = Vec::with_capacity(bytes.len());
         for _ in 0..runs {
