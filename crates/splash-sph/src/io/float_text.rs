@@ -4,6 +4,16 @@
 
 use std::fmt::Write as _;
 
+/// Appends `values` as [`push_f32`] prints them, `separator` between them.
+pub(crate) fn push_f32s(out: &mut Vec<u8>, values: impl IntoIterator<Item = f32>, separator: u8) {
+    for (k, x) in values.into_iter().enumerate() {
+        if k > 0 {
+            out.push(separator);
+        }
+        push_f32(out, x);
+    }
+}
+
 /// Appends `x` as `format!("{x}")` would.
 ///
 /// Żmij and `fmt` pick the same shortest digits but for one case: when the two nearest

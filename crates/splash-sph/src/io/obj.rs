@@ -2,7 +2,7 @@
 
 use std::io::{self, Write};
 
-use super::float_text::push_f32;
+use super::float_text::push_f32s;
 use super::text_records::write_records;
 use crate::mesh::TriMesh;
 
@@ -19,12 +19,7 @@ pub(super) fn write(mesh: &TriMesh, out: &mut impl Write) -> io::Result<()> {
     for (key, vectors) in [(&b"v "[..], &mesh.vertices), (b"vn ", &mesh.normals)] {
         write_records(out, vectors.len(), |i, line| {
             line.extend_from_slice(key);
-            let v = vectors[i];
-            push_f32(line, v.x);
-            line.push(b' ');
-            push_f32(line, v.y);
-            line.push(b' ');
-            push_f32(line, v.z);
+            push_f32s(line, vectors[i].to_array(), b' ');
             line.push(b'\n');
         })?;
     }

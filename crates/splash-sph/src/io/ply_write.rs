@@ -11,7 +11,7 @@ use ply_rs_bw::ply::{
 };
 use ply_rs_bw::writer::Writer;
 
-use super::float_text::{push_f32, push_int};
+use super::float_text::{push_f32, push_f32s, push_int};
 use super::text_records::write_records;
 use super::vertex_attributes::{AttributeValues, VertexAttributes};
 use crate::mesh::TriMesh;
@@ -171,17 +171,10 @@ fn write_ascii(
     out: &mut impl Write,
 ) -> io::Result<()> {
     write_records(out, mesh.vertices.len(), |i, line| {
-        let v = mesh.vertices[i];
-        push_f32(line, v.x);
-        for x in [v.y, v.z] {
-            line.push(b' ');
-            push_f32(line, x);
-        }
+        push_f32s(line, mesh.vertices[i].to_array(), b' ');
         if let Some(n) = mesh.normals.get(i) {
-            for x in n.to_array() {
-                line.push(b' ');
-                push_f32(line, x);
-            }
+            line.push(b' ');
+            push_f32s(line, n.to_array(), b' ');
         }
         for (_, values) in arrays {
             let (row, width) = match values {

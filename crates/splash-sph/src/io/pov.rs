@@ -11,7 +11,7 @@ use std::io::{self, Write};
 
 use glam::Vec3;
 
-use super::float_text::{push_f32, push_int};
+use super::float_text::{push_f32s, push_int};
 use super::text_records::write_records;
 use crate::mesh::TriMesh;
 
@@ -60,13 +60,8 @@ pub(super) fn write(mesh: &TriMesh, out: &mut impl Write) -> io::Result<()> {
 /// `f32`, never in exponent form.
 fn vectors(out: &mut impl Write, vectors: &[Vec3]) -> io::Result<()> {
     write_records(out, vectors.len(), |i, line| {
-        let v = vectors[i];
         line.extend_from_slice(b"    <");
-        push_f32(line, v.x);
-        line.push(b',');
-        push_f32(line, v.y);
-        line.push(b',');
-        push_f32(line, v.z);
+        push_f32s(line, vectors[i].to_array(), b',');
         line.push(b'>');
         end(line, i, vectors.len());
     })?;

@@ -260,12 +260,11 @@ fn flip_around(vertices: &[Vec3], triangles: &mut [[u32; 3]], first: u32) {
     // (the rows are dropped here: flips keep the twins up to date themselves)
     let mut locked = vec![false; vertices.len()];
     // Flips keep triangle numbers, so the triangles to try are found once.
-    let near: Vec<u32> = (0..triangles.len() as u32)
+    let mut near: Vec<u32> = (0..triangles.len() as u32)
         .into_par_iter()
         .with_min_len(CHUNK)
         .filter(|&f| triangles[f as usize].iter().any(|&v| v >= first))
         .collect();
-    let mut near = near;
     for _ in 0..FLIP_PASSES {
         let candidates: Vec<(u32, u32)> = near
             .par_iter()
