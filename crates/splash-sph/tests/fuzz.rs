@@ -1091,7 +1091,7 @@ fn mesh_seeds(formats: &[MeshFormat]) -> Vec<Vec<u8>> {
         normals: Vec::new(),
         ..full.clone()
     };
-    let named = vec![
+    let named = [
         (
             "density".to_string(),
             Attribute::Scalar(vec![1000.0, 999.5, 1001.0, 1000.25]),
