@@ -325,31 +325,19 @@ fn smooth_and_restore(
         Volumes::Kept => raw_volumes.iter().map(|&(v, _)| v).collect(),
     };
     let max_step = config.max_offset * spacing;
-    let volume_steps = |vertices: &mut [Vec3],
-                        triangles: &[[u32; 3]],
-                        normals: &mut [Vec3],
-                        measures: &mut Measures,
-                        rings: &VertexFaces,
-                        components: &Components,
-                        steps: u32| {
-        if !targets.is_empty() {
-            restore(
-                vertices, normals, measures, triangles, rings, components, &targets, steps,
-                max_step,
-            );
-        }
-    };
     for _ in 0..config.volume_rounds {
         taubin(vertices, &mut scratch, &rings, 1, lambda, mu);
         normals_and_measures(vertices, triangles, &rings, normals, &mut measures);
-        volume_steps(
+        restore(
             vertices,
-            triangles,
             normals,
             &mut measures,
+            triangles,
             &rings,
             &components,
+            &targets,
             1,
+            max_step,
         );
     }
     normals_and_measures(vertices, triangles, &rings, normals, &mut measures);
@@ -381,14 +369,16 @@ fn smooth_and_restore(
         0.5,
     );
     normals_and_measures(vertices, triangles, &rings, normals, &mut measures);
-    volume_steps(
+    restore(
         vertices,
-        triangles,
         normals,
         &mut measures,
+        triangles,
         &rings,
         &components,
+        &targets,
         config.volume_steps,
+        max_step,
     );
     if wants_normals && config.volume_steps > 0 {
         normals_and_measures(vertices, triangles, &rings, normals, &mut measures);
