@@ -261,4 +261,61 @@ mod tests {
         );
         std::fs::remove_dir_all(&dir).unwrap();
     }
+
+    /// USD output: the stage lists every frame's layer at its number, a failed frame is left
+    /// out (and named in a warning) until a run with `skip_existing` writes it and the stage
+    /// again; a plan whose stage would overwrite a frame's layer is refused.
+    #[test]
+    fn usd_stages_list_the_layers_that_exist() {
+        #[derive(Default)]
+        struct Warnings(Vec<String>);
+        impl Progress for Warnings {
+            fn warning(&mut self, _input: Option<&Path>, message: &str) {
+                self.0.push(message.to_string());
+            }
+            fn frame_done(&mut self, _o: &FrameOutcome, _done: usize, _total: usize) {}
+        }
+        let dir = std::env::temp_dir().join(format!("splash-batch-usd-{}", std::process::id()));
+        std::fs::create_dir_all(dir.join("sim")).unwrap();
+        let inputs = ball_frames(&dir.join("sim"), 3);
+        let good = std::fs::read(&inputs[1]).unwrap();
+        std::fs::write(&inputs[1], "x,y,z\n1,2\n").unwrap();
+        let usd = Batch {
+            format: MeshFormat::Usd,
+            config: Config {
+                spacing: Some(0.1),
+                ..Config::default()
+            },
+            ..batch(&inputs, &dir.join("usd"), None)
+        };
+        let mut seen = Warnings::default();
+        let report = usd.run(&mut seen).unwrap();
+        assert_eq!(report.failed().count(), 1);
+        let stage = dir.join("usd/f.usda");
+        let text = std::fs::read_to_string(&stage).unwrap();
+        assert!(text.contains("(1, 0),\n                (3, 1)\n"), "{text}");
+        assert!(text.contains("@./f_0003.usda@") && !text.contains("f_0002"));
+        assert!(
+            seen.0.iter().any(|w| w.contains("leaves out frame 2 ")),
+            "{:?}",
+            seen.0
+        );
+        let layer = std::fs::read_to_string(dir.join("usd/f_0003.usda")).unwrap();
+        assert!(layer.contains("    vector3f[] velocities.timeSamples = {\n        3: ["));
+
+        std::fs::write(&inputs[1], good).unwrap();
+        let report = usd.run(&mut Warnings::default()).unwrap();
+        assert!(report.complete() && report.plan.skipped.len() == 2);
+        let text = std::fs::read_to_string(&stage).unwrap();
+        assert!(text.contains("(1, 1),\n                (2, 2),\n                (3, 3)\n"));
+
+        let clash = Batch {
+            output: Output::Pattern(dir.join("usd/{stem}.usda").display().to_string()),
+            inputs: vec![dir.join("sim/f_1.csv"), dir.join("sim/f.csv")],
+            ..usd
+        };
+        let e = clash.plan().unwrap_err().to_string();
+        assert!(e.contains("overwritten by the sequence's USD stage"), "{e}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 }
