@@ -91,6 +91,10 @@ def test_the_stage_plays_each_frames_mesh_at_its_time(splash_bin, tmp_path):
         assert mesh.GetNormalsInterpolation() == UsdGeom.Tokens.vertex
         assert mesh.GetSubdivisionSchemeAttr().Get() == UsdGeom.Tokens.none
         assert mesh.GetOrientationAttr().Get() == UsdGeom.Tokens.rightHanded
+        valid, why = UsdGeom.Mesh.ValidateTopology(
+            faces.reshape(-1).tolist(), [3] * len(faces), len(points)
+        )
+        assert valid, why
         extent = np.array(mesh.GetExtentAttr().Get(time), dtype=np.float32)
         np.testing.assert_array_equal(extent, [points.min(axis=0), points.max(axis=0)])
         counts.append(len(points))
