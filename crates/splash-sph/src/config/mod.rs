@@ -397,8 +397,8 @@ impl Config {
             && !format.holds_attributes()
         {
             bail_config!(
-                "output.attributes needs PLY, VTK, VTU or VTP output: .{} files have no place \
-                 for vertex attributes",
+                "output.attributes needs PLY, VTK, VTU, VTP or USD output: .{} files have no \
+                 place for vertex attributes",
                 format.extension()
             );
         }
