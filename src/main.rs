@@ -124,8 +124,10 @@ struct ConfigArgs {
     max_memory: Option<String>,
 
     /// Mesh format: obj, ply (binary little-endian), ply-ascii, pov (POV-Ray mesh2 include,
-    /// .inc), vtk (legacy binary), vtu or vtp (VTK XML, zlib-compressed). Default: from the
-    /// output file's extension, else obj.
+    /// .inc), vtk (legacy binary), vtu or vtp (VTK XML, zlib-compressed), usd (a .usda layer
+    /// per frame, with the particles' velocities, and for a sequence a stage that plays them
+    /// as one mesh: <name>.usda beside them). Default: from the output file's extension, else
+    /// obj.
     #[arg(long)]
     format: Option<String>,
 
@@ -134,7 +136,7 @@ struct ConfigArgs {
     #[arg(long, value_name = "AXIS")]
     up_axis: Option<String>,
 
-    /// Per-vertex attributes to write (PLY, VTK, VTU, VTP): particle attributes by name
+    /// Per-vertex attributes to write (PLY, VTK, VTU, VTP, USD): particle attributes by name
     /// (velocity, density, …; v, vel and vx vy vz all find velocity), interpolated onto the
     /// vertices with the kernel-weighted mean of the particles around each.
     #[arg(long, value_name = "LIST")]

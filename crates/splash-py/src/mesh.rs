@@ -109,13 +109,14 @@ impl Mesh {
     /// creating missing directories.
     ///
     /// ``format``: ``"obj"``, ``"ply"`` (binary), ``"ply-ascii"``, ``"pov"``, ``"vtk"``,
-    /// ``"vtu"`` or ``"vtp"``; by default the configuration's ``output.format``, else the one
-    /// the extension implies (``.obj``, ``.ply``, ``.inc``, ``.vtk``, ``.vtu``, ``.vtp``), else
-    /// OBJ. ``up_axis``: ``"z"`` or ``"y"`` turns the written coordinates so that that axis is
-    /// up (the arrays are left as they are); by default the configuration's
-    /// ``output.up_axis``. PLY and VTK files get every attribute of the mesh (``velocity`` as
-    /// the PLY properties ``vx vy vz``); OBJ and POV-Ray files leave them out. The GIL is
-    /// released while writing.
+    /// ``"vtu"``, ``"vtp"`` or ``"usd"`` (a ``.usda`` layer); by default the configuration's
+    /// ``output.format``, else the one the extension implies (``.obj``, ``.ply``, ``.inc``,
+    /// ``.vtk``, ``.vtu``, ``.vtp``, ``.usda``), else OBJ. ``up_axis``: ``"z"`` or ``"y"``
+    /// turns the written coordinates so that that axis is up (the arrays are left as they
+    /// are); by default the configuration's ``output.up_axis``. PLY, VTK and USD files get
+    /// every attribute of the mesh (``velocity`` as the PLY properties ``vx vy vz``, USD's
+    /// ``velocities``); OBJ and POV-Ray files leave them out. The GIL is released while
+    /// writing.
     ///
     /// Raises OSError when the file cannot be written, ValueError for an unknown format or
     /// one that contradicts the extension.

@@ -40,7 +40,10 @@ options_function! {
 /// ``"auto/N"`` (K from ``SLURM_ARRAY_TASK_ID``). ``skip_existing``: leave frames whose output
 /// exists alone. ``fail_fast``: stop at the first failing frame (by default it is reported
 /// and the others go on). ``attributes``: particle attributes to interpolate onto the
-/// vertices, names or one comma-separated string (PLY, VTK, VTU, VTP output).
+/// vertices, names or one comma-separated string (PLY, VTK, VTU, VTP, USD output).
+/// ``format="usd"`` also writes, after the frames, the stage that plays their layers as one
+/// animated mesh (as ``splash recon --format usd`` does), and takes the particles' velocities
+/// whenever they have them.
 /// ``input_format``, ``format``, ``up_axis``: as the command line's flags. The other keyword
 /// arguments are ``reconstruct``'s; without ``spacing`` it is estimated once, on the first
 /// frame of the whole selection, so that every shard uses the same grid.

@@ -1,5 +1,6 @@
 //! How long the mesh writers take on one mesh, in memory and to a file (temporary, fsync,
-//! rename), in every output format, with the minimum and median over the runs (the minimum
+//! rename), in every output format, each run timing every format in turn (so that they are
+//! compared under the same load), with the minimum and median over the runs (the minimum
 //! is the figure a shared machine disturbs least). The OBJ row is paired with the serial
 //! `write!` loop the OBJ writer was before it formatted on all threads, run alternately in the
 //! same process, and checked to give the same bytes.
@@ -85,23 +86,29 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         ("ply", MeshFormat::PlyBinary),
         ("vtk", MeshFormat::Vtk),
         ("vtu", MeshFormat::Vtu),
+        ("usd", MeshFormat::Usd),
     ];
-    for (name, format) in formats {
-        let mut bytes = Vec::new();
-        write_mesh(&mesh, format, &mut bytes)?;
-        let file = dir.join(format!(
-            "write-speed-{}.{}",
-            std::process::id(),
-            format.extension()
-        ));
-        let (mut memory, mut to_file, mut serial) = (Vec::new(), Vec::new(), Vec::new());
-        let mut buffer = Vec::with_capacity(bytes.len());
-        for _ in 0..runs {
-            memory.push(time(&mut || {
+    // Each run times every format in turn, so that the formats are compared pair by pair
+    // under the same load.
+    let n = formats.len();
+    let (mut memory, mut to_file) = (vec![Vec::new(); n], vec![Vec::new(); n]);
+    let mut serial = Vec::new();
+    let mut sizes = vec![0; n];
+    let mut buffer = Vec::new();
+    for run in 0..runs {
+        for (k, &(_, format)) in formats.iter().enumerate() {
+            let file = dir.join(format!(
+                "write-speed-{}.{}",
+                std::process::id(),
+                format.extension()
+            ));
+            memory[k].push(time(&mut || {
                 buffer.clear();
                 write_mesh(&mesh, format, &mut buffer).unwrap();
             }));
-            to_file.push(time(&mut || write_mesh_file(&file, &mesh, format).unwrap()));
+            sizes[k] = buffer.len();
+            let bytes = std::mem::take(&mut buffer);
+            to_file[k].push(time(&mut || write_mesh_file(&file, &mesh, format).unwrap()));
             if format == MeshFormat::Obj {
                 serial.push(time(&mut || {
                     buffer.clear();
@@ -109,20 +116,25 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 }));
                 assert!(buffer == bytes, "the serial OBJ writer gives other bytes");
             }
+            buffer = bytes;
+            if run + 1 == runs {
+                std::fs::remove_file(&file)?;
+            }
         }
-        std::fs::remove_file(&file)?;
-        let (paired, ratio) = if serial.is_empty() {
+    }
+    for (k, &(name, format)) in formats.iter().enumerate() {
+        let (paired, ratio) = if format != MeshFormat::Obj {
             (String::new(), String::new())
         } else {
-            let ratio = memory.iter().min().unwrap().as_secs_f64()
+            let ratio = memory[k].iter().min().unwrap().as_secs_f64()
                 / serial.iter().min().unwrap().as_secs_f64();
-            (summary(serial), format!("{ratio:.2}"))
+            (summary(serial.clone()), format!("{ratio:.2}"))
         };
         println!(
             "| {name} | {} | {} | {} | {paired} | {ratio} |",
-            bytes.len(),
-            summary(memory),
-            summary(to_file)
+            sizes[k],
+            summary(memory[k].clone()),
+            summary(to_file[k].clone())
         );
     }
     Ok(())

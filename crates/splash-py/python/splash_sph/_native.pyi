@@ -75,13 +75,14 @@ class Mesh:
         creating missing directories.
 
         ``format``: ``"obj"``, ``"ply"`` (binary), ``"ply-ascii"``, ``"pov"``, ``"vtk"``,
-        ``"vtu"`` or ``"vtp"``; by default the configuration's ``output.format``, else the one
-        the extension implies (``.obj``, ``.ply``, ``.inc``, ``.vtk``, ``.vtu``, ``.vtp``),
-        else OBJ. ``up_axis``: ``"z"`` or ``"y"`` turns the written coordinates so that that
-        axis is up (the arrays are left as they are); by default the configuration's
-        ``output.up_axis``. PLY and VTK files get every attribute of the mesh (``velocity`` as
-        the PLY properties ``vx vy vz``); OBJ and POV-Ray files leave them out. The GIL is
-        released while writing.
+        ``"vtu"``, ``"vtp"`` or ``"usd"`` (a ``.usda`` layer); by default the configuration's
+        ``output.format``, else the one the extension implies (``.obj``, ``.ply``, ``.inc``,
+        ``.vtk``, ``.vtu``, ``.vtp``, ``.usda``), else OBJ. ``up_axis``: ``"z"`` or ``"y"``
+        turns the written coordinates so that that axis is up (the arrays are left as they
+        are); by default the configuration's ``output.up_axis``. PLY, VTK and USD files get
+        every attribute of the mesh (``velocity`` as the PLY properties ``vx vy vz``, USD's
+        ``velocities``); OBJ and POV-Ray files leave them out. The GIL is released while
+        writing.
 
         Raises OSError when the file cannot be written, ValueError for an unknown format or
         one that contradicts the extension.
@@ -415,7 +416,9 @@ def recon_sequence(
     stops the run and is raised again. ``frames``: ``"1-10,20,30-40x5"``. ``shard``:
     ``"K/N"`` or ``"auto/N"`` (K from ``SLURM_ARRAY_TASK_ID``). ``skip_existing``: leave
     frames whose output exists alone. ``fail_fast``: stop at the first failing frame.
-    ``attributes``: particle attributes to interpolate onto the vertices (PLY, VTK, VTU, VTP).
+    ``attributes``: particle attributes to interpolate onto the vertices (PLY, VTK, VTU, VTP,
+    USD). ``format="usd"`` also writes, after the frames, the stage that plays their layers as
+    one animated mesh, and takes the particles' velocities whenever they have them.
     The other keywords are ``reconstruct``'s; without ``spacing`` it is estimated once, on the
     first frame of the whole selection, so that every shard uses one grid.
 

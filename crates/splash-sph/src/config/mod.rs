@@ -126,8 +126,9 @@ pub struct OutputConfig {
     /// Rotates the mesh on output so that this axis is up; coordinates as they are when absent.
     pub up_axis: Option<UpAxis>,
     /// Per-vertex attributes interpolated from the particles and written (PLY, VTK, VTU,
-    /// VTP): any particle attribute by name, in the canonical spelling of
+    /// VTP, USD): any particle attribute by name, in the canonical spelling of
     /// [`attribute_names`](crate::attribute_names) (`velocity` for `v`, `vel`, `vx vy vz`).
+    /// USD output takes `velocity` whenever the particles have it, listed here or not.
     pub attributes: Vec<String>,
 }
 
@@ -396,8 +397,8 @@ impl Config {
             && !format.holds_attributes()
         {
             bail_config!(
-                "output.attributes needs PLY, VTK, VTU or VTP output: .{} files have no place \
-                 for vertex attributes",
+                "output.attributes needs PLY, VTK, VTU, VTP or USD output: .{} files have no \
+                 place for vertex attributes",
                 format.extension()
             );
         }

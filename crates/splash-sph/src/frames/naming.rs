@@ -67,7 +67,8 @@ impl Output {
             (None, None) => match self.extension() {
                 Some(ext) => bail_config!(
                     "the output name's .{ext} extension is not a mesh format splash writes \
-                     (.obj, .ply, .inc, .vtk, .vtu, .vtp); rename the output or give --format"
+                     (.obj, .ply, .inc, .vtk, .vtu, .vtp, .usda); rename the output or give \
+                     --format"
                 ),
                 None => MeshFormat::Obj,
             },
@@ -103,6 +104,7 @@ fn format_name(format: MeshFormat) -> &'static str {
         MeshFormat::PlyBinary => "ply",
         MeshFormat::PlyAscii => "ply-ascii",
         MeshFormat::Pov => "pov",
+        MeshFormat::Usd => "usd",
         other => other.extension(),
     }
 }

@@ -23,9 +23,11 @@
 //! valid and reads as empty `Vec`s.
 //!
 //! Meshes are written as OBJ, PLY (binary little-endian or ascii), POV-Ray `mesh2`, VTK legacy
-//! binary or VTK XML (`.vtu`, `.vtp`), atomically when written to a file with
-//! [`write_mesh_file`]. PLY and VTK files can carry per-vertex attributes
-//! ([`VertexAttributes`]). [`read_mesh`] reads them back, but for POV-Ray's.
+//! binary, VTK XML (`.vtu`, `.vtp`) or USD text layers (`.usda`), atomically when written to a
+//! file with [`write_mesh_file`]. PLY, VTK and USD files can carry per-vertex attributes
+//! ([`VertexAttributes`]). [`read_mesh`] reads them back, but for POV-Ray's and USD's. A
+//! sequence of USD layers plays as one animated mesh through a stage of value clips
+//! ([`write_usd_stage`]).
 
 #[macro_use]
 mod failure;
@@ -51,6 +53,8 @@ mod pov;
 mod raw;
 mod records;
 mod text_records;
+mod usd;
+mod usd_stage;
 mod vertex_attributes;
 mod vtk_legacy;
 mod vtk_write;
@@ -70,6 +74,10 @@ pub use mesh_read::{MeshFile, read_mesh};
 
 pub use particles::{Attribute, Particles};
 pub use pov::POV_OBJECT;
+pub use usd::{USD_PRIM, UsdFrame};
+pub use usd_stage::{
+    USD_FRAMES_PER_SECOND, UsdClip, usd_stage_path, usd_topology_path, write_usd_stage,
+};
 pub use vertex_attributes::VertexAttributes;
 
 /// Reads one particle frame, its positions and attributes; `format` overrides the guess from
@@ -200,6 +208,8 @@ pub enum MeshFormat {
     Vtu,
     /// VTK XML poly data (`.vtp`), binary and zlib-compressed.
     Vtp,
+    /// A USD text layer (`.usda`) holding one `UsdGeomMesh`.
+    Usd,
 }
 
 impl MeshFormat {
@@ -212,10 +222,12 @@ impl MeshFormat {
             Self::Vtk => "vtk",
             Self::Vtu => "vtu",
             Self::Vtp => "vtp",
+            Self::Usd => "usda",
         }
     }
 
-    /// Whether the format can carry per-vertex attributes (PLY properties, VTK point data).
+    /// Whether the format can carry per-vertex attributes (PLY properties, VTK point data, USD
+    /// primvars).
     pub fn holds_attributes(self) -> bool {
         !matches!(self, Self::Obj | Self::Pov)
     }
@@ -228,7 +240,7 @@ impl MeshFormat {
 
     /// Parses a format name as given on the command line: `obj`, `ply` (binary little-endian),
     /// `ply-ascii`, `pov` (POV-Ray `mesh2` include, `.inc`), `vtk` (legacy binary), `vtu` or
-    /// `vtp` (XML, compressed).
+    /// `vtp` (XML, compressed), `usd` (USD text layer, `.usda`).
     pub fn parse(name: &str) -> crate::Result<Self> {
         match name.trim().to_ascii_lowercase().as_str() {
             "obj" => Ok(Self::Obj),
@@ -238,14 +250,16 @@ impl MeshFormat {
             "vtk" => Ok(Self::Vtk),
             "vtu" => Ok(Self::Vtu),
             "vtp" => Ok(Self::Vtp),
+            "usd" | "usda" => Ok(Self::Usd),
             _ => bail_config!(
-                "unknown mesh format '{name}': expected obj, ply, ply-ascii, pov, vtk, vtu or vtp"
+                "unknown mesh format '{name}': expected obj, ply, ply-ascii, pov, vtk, vtu, vtp \
+                 or usd"
             ),
         }
     }
 
     /// The format implied by the extension (`.obj`, `.ply` as binary, `.inc` as POV-Ray,
-    /// `.vtk`, `.vtu`, `.vtp`), case-insensitively.
+    /// `.vtk`, `.vtu`, `.vtp`, `.usda` and `.usd` as USD text), case-insensitively.
     pub fn from_path(path: &Path) -> Option<Self> {
         let extension = path.extension()?.to_str()?.to_ascii_lowercase();
         match extension.as_str() {
@@ -255,6 +269,7 @@ impl MeshFormat {
             "vtk" => Some(Self::Vtk),
             "vtu" => Some(Self::Vtu),
             "vtp" => Some(Self::Vtp),
+            "usda" | "usd" => Some(Self::Usd),
             _ => None,
         }
     }
@@ -278,28 +293,12 @@ pub fn write_mesh_with(
     if !attributes.is_empty() && !format.holds_attributes() {
         let names: Vec<&str> = attributes.arrays().iter().map(|(n, _)| *n).collect();
         return Err(invalid_input(format!(
-            ".{} files cannot hold vertex attributes ({}): write PLY, VTK, VTU or VTP",
+            ".{} files cannot hold vertex attributes ({}): write PLY, VTK, VTU, VTP or USD",
             format.extension(),
             listed(names)
         )));
     }
-    let arrays = attributes.arrays();
-    for (i, (name, values)) in arrays.iter().enumerate() {
-        if values.len() != mesh.vertices.len() {
-            return Err(invalid_input(format!(
-                "mesh has {} values of '{}' for {} vertices",
-                values.len(),
-                short(name),
-                mesh.vertices.len()
-            )));
-        }
-        if arrays[..i].iter().any(|(n, _)| n == name) {
-            return Err(invalid_input(format!(
-                "the vertex attribute '{}' is given twice",
-                short(name)
-            )));
-        }
-    }
+    check_attributes(mesh, attributes)?;
     let mut out = BufWriter::with_capacity(1 << 16, w);
     match format {
         MeshFormat::Obj => obj::write(mesh, &mut out)?,
@@ -314,8 +313,27 @@ pub fn write_mesh_with(
             &mut out,
         )?,
         MeshFormat::Vtp => vtu_write::write(mesh, attributes, vtu_write::Kind::PolyData, &mut out)?,
+        MeshFormat::Usd => usd::write(mesh, attributes, UsdFrame::default(), &mut out)?,
     }
     out.flush()
+}
+
+/// Writes a USD layer of `mesh` placed in time and space by `frame` (its values sampled at
+/// the frame's time code, for a stage's value clips), whole or not at all, as
+/// [`write_mesh_file`] does.
+pub fn write_usd_file(
+    path: &Path,
+    mesh: &TriMesh,
+    attributes: &VertexAttributes,
+    frame: UsdFrame,
+) -> crate::Result<()> {
+    atomic::write_file(path, |file| {
+        check_mesh(mesh)?;
+        check_attributes(mesh, attributes)?;
+        let mut out = BufWriter::with_capacity(1 << 16, file);
+        usd::write(mesh, attributes, frame, &mut out)?;
+        out.flush()
+    })
 }
 
 /// Writes to a temporary file in the same directory, fsyncs, renames onto `path`; on any error
@@ -375,6 +393,28 @@ impl UpAxis {
             }
         }
     }
+}
+
+/// Rejects attributes without one value per vertex, and a name given twice.
+fn check_attributes(mesh: &TriMesh, attributes: &VertexAttributes) -> io::Result<()> {
+    let arrays = attributes.arrays();
+    for (i, (name, values)) in arrays.iter().enumerate() {
+        if values.len() != mesh.vertices.len() {
+            return Err(invalid_input(format!(
+                "mesh has {} values of '{}' for {} vertices",
+                values.len(),
+                short(name),
+                mesh.vertices.len()
+            )));
+        }
+        if arrays[..i].iter().any(|(n, _)| n == name) {
+            return Err(invalid_input(format!(
+                "the vertex attribute '{}' is given twice",
+                short(name)
+            )));
+        }
+    }
+    Ok(())
 }
 
 /// Rejects meshes that would make a corrupt file rather than writing them.

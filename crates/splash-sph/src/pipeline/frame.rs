@@ -1,7 +1,9 @@
 //! One frame of a sequence, file to file: read the particles, look up and check the attributes
 //! asked for, reconstruct the surface ([`surface`](super::surface)) or extract an isosurface
 //! (Marching Correctors, [`iso`](crate::iso)), turn it upright if asked, write it whole (a
-//! temporary renamed into place). The spacing and the reconstructor are kept from frame to
+//! temporary renamed into place; a USD layer's values sampled at the frame's number, for a
+//! sequence stage). USD output takes the particles' velocities whenever a frame has them
+//! (`velocities`, for motion blur), asked for or not. The spacing and the reconstructor are kept from frame to
 //! frame, so that a whole sequence shares one grid and one thread pool. Reading (`Loader`) and
 //! writing (`Writer`) hold only settings, so that a sequence can run them on threads of
 //! their own around the reconstruction (`overlap`).
@@ -16,7 +18,10 @@ use super::Progress;
 use crate::attribute_names;
 use crate::config::Config;
 use crate::error::{Error, Result};
-use crate::io::{self, Attribute, InputFormat, MeshFormat, Particles, UpAxis, VertexAttributes};
+use crate::frames::path_frame_number;
+use crate::io::{
+    self, Attribute, InputFormat, MeshFormat, Particles, UpAxis, UsdFrame, VertexAttributes,
+};
 use crate::iso::{self, IsoRequest};
 use crate::mesh::TriMesh;
 use crate::reconstructor::Reconstructor;
@@ -50,8 +55,8 @@ impl FramePipeline {
         config.validate()?;
         if !config.output.attributes.is_empty() && !format.holds_attributes() {
             bail_config!(
-                "--attributes {} needs PLY, VTK, VTU or VTP output (--format ply, ply-ascii, \
-                 vtk, vtu or vtp): .{} files have no place for vertex attributes",
+                "--attributes {} needs PLY, VTK, VTU, VTP or USD output (--format ply, \
+                 ply-ascii, vtk, vtu, vtp or usd): .{} files have no place for vertex attributes",
                 config.output.attributes.join(","),
                 format.extension()
             );
@@ -133,18 +138,28 @@ impl FramePipeline {
     ) -> Result<Made> {
         let Loaded {
             positions,
-            attributes,
+            mut attributes,
             outside_box,
             read,
         } = loaded;
+        let time = path_frame_number(input);
         if let Some(request) = &self.iso {
             let request = request.clone();
             let mut made = self.iso_frame(input, &request, positions, attributes, progress)?;
             made.stats.timings.read = read;
             made.stats.particles_outside_box = outside_box;
+            made.time = time;
             return Ok(made);
         }
-        let wanted = particle_attributes(input, attributes, &self.config.output.attributes)?;
+        let mut names = self.config.output.attributes.clone();
+        if self.format == MeshFormat::Usd
+            && !names.iter().any(|n| n == "velocity")
+            && let Some(velocity) = attribute_names::take(&mut attributes, "velocity")
+        {
+            attributes.insert("velocity".into(), velocity);
+            names.push("velocity".into());
+        }
+        let wanted = particle_attributes(input, attributes, &names)?;
         if positions.is_empty() {
             // Nothing to reconstruct, and nothing to estimate a spacing from.
             let named: Vec<(String, Attribute)> = wanted
@@ -164,6 +179,7 @@ impl FramePipeline {
                 mesh: TriMesh::default(),
                 named,
                 stats,
+                time,
             });
         }
         let r = self.sequence_spacing(input, &positions, progress)?;
@@ -194,6 +210,7 @@ impl FramePipeline {
             mesh: surface.mesh,
             named,
             stats,
+            time,
         })
     }
 
@@ -230,6 +247,7 @@ impl FramePipeline {
             mesh: surface.mesh,
             named: surface.attributes,
             stats,
+            time: None,
         })
     }
 
@@ -302,6 +320,8 @@ pub(super) struct Made {
     mesh: TriMesh,
     named: Vec<(String, Attribute)>,
     stats: FrameStats,
+    /// The frame's number: a USD layer's time code.
+    time: Option<u64>,
 }
 
 /// Writes meshes: turned upright if asked, whole or not at all.
@@ -318,6 +338,7 @@ impl Writer {
             mut mesh,
             mut named,
             mut stats,
+            time,
         } = made;
         let start = Instant::now();
         if let Some(axis) = self.up_axis {
@@ -327,7 +348,12 @@ impl Writer {
             named: &named,
             ..Default::default()
         };
-        io::write_mesh_file_with(output, &mesh, &attributes, self.format)?;
+        if self.format == MeshFormat::Usd {
+            let up_axis = self.up_axis;
+            io::write_usd_file(output, &mesh, &attributes, UsdFrame { time, up_axis })?;
+        } else {
+            io::write_mesh_file_with(output, &mesh, &attributes, self.format)?;
+        }
         stats.timings.write = start.elapsed();
         Ok(stats)
     }
