@@ -22,7 +22,7 @@
 //! # Ok::<(), splash_sph::Error>(())
 //! ```
 
-#![warn(missing_docs)]
+#![deny(missing_docs)]
 
 #[macro_use]
 mod error;

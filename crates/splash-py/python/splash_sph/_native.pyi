@@ -1,7 +1,7 @@
 """Type stubs of the native extension; the ``splash_sph`` package re-exports all of it."""
 
 import os
-from typing import Any, Callable, Dict, List, Mapping, NamedTuple, Optional, Sequence, TypedDict, Union
+from typing import Any, Callable, Dict, List, Mapping, NamedTuple, Optional, Sequence, TypedDict, Union, final, type_check_only
 
 import numpy as np
 import numpy.typing as npt
@@ -9,6 +9,24 @@ import numpy.typing as npt
 _Path = Union[str, "os.PathLike[str]"]
 _Array = npt.ArrayLike
 
+__all__ = [
+    "reconstruct",
+    "recon_sequence",
+    "frame_number",
+    "iso",
+    "postprocess",
+    "preview",
+    "read_particles",
+    "read_mesh",
+    "MeshArrays",
+    "estimate_spacing",
+    "default_config",
+    "config_toml",
+    "Mesh",
+    "Particles",
+]
+
+@final
 class Particles:
     """One particle frame: positions and per-particle attributes.
 
@@ -35,11 +53,12 @@ class Particles:
         array. Raises KeyError, listing the frame's attributes, when it has none of these."""
     def __len__(self) -> int:
         """The number of particles."""
-    def __getitem__(self, name: str) -> npt.NDArray[np.float32]:
+    def __getitem__(self, name: str, /) -> npt.NDArray[np.float32]:
         """The attribute ``name``; KeyError when the frame has none of that name."""
-    def __contains__(self, name: str) -> bool:
+    def __contains__(self, name: str, /) -> bool:
         """Whether the frame has the attribute ``name``."""
 
+@final
 class Mesh:
     """A closed triangle mesh whose triangles wind counter-clockwise seen from outside the
     fluid.
@@ -315,7 +334,7 @@ def preview(
     positions: _Array,
     spacing: Optional[float] = None,
     *,
-    size: "tuple[int, int]" = (1280, 720),
+    size: "tuple[int, int]" = ...,
     camera: Optional["tuple[float, float, float]"] = None,
     look_at: Optional["tuple[float, float, float]"] = None,
     up: Optional["tuple[float, float, float]"] = None,
@@ -331,7 +350,8 @@ def preview(
 ) -> "npt.NDArray[np.uint8]":
     """A ray-traced picture of the metaball surface of ``positions`` (the surface
     ``reconstruct(..., field="metaball")`` meshes) as an (H, W, 3) uint8 RGB array, as
-    ``splash preview`` renders it: Fitted BVH, Phong shading, a hard shadow. Without
+    ``splash preview`` renders it: Fitted BVH, Phong shading, a hard shadow. ``size``:
+    (width, height) in pixels, default (1280, 720). Without
     ``camera`` the particles' 0.5-99.5 % percentile box is framed automatically. The image
     does not depend on ``threads``. Raises ValueError for bad settings, cameras or sizes.
     """
@@ -344,6 +364,7 @@ def estimate_spacing(positions: _Array) -> float:
     them coincide. The GIL is released while estimating.
     """
 
+@type_check_only
 class FrameReport(TypedDict, total=False):
     """One frame of ``recon_sequence``, as ``progress`` gets it and the run report lists it
     (the fields of ``splash recon --log-format json``'s ``frame`` events)."""
@@ -360,6 +381,7 @@ class FrameReport(TypedDict, total=False):
     times: Dict[str, float]
     error: str  # status "error" only
 
+@type_check_only
 class RunReport(TypedDict):
     """What ``recon_sequence`` returns: this job's share of the sequence and its frames."""
 

@@ -34,7 +34,9 @@ pub struct Config {
     pub engine: Engine,
     /// Worker threads; all cores when absent. The mesh does not depend on it.
     pub threads: Option<usize>,
-    /// Heap a full-grid engine may plan to use; half the machine's memory when absent.
+    /// Heap a frame may plan to use (`"8G"`, `"512M"`, or bytes); when absent 80 % of the
+    /// smallest of the cgroup limit, SLURM's memory and the available memory (8 GiB where none
+    /// is known).
     pub max_memory: Option<Bytes>,
     /// Which particles are on the surface.
     pub surface_particles: SurfaceParticles,

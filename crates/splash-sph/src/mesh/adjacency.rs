@@ -18,7 +18,7 @@ pub struct VertexFaces {
 }
 
 impl VertexFaces {
-    /// The rows of `triangles` over `vertices` vertices (see [`vertex_rows`]).
+    /// The rows of `triangles` over `vertices` vertices (see `vertex_rows`).
     pub fn new(vertices: usize, triangles: &[[u32; 3]]) -> VertexFaces {
         assert!(
             3 * triangles.len() < u32::MAX as usize,

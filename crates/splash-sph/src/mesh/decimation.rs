@@ -22,7 +22,7 @@
 //!   which keeps a closed manifold closed and manifold, the Euler characteristic and the
 //!   components as they were (a collapse never joins two components);
 //! - a surviving triangle around it turns by more than about 78° or degenerates, or gets a
-//!   smaller quality than both [`MIN_QUALITY`] and the worst triangle it replaces.
+//!   smaller quality than both `MIN_QUALITY` and the worst triangle it replaces.
 //!
 //! Vertices whose star is not a single closed fan (boundaries, non-manifold spots, degenerate
 //! triangles) are never moved, so other meshes pass through with those parts untouched.
