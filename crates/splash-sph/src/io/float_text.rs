@@ -5,10 +5,14 @@
 use std::fmt::Write as _;
 
 /// Appends `values` as [`push_f32`] prints them, `separator` between them.
-pub(crate) fn push_f32s(out: &mut Vec<u8>, values: impl IntoIterator<Item = f32>, separator: u8) {
+pub(crate) fn push_f32s(
+    out: &mut Vec<u8>,
+    values: impl IntoIterator<Item = f32>,
+    separator: &[u8],
+) {
     for (k, x) in values.into_iter().enumerate() {
         if k > 0 {
-            out.push(separator);
+            out.extend_from_slice(separator);
         }
         push_f32(out, x);
     }
@@ -121,6 +125,16 @@ fn positional(out: &mut Vec<u8>, mantissa: &[u8], exponent: &[u8]) {
     } else {
         out.extend_from_slice(digits);
         out.extend(std::iter::repeat_n(b'0', (before - len) as usize));
+    }
+}
+
+/// Appends `values` in decimal, `separator` between them.
+pub(crate) fn push_ints(out: &mut Vec<u8>, values: [u32; 3], separator: &[u8]) {
+    for (k, i) in values.into_iter().enumerate() {
+        if k > 0 {
+            out.extend_from_slice(separator);
+        }
+        push_int(out, i);
     }
 }
 

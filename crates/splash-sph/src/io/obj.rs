@@ -19,7 +19,7 @@ pub(super) fn write(mesh: &TriMesh, out: &mut impl Write) -> io::Result<()> {
     for (key, vectors) in [(&b"v "[..], &mesh.vertices), (b"vn ", &mesh.normals)] {
         write_records(out, vectors.len(), |i, line| {
             line.extend_from_slice(key);
-            push_f32s(line, vectors[i].to_array(), b' ');
+            push_f32s(line, vectors[i].to_array(), b" ");
             line.push(b'\n');
         })?;
     }

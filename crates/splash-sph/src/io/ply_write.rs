@@ -171,10 +171,10 @@ fn write_ascii(
     out: &mut impl Write,
 ) -> io::Result<()> {
     write_records(out, mesh.vertices.len(), |i, line| {
-        push_f32s(line, mesh.vertices[i].to_array(), b' ');
+        push_f32s(line, mesh.vertices[i].to_array(), b" ");
         if let Some(n) = mesh.normals.get(i) {
             line.push(b' ');
-            push_f32s(line, n.to_array(), b' ');
+            push_f32s(line, n.to_array(), b" ");
         }
         for (_, values) in arrays {
             let (row, width) = match values {

@@ -11,7 +11,7 @@ use std::io::{self, Write};
 
 use glam::Vec3;
 
-use super::float_text::{push_f32s, push_int};
+use super::float_text::{push_f32s, push_ints};
 use super::text_records::write_records;
 use crate::mesh::TriMesh;
 
@@ -39,12 +39,7 @@ pub(super) fn write(mesh: &TriMesh, out: &mut impl Write) -> io::Result<()> {
     let triangles = &mesh.triangles;
     write_records(out, triangles.len(), |i, line| {
         line.extend_from_slice(b"    <");
-        let [a, b, c] = triangles[i];
-        push_int(line, a);
-        line.push(b',');
-        push_int(line, b);
-        line.push(b',');
-        push_int(line, c);
+        push_ints(line, triangles[i], b",");
         line.push(b'>');
         end(line, i, triangles.len());
     })?;
@@ -61,7 +56,7 @@ pub(super) fn write(mesh: &TriMesh, out: &mut impl Write) -> io::Result<()> {
 fn vectors(out: &mut impl Write, vectors: &[Vec3]) -> io::Result<()> {
     write_records(out, vectors.len(), |i, line| {
         line.extend_from_slice(b"    <");
-        push_f32s(line, vectors[i].to_array(), b',');
+        push_f32s(line, vectors[i].to_array(), b",");
         line.push(b'>');
         end(line, i, vectors.len());
     })?;
