@@ -19,14 +19,6 @@ fn params(field: &str, cell: &str, r: f32, block: u32) -> Params {
     }
 }
 
-/// With the seeds around sparse particles (`slices.sparse_seeds`).
-fn complete(field: &str, cell: &str, r: f32, block: u32) -> Params {
-    Params {
-        sparse_seeds: true,
-        ..params(field, cell, r, block)
-    }
-}
-
 fn slices(ps: &[Vec3], p: &Params, threads: usize) -> (Reconstruction, SlicesReport) {
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
@@ -192,7 +184,7 @@ fn component_sizes(m: &TriMesh) -> Vec<usize> {
 #[test]
 fn at_half_cells_slices_find_the_blobs_away_from_every_particle() {
     let ps = read(&fixture("frame_0040.ply"));
-    let p = complete("ssp07", "r/2", 0.014, 64);
+    let p = params("ssp07", "r/2", 0.014, 64);
     let full = reconstruct(&ps, &p, Engine::FullGather).unwrap();
     let (rec, report) = slices(&ps, &p, 2);
     assert_sound(&report, "frame_0040 at r/2");
@@ -234,7 +226,7 @@ fn slices_find_every_component_of_the_full_grid_on_real_frames() {
                 for &(block, threads) in runs {
                     let what =
                         format!("{name}, {field} at {cell}, block {block}, {threads} threads");
-                    let (rec, _) = slices(&ps, &complete(field, cell, 0.014, block), threads);
+                    let (rec, _) = slices(&ps, &params(field, cell, 0.014, block), threads);
                     assert_eq!(
                         component_sizes(&rec.mesh),
                         component_sizes(&full.mesh),
