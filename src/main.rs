@@ -105,11 +105,10 @@ struct ConfigArgs {
 
     /// Reconstruction engine: narrow-band (default), the paper's baselines full-gather
     /// (Z-index gather on every grid vertex) and scatter (serial, SSP07 only), or slices
-    /// (block-parallel Marching Slices, memory bounded per block; see --block). All give the
-    /// same mesh, except at small cells for blobs of a few cells away from every particle:
-    /// the narrow band misses those farther than its 2r band (at cell r/2: 1 of 55 components
-    /// on cbd-small frame 40), slices all of them (7 of 55) unless the config sets
-    /// `slices.sparse_seeds = true`.
+    /// (block-parallel Marching Slices, memory bounded per block; see --block). full-gather,
+    /// scatter and slices give the same components; the narrow band too, except at small
+    /// cells for blobs of a few cells farther than its 2r band from every surface particle
+    /// (at cell r/2: 1 of 55 components on cbd-small frame 40).
     #[arg(long)]
     engine: Option<String>,
 

@@ -29,8 +29,8 @@ pub struct Config {
     /// Marching Cubes cell edge length; at most 4r ([`validate`](Self::validate) refuses
     /// larger cells once the spacing is known).
     pub cell: Length,
-    /// Which engine reconstructs (all give the same mesh but for small blobs away from every
-    /// particle at small cells: see `slices.sparse_seeds`).
+    /// Which engine reconstructs (all give the same mesh but for small blobs far from every
+    /// surface particle at small cells, which the narrow band can miss).
     pub engine: Engine,
     /// Worker threads; all cores when absent. The mesh does not depend on it.
     pub threads: Option<usize>,
@@ -207,18 +207,11 @@ impl OutputConfig {
 pub struct SlicesConfig {
     /// Cubes per side of a block (Rosenberg & Birdwell 2008, Sec. 3), without its margin.
     pub block: u32,
-    /// Also seed from the corners 1r–3r around sparse particles, so that the engine finds the
-    /// small blobs away from every particle that the paper's seeds miss (at cell r/2; the full
-    /// grid's components, all of them). Off by default: it costs 4–6× the engine's time.
-    pub sparse_seeds: bool,
 }
 
 impl Default for SlicesConfig {
     fn default() -> Self {
-        SlicesConfig {
-            block: 64,
-            sparse_seeds: false,
-        }
+        SlicesConfig { block: 64 }
     }
 }
 
@@ -482,8 +475,6 @@ pub(crate) struct Params {
     pub correct: u32,
     /// Cubes per side of a Marching Slices block.
     pub block: u32,
-    /// Marching Slices also seeds around sparse particles.
-    pub sparse_seeds: bool,
     /// The field's support radius in world units (the field's own, kept for the gathers).
     pub support: f32,
     pub engine: Engine,
@@ -536,7 +527,6 @@ impl Params {
             normals: config.normals,
             correct: config.correct,
             block: config.slices.block,
-            sparse_seeds: config.slices.sparse_seeds,
             engine: config.engine,
             max_memory: config.max_memory.map_or_else(default_limit, |b| b.0),
         }

@@ -35,8 +35,9 @@ impl Block {
     /// An upper estimate of the heap its marching holds at its peak, with `channels`
     /// per-particle channels, a reach of `reach` cubes and the mesh aside: the lookup cache
     /// (its column arrays, and an entry per particle and column within reach, at most the
-    /// disk of the reach: particles of the margin have fewer), the block's copies of its particles, and four slice caches (the
-    /// paper's two, with their neighbours; 3 at most on the fixtures).
+    /// disk of the reach: particles of the margin have fewer), the block's copies of its
+    /// particles, four slice caches (the paper's two, with their neighbours; 3 at most on the
+    /// fixtures), and the missed seeds' bits and brick layer.
     pub fn planned_bytes(&self, channels: usize, reach: f32) -> u64 {
         block_bytes(
             self.particles.len() as u64,
@@ -58,7 +59,13 @@ pub fn block_bytes(particles: u64, cubes: i32, channels: usize, reach: f32) -> u
         .saturating_mul(8);
     let copies = particles.saturating_mul(12 + 24 + 4 + 4 * channels as u64);
     let slices = 4 * columns * 4 + 3 * columns * 4;
-    entries.saturating_add(copies).saturating_add(slices)
+    // The visited bits, and the missed seeds' layer of bricks: its marks, vertices (12),
+    // values as sampled (4) and as planes (4), on 9 planes at most.
+    let seeds = side.pow(3) / 8 + 9 * columns * (12 + 4 + 4);
+    entries
+        .saturating_add(copies)
+        .saturating_add(slices)
+        .saturating_add(seeds)
 }
 
 /// Cubes of margin on each side of a block, for a reach of `reach` world units.

@@ -1,6 +1,7 @@
 //! Marching Slices within one block (Rosenberg & Birdwell 2008, Sec. 4, Algorithm 1): seeds
 //! from every particle, then the lowest slab with work is polygonised, following the surface
-//! cube by cube through todo lists, with slice caches only for the slices next to live slabs.
+//! cube by cube through todo lists, with slice caches only for the slices next to live slabs;
+//! then once more from the crossings that walk missed (`missed_seeds.rs`).
 
 use std::sync::atomic::{AtomicUsize, Ordering};
 
@@ -10,8 +11,8 @@ use serde::Serialize;
 
 use super::blocks::Block;
 use super::lookup_cache::LookupCache;
+use super::missed_seeds::MissedSeeds;
 use super::slice_cache::{Corner, DONE_ABOVE, DONE_BELOW, NO_VERTEX, SliceCache};
-use super::sparse_seeds::SparseSeeds;
 use crate::error::Result;
 use crate::field::ScalarField;
 use crate::mesh::marching_cubes::{
@@ -27,10 +28,8 @@ pub struct Setting<'a, F: ScalarField + ?Sized> {
     pub handlers: &'a HandlerArray,
     pub field: &'a F,
     pub cell: f32,
-    /// The particle spacing r, for the sparse seeds.
+    /// The particle spacing r, for the missed seeds.
     pub spacing: f32,
-    /// Seed around sparse particles too (`slices.sparse_seeds`).
-    pub sparse_seeds: bool,
     /// Cache the field's gradient at corners, for `normals = "grid"`.
     pub corner_gradients: bool,
     /// Keep every visited cube, to count visits to a cube already visited.
@@ -102,6 +101,9 @@ struct Marcher<'a, F: ScalarField + ?Sized> {
     mesh: BlockMesh,
     stats: BlockStats,
     visited: FxHashSet<IVec3>,
+    /// A bit per cube of the block with its margins, set once visited: the missed seeds'
+    /// marching starts only where the first found nothing.
+    visited_bits: Vec<u64>,
     live: usize,
     /// Bytes last added to `in_flight`.
     counted: usize,
@@ -156,6 +158,7 @@ pub fn march<F: ScalarField + ?Sized>(
             ..BlockStats::default()
         },
         visited: FxHashSet::default(),
+        visited_bits: vec![0; (n as usize).pow(3).div_ceil(64)],
         live: 0,
         counted: 0,
     };
@@ -168,10 +171,11 @@ pub fn march<F: ScalarField + ?Sized>(
             .sum::<usize>();
     m.account();
     let reach_slabs = (f64::from(support) / cell).ceil() as i32;
-    if m.set.sparse_seeds {
-        m.seed_sparse(reach_slabs);
-    }
     m.seed(&local, reach_slabs);
+    m.run();
+    // Pushed after the first marching is done, so that its mesh is unchanged and the missed
+    // components' triangles follow.
+    m.seed_missed()?;
     m.run();
     m.account();
     set.in_flight.now.fetch_sub(m.counted, Ordering::Relaxed);
@@ -235,32 +239,37 @@ impl<F: ScalarField + ?Sized> Marcher<'_, F> {
         }
     }
 
-    /// Sparse seeds (`sparse_seeds.rs`): from each inside corner near a sparse particle,
-    /// down in −z to the first outside corner, as [`seed`](Self::seed) walks. Pushed before
-    /// the particles' seeds, so they are popped last and only start cubes that nothing else
-    /// reached: a mesh without such blobs is marched as before.
-    fn seed_sparse(&mut self, reach_slabs: i32) {
-        let top = self.n - 1;
-        let seeds = SparseSeeds {
+    /// Missed seeds (`missed_seeds.rs`): the unvisited cubes around each crossing edge found
+    /// near sparse particles.
+    fn seed_missed(&mut self) -> Result<()> {
+        let seeds = MissedSeeds {
             handlers: self.set.handlers,
-            support: self.set.field.support(),
+            field: self.set.field,
             spacing: self.set.spacing,
             cell: self.set.cell,
-            origin: self.origin,
-            lo: IVec3::ONE,
-            hi: IVec3::splat(top),
+            lo: self.block.lo,
+            size: self.block.size,
         };
-        for c in seeds.corners(&self.positions) {
-            if self.value(c) >= 0.0 {
-                continue;
-            }
-            for z in ((c.z - reach_slabs - 1).max(0)..c.z).rev() {
-                if self.value(c.with_z(z)) >= 0.0 {
-                    self.push(c.with_z(z));
-                    break;
+        for (c, axis) in seeds.crossing_edges(&self.positions)? {
+            let (a, b) = (IVec3::AXES[(axis + 1) % 3], IVec3::AXES[(axis + 2) % 3]);
+            let edge = c - self.origin;
+            for cube in [edge, edge - a, edge - b, edge - a - b] {
+                if within(cube, self.n) && !self.was_visited(cube) {
+                    self.push(cube);
                 }
             }
         }
+        Ok(())
+    }
+
+    fn bit(&self, cube: IVec3) -> usize {
+        let n = self.n as usize;
+        (cube.z as usize * n + cube.y as usize) * n + cube.x as usize
+    }
+
+    fn was_visited(&self, cube: IVec3) -> bool {
+        let i = self.bit(cube);
+        self.visited_bits[i >> 6] >> (i & 63) & 1 != 0
     }
 
     fn push(&mut self, cube: IVec3) {
@@ -289,9 +298,14 @@ impl<F: ScalarField + ?Sized> Marcher<'_, F> {
     fn visit(&mut self, cube: IVec3) {
         let (z, i) = (cube.z as usize, self.entry(cube));
         let (below, above) = (self.slice(z), self.slice(z + 1));
-        if below.entry(i) & DONE_ABOVE != 0 || above.entry(i) & DONE_BELOW != 0 {
+        if below.entry(i) & DONE_ABOVE != 0
+            || above.entry(i) & DONE_BELOW != 0
+            || self.was_visited(cube)
+        {
             return;
         }
+        let bit = self.bit(cube);
+        self.visited_bits[bit >> 6] |= 1 << (bit & 63);
         self.slices[z].as_mut().unwrap().set_flag(i, DONE_ABOVE);
         self.slices[z + 1].as_mut().unwrap().set_flag(i, DONE_BELOW);
         self.stats.cubes_visited += 1;
@@ -455,7 +469,7 @@ impl<F: ScalarField + ?Sized> Marcher<'_, F> {
             .iter()
             .map(|t| t.capacity() * size_of::<[u16; 2]>())
             .sum();
-        let render = slices + todo;
+        let render = slices + todo + self.visited_bits.capacity() * size_of::<u64>();
         self.stats.render_bytes = self.stats.render_bytes.max(render);
         let now = render + self.stats.cache_bytes;
         let flight = &self.set.in_flight;

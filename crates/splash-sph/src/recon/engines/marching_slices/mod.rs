@@ -1,14 +1,15 @@
 //! The block-parallel Marching Slices engine of Rosenberg & Birdwell 2008: block subdivision
 //! (Sec. 3, `blocks.rs`), Marching Slices within each block (Sec. 4, `marching.rs`, with
 //! `slice_cache.rs`), the 2D-projection 1D-lookup particle cache (Sec. 6, `lookup_cache.rs`),
-//! and the blocks' meshes welded into one (`weld.rs`). Blocks run in parallel; each holds its
+//! seeds for what the paper's seeding misses (`missed_seeds.rs`), and the blocks' meshes
+//! welded into one (`weld.rs`). Blocks run in parallel; each holds its
 //! lookup cache and slice caches only while it runs, so working memory is bounded per block.
 
 pub mod blocks;
 pub mod lookup_cache;
 pub mod marching;
+pub mod missed_seeds;
 pub mod slice_cache;
-pub mod sparse_seeds;
 pub mod weld;
 
 use std::sync::atomic::Ordering;
@@ -132,7 +133,6 @@ pub fn reconstruct(
         field,
         cell,
         spacing: params.spacing,
-        sparse_seeds: params.sparse_seeds,
         corner_gradients: params.normals == Normals::Grid,
         check_visits: checks.visits,
         in_flight: &in_flight,
