@@ -29,7 +29,8 @@ const VALUES: &str = "value";
 /// per-particle values.
 ///
 /// ``magnitude``: the isosurface of |A| of a vector attribute; ``vorticity``: of |∇ × v| of a
-/// velocity (SPH curl). ``spacing``: the particle spacing r (required unless the config gives
+/// velocity (SPH curl); ``lambda2``: of λ2, the middle eigenvalue of S² + Ω² of a velocity's
+/// SPH gradient (vortex cores are where λ2 < 0: take a negative level). ``spacing``: the particle spacing r (required unless the config gives
 /// it). ``cell``: the virtual grid's cell (``"r/2"`` by default, ``"r"``, a number).
 /// ``correct``: Newton steps per vertex along its cube edge (3 by default, 0: plain Marching
 /// Cubes vertices). ``shepard``: normalise by the sum of weights Σ V W (plain SPH by default).
@@ -45,12 +46,12 @@ const VALUES: &str = "value";
 /// ``crossed_cells``, ``cache_hit_ratio``, ``correction``, ``times`` in seconds, ...).
 ///
 /// Raises KeyError for an attribute the particles do not have (listing theirs), ValueError for
-/// a vector without ``magnitude``/``vorticity``, bad arrays or settings; TypeError for a wrong
+/// a vector without ``magnitude``/``vorticity``/``lambda2``, bad arrays or settings; TypeError for a wrong
 /// kind of argument.
 #[allow(clippy::too_many_arguments)]
 #[pyfunction]
 #[pyo3(signature = (particles, attribute, level, *, spacing=None, magnitude=false,
-    vorticity=false, cell=None, correct=None, shepard=None, kernel_scale=None, attributes=None,
+    vorticity=false, lambda2=false, cell=None, correct=None, shepard=None, kernel_scale=None, attributes=None,
     threads=None, config=None))]
 pub fn iso<'py>(
     py: Python<'py>,
@@ -60,6 +61,7 @@ pub fn iso<'py>(
     spacing: Option<f32>,
     magnitude: bool,
     vorticity: bool,
+    lambda2: bool,
     cell: Option<Bound<'py, PyAny>>,
     correct: Option<i64>,
     shepard: Option<bool>,
@@ -68,9 +70,9 @@ pub fn iso<'py>(
     threads: Option<i64>,
     config: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Mesh> {
-    if magnitude && vorticity {
+    if usize::from(magnitude) + usize::from(vorticity) + usize::from(lambda2) > 1 {
         return Err(PyValueError::new_err(
-            "magnitude and vorticity exclude each other: pass one",
+            "magnitude, vorticity and lambda2 exclude each other: pass one",
         ));
     }
     let overrides = Overrides {
@@ -135,9 +137,10 @@ pub fn iso<'py>(
     config.output.attributes = attributes.unwrap_or_default();
     let request = IsoRequest {
         attribute: name,
-        derived: match (magnitude, vorticity) {
-            (true, _) => Derived::Magnitude,
-            (_, true) => Derived::Vorticity,
+        derived: match (magnitude, vorticity, lambda2) {
+            (true, ..) => Derived::Magnitude,
+            (_, true, _) => Derived::Vorticity,
+            (.., true) => Derived::Lambda2,
             _ => Derived::Value,
         },
         level,

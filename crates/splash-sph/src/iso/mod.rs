@@ -2,9 +2,11 @@
 //! respect to the SPH interpolant. A virtual grid whose cells are materialised only as seeds or
 //! when the surface crosses them, seeds from particle pairs, surface following with a slice
 //! cache, Newton correction of every vertex along its edge, trimming at free boundaries by the
-//! sum of weights, and normals from the SPH gradient.
+//! sum of weights, and normals from the SPH gradient. The quantity may be derived from a
+//! velocity: its magnitude, vorticity or λ2 (the paper's Fig. 7).
 
 mod assembly;
+pub(crate) mod lambda2;
 pub(crate) mod quantity;
 pub(crate) mod seed_cells;
 mod slice_cache;
