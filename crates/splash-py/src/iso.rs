@@ -3,7 +3,7 @@
 
 use std::collections::BTreeMap;
 
-use pyo3::exceptions::{PyKeyError, PyTypeError, PyValueError};
+use pyo3::exceptions::{PyKeyError, PyTypeError, PyUserWarning, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use splash_sph::iso::{Derived, IsoRequest, IsoStats, extract};
@@ -34,7 +34,8 @@ const VALUES: &str = "value";
 /// it). ``cell``: the virtual grid's cell (``"r/2"`` by default, ``"r"``, a number).
 /// ``correct``: Newton steps per vertex along its cube edge (3 by default, 0: plain Marching
 /// Cubes vertices). ``shepard``: normalise by the sum of weights Σ V W (plain SPH by default).
-/// ``kernel_scale``: multiplies every particle's kernel support. ``attributes``: names of the
+/// ``kernel_scale``: multiplies every particle's kernel support (a UserWarning says when it
+/// leaves fewer than 10 particles in a support on average: the surface then breaks up). ``attributes``: names of the
 /// particles' attributes to interpolate onto the vertices (with a ``Particles`` only); they come
 /// back in ``Mesh.attributes``. ``threads``: worker threads (all cores by default; the mesh does
 /// not depend on it). ``config``: a TOML file's path or a dict, as for ``reconstruct`` (its
@@ -157,6 +158,11 @@ pub fn iso<'py>(
             e => to_py(e),
         })?;
 
+    for warning in &surface.warnings {
+        let message = std::ffi::CString::new(warning.as_str())
+            .map_err(|e| PyValueError::new_err(e.to_string()))?;
+        PyErr::warn(py, &py.get_type::<PyUserWarning>(), &message, 1)?;
+    }
     let report = report(py, &surface.stats, positions.len(), config.spacing)?;
     let mesh_attributes = PyDict::new(py);
     for (name, values) in surface.attributes {
@@ -187,6 +193,7 @@ fn report<'py>(
     report.set_item("spacing", spacing)?;
     report.set_item("level", s.level)?;
     report.set_item("cell", s.cell)?;
+    report.set_item("support_neighbours", s.support_neighbours)?;
     report.set_item("virtual_cells", s.virtual_cells)?;
     report.set_item("seed_cells", s.seed_cells)?;
     report.set_item("visited_cells", s.visited_cells)?;

@@ -294,8 +294,9 @@ def iso(
     gives it). ``cell``: the virtual grid's cell (``"r/2"`` by default, ``"r"``, a number).
     ``correct``: Newton steps per vertex along its cube edge (3 by default; 0 gives plain
     Marching Cubes vertices). ``shepard``: normalise by the sum of weights (plain SPH by
-    default). ``kernel_scale``: multiplies every particle's kernel support.
-    ``attributes``: names of the particles' attributes to interpolate onto the vertices
+    default). ``kernel_scale``: multiplies every particle's kernel support; a UserWarning
+    says when it leaves fewer than 10 particles in a support on average (the surface then
+    breaks up). ``attributes``: names of the particles' attributes to interpolate onto the vertices
     (with a ``Particles`` only), with the quantity's sums (plain SPH unless ``shepard``,
     which makes them kernel-weighted means); they come back in ``Mesh.attributes``. ``threads``: worker
     threads (all cores by default; the mesh does not depend on it). ``config``: a TOML
