@@ -429,3 +429,40 @@ fn a_kernel_scale_leaving_few_neighbours_warns() {
     let full = iso(&args).ok();
     assert!(!full.stderr.contains("warning"), "{}", full.stderr);
 }
+
+/// `splash bench iso`: the paper's five tables, and one JSON record per configuration whose
+/// counts are those of `splash iso` (3 quantities × 3 kernel scales × 2 cells × 2 corrections).
+#[test]
+fn bench_iso_prints_tables_one_to_five_and_writes_every_run() {
+    let dir = TempDir::new("bench-iso");
+    let json = dir.path("b.json");
+    let output = Command::new(env!("CARGO_BIN_EXE_splash"))
+        .args(["bench", "iso", fixture("frame_0040.ply").to_str().unwrap()])
+        .args(["--spacing", "0.014", "-q", "--json", json.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&output.stdout).into_owned();
+    finish("splash bench iso".into(), output).ok();
+    for t in [
+        "Table I:",
+        "Table II:",
+        "Table III:",
+        "Table IV:",
+        "Table V:",
+    ] {
+        assert!(stdout.contains(t), "{t} missing:\n{stdout}");
+    }
+    assert!(
+        stdout.contains("| Isosurface triangles | 35520 | 7930 | 87310 |"),
+        "{stdout}"
+    );
+    let report: serde_json::Value = serde_json::from_slice(&fs::read(&json).unwrap()).unwrap();
+    let runs = report["runs"].as_array().unwrap();
+    assert_eq!(runs.len(), 36);
+    // The speed at scale 1, cell r/2, corrected: the default `splash iso`'s 87 310 triangles.
+    let speed = runs
+        .iter()
+        .find(|r| r["quantity"] == "speed" && r["cell"] == "r/2" && r["correct"] == 3)
+        .unwrap();
+    assert_eq!(speed["stats"]["triangles"], 87310);
+}
