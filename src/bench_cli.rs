@@ -4,7 +4,7 @@ use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 use anyhow::{Context, Result, bail};
-use clap::Args;
+use clap::{Args, Subcommand};
 
 use splash_sph::{Bytes, Config, Engine, Length};
 
@@ -22,7 +22,12 @@ need more than --max-memory are not attempted and read NA in the tables, with th
 
 Example:
   splash bench ../shared/data/cbd-small --frames-per-scene 3 --spacing 0.014 --cell r --cell r/2 --threads 1,2")]
+#[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
 pub struct BenchArgs {
+    /// Another paper's tables instead of the engines'.
+    #[command(subcommand)]
+    table: Option<BenchTable>,
+
     /// Scene directories or particle files.
     #[arg(required = true)]
     inputs: Vec<PathBuf>,
@@ -71,7 +76,18 @@ pub struct BenchArgs {
     quiet: bool,
 }
 
+/// The other papers' benches.
+#[derive(Subcommand)]
+enum BenchTable {
+    /// Marching Correctors' Tables I–V on one frame: stage times at kernel scales 1, 0.75,
+    /// 0.5 and cells r/2, r with and without correction, for the vorticity, |v| and λ2.
+    Iso(crate::bench_iso::BenchIsoArgs),
+}
+
 pub fn bench(args: BenchArgs) -> Result<ExitCode> {
+    if let Some(BenchTable::Iso(iso)) = args.table {
+        return crate::bench_iso::run(iso);
+    }
     let mut config = match &args.config {
         Some(path) => Config::from_file(path)?,
         None => Config::default(),

@@ -9,6 +9,7 @@ use clap::{Args, Parser, Subcommand};
 
 mod bench;
 mod bench_cli;
+mod bench_iso;
 mod farm;
 mod log;
 mod memory;
@@ -41,7 +42,7 @@ struct Cli {
 enum Command {
     /// Reconstruct one surface mesh per particle file.
     Recon(Box<Recon>),
-    /// Isosurface of a particle quantity (pressure, density, speed, vorticity) per particle
+    /// Isosurface of a particle quantity (pressure, density, speed, vorticity, λ2) per particle
     /// file, exact with respect to the SPH interpolant (Marching Correctors).
     Iso(Box<Iso>),
     /// Ray-trace a PNG of each frame's metaball surface, straight from the particles.
@@ -271,7 +272,8 @@ normalisation, trimming thresholds, seed reach and cache slices. -v prints the p
 seed cells, cells used, cache hit ratio, correction sizes and stage times. Examples:
   splash iso 'frames/*.ply' --attribute pressure --level 3000 --spacing 0.014 -o iso/
   splash iso frame.vtk --attribute velocity --magnitude --level 2.5 --attributes density -o v.ply
-  splash iso frame.ply --attribute velocity --vorticity --level 20 -o w.ply")]
+  splash iso frame.ply --attribute velocity --vorticity --level 20 -o w.ply
+  splash iso frames/ --attribute velocity --lambda2 --level -50 -o vortices/")]
 // recon's flags that shape the free surface mean nothing here: hidden, and refused if given.
 #[command(
     mut_arg("correct", |a| a.help("Newton steps per vertex along its cube edge onto the \
@@ -295,12 +297,18 @@ struct Iso {
     level: f32,
 
     /// Isosurface of the magnitude of a vector attribute.
-    #[arg(long, conflicts_with = "vorticity")]
+    #[arg(long, conflicts_with_all = ["vorticity", "lambda2"])]
     magnitude: bool,
 
     /// Isosurface of the vorticity magnitude |curl v| of a velocity attribute (SPH curl).
-    #[arg(long)]
+    #[arg(long, conflicts_with = "lambda2")]
     vorticity: bool,
+
+    /// Isosurface of λ2, the middle eigenvalue of S² + Ω² of a velocity attribute's SPH
+    /// gradient (Jeong & Hussain): vortex cores are where λ2 < 0, so take a negative --level
+    /// (the paper's dam break: -150).
+    #[arg(long)]
+    lambda2: bool,
 
     /// Shepard-normalised interpolation (plain SPH by default, as in the paper).
     #[arg(long)]
@@ -347,9 +355,10 @@ fn show_config(args: &ConfigArgs) -> Result<ExitCode> {
 }
 
 fn iso(mut args: Iso) -> Result<ExitCode> {
-    let derived = match (args.magnitude, args.vorticity) {
-        (true, _) => splash_sph::iso::Derived::Magnitude,
-        (_, true) => splash_sph::iso::Derived::Vorticity,
+    let derived = match (args.magnitude, args.vorticity, args.lambda2) {
+        (true, ..) => splash_sph::iso::Derived::Magnitude,
+        (_, true, _) => splash_sph::iso::Derived::Vorticity,
+        (.., true) => splash_sph::iso::Derived::Lambda2,
         _ => splash_sph::iso::Derived::Value,
     };
     let request = splash_sph::iso::IsoRequest {

@@ -270,3 +270,199 @@ fn report_is_refused_with_where_the_figures_are() {
     .has("--log-format json");
     assert!(dir.entries().is_empty(), "{:?}", dir.entries());
 }
+
+/// An ASCII PLY of a Lamb–Oseen vortex (core 0.2) about the vertical line through (0.5, 0.5),
+/// faded along z, on a lattice of spacing 0.05 filling [0, 1]³: its core λ2 < 0 is one closed
+/// cigar inside the box.
+fn vortex_ply(dir: &TempDir) -> std::path::PathBuf {
+    let (r, core) = (0.05f32, 0.2f32);
+    let n = 20;
+    let mut text = format!(
+        "ply\nformat ascii 1.0\nelement vertex {}\nproperty float x\nproperty float y\n\
+         property float z\nproperty float vx\nproperty float vy\nproperty float vz\nend_header\n",
+        (n + 1) * (n + 1) * (n + 1)
+    );
+    for k in 0..=n {
+        for j in 0..=n {
+            for i in 0..=n {
+                let (x, y, z) = (i as f32 * r, j as f32 * r, k as f32 * r);
+                let (dx, dy) = (x - 0.5, y - 0.5);
+                let rho = (dx * dx + dy * dy).sqrt();
+                let speed = if rho > 0.0 {
+                    (1.0 - (-(rho / core).powi(2)).exp()) / (2.0 * std::f32::consts::PI * rho)
+                        * (-((z - 0.5) / 0.2).powi(2)).exp()
+                } else {
+                    0.0
+                };
+                let (vx, vy) = if rho > 0.0 {
+                    (-dy / rho * speed, dx / rho * speed)
+                } else {
+                    (0.0, 0.0)
+                };
+                text += &format!("{x} {y} {z} {vx} {vy} 0\n");
+            }
+        }
+    }
+    dir.file("vortex.ply", text)
+}
+
+#[test]
+fn lambda2_of_a_vortex_is_a_closed_outward_surface_around_its_core() {
+    let dir = TempDir::new("iso-lambda2");
+    let input = vortex_ply(&dir);
+    let out = dir.path("core.ply");
+    let output = Command::new(env!("CARGO_BIN_EXE_splash"))
+        .args([
+            "iso",
+            input.to_str().unwrap(),
+            "--attribute",
+            "velocity",
+            "--lambda2",
+        ])
+        .args([
+            "--level",
+            "-2",
+            "--spacing",
+            "0.05",
+            "-o",
+            out.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    finish("splash iso vortex.ply --lambda2".into(), output).ok();
+    let ply = read_ply(&out);
+    let vertices: Vec<[f32; 3]> = ply.payload["vertex"]
+        .iter()
+        .map(|v| [float(v, "x"), float(v, "y"), float(v, "z")])
+        .collect();
+    let faces: Vec<[usize; 3]> = ply.payload["face"]
+        .iter()
+        .map(|f| {
+            let Property::ListInt(l) = &f["vertex_indices"] else {
+                panic!("face indices")
+            };
+            [l[0], l[1], l[2]].map(|i| i as usize)
+        })
+        .collect();
+    assert!(faces.len() > 500, "{} triangles", faces.len());
+    // Closed and consistently wound: every directed edge once, its reverse once.
+    let mut edges = std::collections::BTreeMap::new();
+    for f in &faces {
+        for k in 0..3 {
+            *edges.entry((f[k], f[(k + 1) % 3])).or_insert(0) += 1;
+        }
+    }
+    for (&(a, b), &count) in &edges {
+        assert_eq!((count, edges.get(&(b, a))), (1, Some(&1)), "edge {a}–{b}");
+    }
+    // Around the axis, inside the radius where λ2 changes sign (1.12 × the core); wound
+    // outwards: a positive enclosed volume.
+    let volume: f32 = faces
+        .iter()
+        .map(|f| {
+            let [a, b, c] = f.map(|i| glam::Vec3::from(vertices[i]) - glam::Vec3::splat(0.5));
+            a.dot(b.cross(c)) / 6.0
+        })
+        .sum();
+    assert!(volume > 0.0, "{volume}");
+    for v in &vertices {
+        let rho = ((v[0] - 0.5).powi(2) + (v[1] - 0.5).powi(2)).sqrt();
+        assert!(rho < 1.12 * 0.2, "{v:?}");
+    }
+}
+
+#[test]
+fn lambda2_without_a_velocity_names_the_file() {
+    let dir = TempDir::new("iso-lambda2-missing");
+    let input = dir.file(
+        "still.ply",
+        "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n\
+         property float z\nproperty float density\nend_header\n0 0 0 1000\n0.05 0 0 1000\n",
+    );
+    let out = dir.path("x.ply");
+    let output = Command::new(env!("CARGO_BIN_EXE_splash"))
+        .args([
+            "iso",
+            input.to_str().unwrap(),
+            "--attribute",
+            "velocity",
+            "--lambda2",
+        ])
+        .args([
+            "--level",
+            "-2",
+            "--spacing",
+            "0.05",
+            "-o",
+            out.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    finish("splash iso still.ply --lambda2".into(), output)
+        .failed()
+        .has("still.ply")
+        .has("no particle attribute 'velocity'")
+        .has("density");
+    assert!(!out.exists());
+}
+
+/// The paper's kernel scale 0.5 leaves about 2 particles in a support of the fixture (its
+/// simulation's support is 2r): a warning; the full scale none.
+#[test]
+fn a_kernel_scale_leaving_few_neighbours_warns() {
+    let dir = TempDir::new("iso-kernel-scale");
+    let out = dir.path("x.ply");
+    let args = [
+        "--attribute",
+        "velocity",
+        "--magnitude",
+        "--level",
+        "1.5",
+        "-o",
+    ];
+    let args = [&args[..], &[out.to_str().unwrap()], &FAST].concat();
+    let small = iso(&[&args[..], &["--kernel-scale", "0.5"]].concat()).ok();
+    small
+        .has("warning")
+        .has("kernel scale 0.5")
+        .has("--kernel-scale");
+    let full = iso(&args).ok();
+    assert!(!full.stderr.contains("warning"), "{}", full.stderr);
+}
+
+/// `splash bench iso`: the paper's five tables, and one JSON record per configuration whose
+/// counts are those of `splash iso` (3 quantities × 3 kernel scales × 2 cells × 2 corrections).
+#[test]
+fn bench_iso_prints_tables_one_to_five_and_writes_every_run() {
+    let dir = TempDir::new("bench-iso");
+    let json = dir.path("b.json");
+    let output = Command::new(env!("CARGO_BIN_EXE_splash"))
+        .args(["bench", "iso", fixture("frame_0040.ply").to_str().unwrap()])
+        .args(["--spacing", "0.014", "-q", "--json", json.to_str().unwrap()])
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&output.stdout).into_owned();
+    finish("splash bench iso".into(), output).ok();
+    for t in [
+        "Table I:",
+        "Table II:",
+        "Table III:",
+        "Table IV:",
+        "Table V:",
+    ] {
+        assert!(stdout.contains(t), "{t} missing:\n{stdout}");
+    }
+    assert!(
+        stdout.contains("| Isosurface triangles | 35520 | 7930 | 87310 |"),
+        "{stdout}"
+    );
+    let report: serde_json::Value = serde_json::from_slice(&fs::read(&json).unwrap()).unwrap();
+    let runs = report["runs"].as_array().unwrap();
+    assert_eq!(runs.len(), 36);
+    // The speed at scale 1, cell r/2, corrected: the default `splash iso`'s 87 310 triangles.
+    let speed = runs
+        .iter()
+        .find(|r| r["quantity"] == "speed" && r["cell"] == "r/2" && r["correct"] == 3)
+        .unwrap();
+    assert_eq!(speed["stats"]["triangles"], 87310);
+}

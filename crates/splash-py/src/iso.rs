@@ -3,7 +3,7 @@
 
 use std::collections::BTreeMap;
 
-use pyo3::exceptions::{PyKeyError, PyTypeError, PyValueError};
+use pyo3::exceptions::{PyKeyError, PyTypeError, PyUserWarning, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 use splash_sph::iso::{Derived, IsoRequest, IsoStats, extract};
@@ -29,11 +29,13 @@ const VALUES: &str = "value";
 /// per-particle values.
 ///
 /// ``magnitude``: the isosurface of |A| of a vector attribute; ``vorticity``: of |∇ × v| of a
-/// velocity (SPH curl). ``spacing``: the particle spacing r (required unless the config gives
+/// velocity (SPH curl); ``lambda2``: of λ2, the middle eigenvalue of S² + Ω² of a velocity's
+/// SPH gradient (vortex cores are where λ2 < 0: take a negative level). ``spacing``: the particle spacing r (required unless the config gives
 /// it). ``cell``: the virtual grid's cell (``"r/2"`` by default, ``"r"``, a number).
 /// ``correct``: Newton steps per vertex along its cube edge (3 by default, 0: plain Marching
 /// Cubes vertices). ``shepard``: normalise by the sum of weights Σ V W (plain SPH by default).
-/// ``kernel_scale``: multiplies every particle's kernel support. ``attributes``: names of the
+/// ``kernel_scale``: multiplies every particle's kernel support (a UserWarning says when it
+/// leaves fewer than 10 particles in a support on average: the surface then breaks up). ``attributes``: names of the
 /// particles' attributes to interpolate onto the vertices (with a ``Particles`` only); they come
 /// back in ``Mesh.attributes``. ``threads``: worker threads (all cores by default; the mesh does
 /// not depend on it). ``config``: a TOML file's path or a dict, as for ``reconstruct`` (its
@@ -45,12 +47,12 @@ const VALUES: &str = "value";
 /// ``crossed_cells``, ``cache_hit_ratio``, ``correction``, ``times`` in seconds, ...).
 ///
 /// Raises KeyError for an attribute the particles do not have (listing theirs), ValueError for
-/// a vector without ``magnitude``/``vorticity``, bad arrays or settings; TypeError for a wrong
+/// a vector without ``magnitude``/``vorticity``/``lambda2``, bad arrays or settings; TypeError for a wrong
 /// kind of argument.
 #[allow(clippy::too_many_arguments)]
 #[pyfunction]
 #[pyo3(signature = (particles, attribute, level, *, spacing=None, magnitude=false,
-    vorticity=false, cell=None, correct=None, shepard=None, kernel_scale=None, attributes=None,
+    vorticity=false, lambda2=false, cell=None, correct=None, shepard=None, kernel_scale=None, attributes=None,
     threads=None, config=None))]
 pub fn iso<'py>(
     py: Python<'py>,
@@ -60,6 +62,7 @@ pub fn iso<'py>(
     spacing: Option<f32>,
     magnitude: bool,
     vorticity: bool,
+    lambda2: bool,
     cell: Option<Bound<'py, PyAny>>,
     correct: Option<i64>,
     shepard: Option<bool>,
@@ -68,9 +71,9 @@ pub fn iso<'py>(
     threads: Option<i64>,
     config: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<Mesh> {
-    if magnitude && vorticity {
+    if usize::from(magnitude) + usize::from(vorticity) + usize::from(lambda2) > 1 {
         return Err(PyValueError::new_err(
-            "magnitude and vorticity exclude each other: pass one",
+            "magnitude, vorticity and lambda2 exclude each other: pass one",
         ));
     }
     let overrides = Overrides {
@@ -135,9 +138,10 @@ pub fn iso<'py>(
     config.output.attributes = attributes.unwrap_or_default();
     let request = IsoRequest {
         attribute: name,
-        derived: match (magnitude, vorticity) {
-            (true, _) => Derived::Magnitude,
-            (_, true) => Derived::Vorticity,
+        derived: match (magnitude, vorticity, lambda2) {
+            (true, ..) => Derived::Magnitude,
+            (_, true, _) => Derived::Vorticity,
+            (.., true) => Derived::Lambda2,
             _ => Derived::Value,
         },
         level,
@@ -154,6 +158,11 @@ pub fn iso<'py>(
             e => to_py(e),
         })?;
 
+    for warning in &surface.warnings {
+        let message = std::ffi::CString::new(warning.as_str())
+            .map_err(|e| PyValueError::new_err(e.to_string()))?;
+        PyErr::warn(py, &py.get_type::<PyUserWarning>(), &message, 1)?;
+    }
     let report = report(py, &surface.stats, positions.len(), config.spacing)?;
     let mesh_attributes = PyDict::new(py);
     for (name, values) in surface.attributes {
@@ -184,6 +193,7 @@ fn report<'py>(
     report.set_item("spacing", spacing)?;
     report.set_item("level", s.level)?;
     report.set_item("cell", s.cell)?;
+    report.set_item("support_neighbours", s.support_neighbours)?;
     report.set_item("virtual_cells", s.virtual_cells)?;
     report.set_item("seed_cells", s.seed_cells)?;
     report.set_item("visited_cells", s.visited_cells)?;

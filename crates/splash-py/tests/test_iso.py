@@ -1,6 +1,7 @@
 """splash_sph.iso: the CLI's isosurfaces byte for byte, an analytic level set, and errors."""
 
 import subprocess
+import warnings
 
 import numpy as np
 import pytest
@@ -95,3 +96,28 @@ def test_vorticity_kernel_scale_and_correct_equal_the_cli(frame, splash_bin, tmp
     assert mesh.faces.shape[0] > 100 and mesh.report["correction"]["mean"] == 0.0
     mesh.write(tmp_path / "x.ply")
     assert (tmp_path / "x.ply").read_bytes() == (tmp_path / "y.ply").read_bytes()
+
+
+def test_lambda2_equals_the_cli(frame, splash_bin, tmp_path):
+    cli_iso(splash_bin, tmp_path / "y.ply", "--attribute", "velocity", "--lambda2",
+            "--level", "-50")
+    mesh = splash_sph.iso(frame, "velocity", -50.0, lambda2=True, spacing=FRAME_SPACING,
+                          cell="r")
+    assert mesh.faces.shape[0] > 100
+    mesh.write(tmp_path / "x.ply")
+    assert (tmp_path / "x.ply").read_bytes() == (tmp_path / "y.ply").read_bytes()
+    with pytest.raises(ValueError, match="exclude"):
+        splash_sph.iso(frame, "velocity", -50.0, spacing=FRAME_SPACING, vorticity=True,
+                       lambda2=True)
+
+
+def test_a_kernel_scale_leaving_few_neighbours_warns(frame):
+    with pytest.warns(UserWarning, match="kernel scale 0.5"):
+        small = splash_sph.iso(frame, "velocity", 1.5, magnitude=True, spacing=FRAME_SPACING,
+                               cell="r", kernel_scale=0.5)
+    assert small.report["support_neighbours"] < 10
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        full = splash_sph.iso(frame, "velocity", 1.5, magnitude=True, spacing=FRAME_SPACING,
+                              cell="r")
+    assert full.report["support_neighbours"] > 20

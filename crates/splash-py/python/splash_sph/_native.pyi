@@ -287,6 +287,7 @@ def iso(
     spacing: Optional[float] = None,
     magnitude: bool = False,
     vorticity: bool = False,
+    lambda2: bool = False,
     cell: Union[str, float, None] = None,
     correct: Optional[int] = None,
     shepard: Optional[bool] = None,
@@ -307,12 +308,15 @@ def iso(
     computes them.
 
     ``magnitude``: the isosurface of |A| of a vector attribute; ``vorticity``: of |curl v| of
-    a velocity (SPH curl). ``spacing``: the particle spacing r (required unless the config
+    a velocity (SPH curl); ``lambda2``: of lambda2, the middle eigenvalue of S^2 + Omega^2 of a
+    velocity's SPH gradient (vortex cores are where lambda2 < 0: take a negative level).
+    ``spacing``: the particle spacing r (required unless the config
     gives it). ``cell``: the virtual grid's cell (``"r/2"`` by default, ``"r"``, a number).
     ``correct``: Newton steps per vertex along its cube edge (3 by default; 0 gives plain
     Marching Cubes vertices). ``shepard``: normalise by the sum of weights (plain SPH by
-    default). ``kernel_scale``: multiplies every particle's kernel support.
-    ``attributes``: names of the particles' attributes to interpolate onto the vertices
+    default). ``kernel_scale``: multiplies every particle's kernel support; a UserWarning
+    says when it leaves fewer than 10 particles in a support on average (the surface then
+    breaks up). ``attributes``: names of the particles' attributes to interpolate onto the vertices
     (with a ``Particles`` only), with the quantity's sums (plain SPH unless ``shepard``,
     which makes them kernel-weighted means); they come back in ``Mesh.attributes``. ``threads``: worker
     threads (all cores by default; the mesh does not depend on it). ``config``: a TOML
@@ -326,7 +330,7 @@ def iso(
     with ``particles``, ``spacing`` and ``times`` in seconds.
 
     Raises KeyError for an attribute the particles do not have (the message lists theirs),
-    ValueError for a vector without ``magnitude`` or ``vorticity``, a bad array or bad
+    ValueError for a vector without ``magnitude``, ``vorticity`` or ``lambda2``, a bad array or bad
     settings, TypeError for an argument of the wrong kind.
     """
 

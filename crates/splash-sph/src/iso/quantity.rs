@@ -1,6 +1,7 @@
 //! The scalar whose isosurface is extracted, per particle (Sec. V: any attribute, or a derived
-//! one): an attribute's value, a vector's magnitude, or the vorticity magnitude |∇ × v| from the
-//! SPH curl; with each particle's volume m/ρ and support, sorted into the interpolant.
+//! one): an attribute's value, a vector's magnitude, the vorticity magnitude |∇ × v| from the
+//! SPH curl, or λ2 from the SPH velocity gradient; with each particle's volume m/ρ and support,
+//! sorted into the interpolant.
 
 use std::collections::BTreeMap;
 
@@ -24,6 +25,9 @@ pub enum Derived {
     Magnitude,
     /// |∇ × v| of a vector attribute (velocity), by the SPH curl at each particle.
     Vorticity,
+    /// λ2 of a vector attribute (velocity): the middle eigenvalue of S² + Ω² from the SPH
+    /// velocity gradient at each particle; vortex cores are where λ2 < 0 (Jeong & Hussain).
+    Lambda2,
 }
 
 /// The isosurface asked for: `attribute` (any spelling of the alias table), what is derived
@@ -32,7 +36,7 @@ pub enum Derived {
 pub struct IsoRequest {
     /// Particle attribute by name (`pressure`, `density`, `velocity`, …).
     pub attribute: String,
-    /// Value, magnitude or vorticity.
+    /// Value, magnitude, vorticity or λ2.
     pub derived: Derived,
     /// The isovalue.
     pub level: f32,
@@ -117,13 +121,16 @@ pub(crate) fn interpolant(
     match (&quantity, request.derived) {
         (Attribute::Vector(_), Derived::Value) => bail_input!(
             "'{}' is a vector attribute: ask for its magnitude (--magnitude) or, for a velocity, \
-             its vorticity (--vorticity)",
+             its vorticity (--vorticity) or λ2 (--lambda2)",
             request.attribute
         ),
-        (Attribute::Scalar(_), Derived::Magnitude | Derived::Vorticity) => bail_input!(
-            "'{}' is a scalar attribute: --magnitude and --vorticity need a vector (velocity)",
-            request.attribute
-        ),
+        (Attribute::Scalar(_), Derived::Magnitude | Derived::Vorticity | Derived::Lambda2) => {
+            bail_input!(
+                "'{}' is a scalar attribute: --magnitude, --vorticity and --lambda2 need a vector \
+                 (velocity)",
+                request.attribute
+            )
+        }
         _ => {}
     }
     let supports: Vec<f32> = match lookup(attributes, "h") {
@@ -198,6 +205,7 @@ pub(crate) fn interpolant(
     if matches!(quantity, Attribute::Vector(_)) {
         let derived = match request.derived {
             Derived::Vorticity => vorticity(&interpolant, raw),
+            Derived::Lambda2 => super::lambda2::lambda2(&interpolant, raw),
             _ => magnitude(&interpolant.handlers.channels[raw..raw + 3]),
         };
         interpolant.handlers.channels.push(derived);

@@ -71,6 +71,26 @@ impl Interpolant {
         });
     }
 
+    /// The mean number of other particles whose kernel reaches a particle, over at most
+    /// `samples` particles spread evenly through the handler order (a fixed choice, so the
+    /// figure does not depend on threads).
+    pub fn mean_neighbours(&self, samples: usize) -> f64 {
+        let n = self.handlers.positions.len();
+        if n == 0 {
+            return 0.0;
+        }
+        let stride = n.div_ceil(samples.max(1));
+        let (mut count, mut sampled) = (0u64, 0u64);
+        for i in (0..n).step_by(stride) {
+            let mut near = 0u64;
+            self.for_each_near(self.handlers.positions[i], |_, _, _, _| near += 1);
+            // The particle itself is near at distance 0.
+            count += near - 1;
+            sampled += 1;
+        }
+        count as f64 / sampled as f64
+    }
+
     /// A, ∇A and Σ V W at `x` for channel `channel`.
     pub fn sample(&self, x: Vec3, channel: usize) -> Sample {
         let (volumes, values) = (

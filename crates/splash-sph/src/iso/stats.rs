@@ -74,6 +74,9 @@ pub struct IsoStats {
     pub level: f64,
     /// Virtual cell edge, world units.
     pub cell: f32,
+    /// Mean number of other particles whose (scaled) kernel reaches a particle, over a fixed
+    /// sample of them (Sec. IV-D: about 70 in the paper's dam break at scale 1).
+    pub support_neighbours: f64,
     /// Cells of the particles' bounding box in the virtual grid (never materialised).
     pub virtual_cells: u64,
     /// Seed cells (Sec. III-C).
@@ -120,7 +123,7 @@ impl fmt::Display for IsoStats {
         let (t, c) = (&self.timings, &self.correction);
         write!(
             f,
-            "level {}: {} triangles, {} vertices; virtual cells {}, seeds {}, visited {}, crossed \
+            "level {}: {} triangles, {} vertices; {:.1} neighbours in a support; virtual cells {}, seeds {}, visited {}, crossed \
              {}, discarded {}; cache hit ratio {:.3} ({} of {} node lookups evaluated, ≤ {} \
              nodes held); trimming a–e {:?}; correction mean {:.3e} max {:.3e} sd {:.3e} \
              ({:.2} % of the edge), bins {:?}; grid {:.0} ms, seeds {:.0} ms, extraction {:.0} \
@@ -128,6 +131,7 @@ impl fmt::Display for IsoStats {
             self.level,
             self.triangles,
             self.vertices,
+            self.support_neighbours,
             self.virtual_cells,
             self.seed_cells,
             self.visited_cells,

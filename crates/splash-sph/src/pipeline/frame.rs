@@ -41,6 +41,8 @@ pub struct FramePipeline {
     /// Whether the configuration was checked against a frame's particles (the first one
     /// reconstructed, when the spacing was given).
     checked: bool,
+    /// Whether an isosurface's warnings were shown (once a sequence, not every frame).
+    iso_warned: bool,
 }
 
 impl FramePipeline {
@@ -66,6 +68,7 @@ impl FramePipeline {
             format,
             spacing: config.spacing,
             checked: config.spacing.is_none(),
+            iso_warned: false,
             config,
             iso,
             reconstructor: None,
@@ -233,6 +236,12 @@ impl FramePipeline {
         };
         let surface = iso::extract(&positions, attributes, request, &config)
             .map_err(|e| e.context(format_args!("'{}'", input.display())))?;
+        if !self.iso_warned && !surface.warnings.is_empty() {
+            self.iso_warned = true;
+            for warning in &surface.warnings {
+                progress.warning(Some(input), warning);
+            }
+        }
         let mut stats = FrameStats {
             spacing: r,
             cell: surface.stats.cell,

@@ -10,6 +10,7 @@ mod field_sampling;
 mod gradients;
 mod iso;
 mod iso_components;
+mod lambda2;
 mod marching_cubes;
 mod post;
 mod reconstruction;
