@@ -30,6 +30,9 @@ pub struct Hit {
     pub t: f32,
     /// Outward unit normal: the normalised gradient of the field.
     pub normal: Vec3,
+    /// The per-particle values of [`Tracer::with_values`] at the hit, weighted by the metaballs'
+    /// t_i^α there (in particle order, so independent of the hierarchy); 0 without values.
+    pub value: f32,
 }
 
 /// The paper's Table 3 counts, summed over rays (pass 1, the hierarchy's work).
@@ -82,6 +85,7 @@ pub struct Scratch {
 /// Traces rays through a built hierarchy.
 pub struct Tracer<'a> {
     bvh: &'a FittedBvh,
+    values: Option<&'a [f32]>,
     step: f32,
     r2: f32,
     inv_r2: f32,
@@ -106,11 +110,19 @@ impl<'a> Tracer<'a> {
         let f = bvh.field;
         Tracer {
             bvh,
+            values: None,
             step: f.lone_radius().max(f.cutoff * 1e-3),
             r2: f.cutoff * f.cutoff,
             inv_r2: f.inv_r2(),
             margin: f.cutoff * 1e-3,
         }
+    }
+
+    /// The same tracer interpolating `values` (one per particle, in the particles' order) at
+    /// its hits.
+    pub fn with_values(mut self, values: &'a [f32]) -> Tracer<'a> {
+        self.values = Some(values);
+        self
     }
 
     fn ray(&self, o: Vec3, d: Vec3, tmin: f32, tmax: f32) -> Option<Ray> {
@@ -415,10 +427,11 @@ impl<'a> Tracer<'a> {
             .filter(|&t| t > w0 && t < s)
             .fold(w0, f32::max);
         let u = self.refine(exact, a, s);
-        let normal = self.normal(exact, ray.base + u * ray.d, ray.d);
+        let x = ray.base + u * ray.d;
         Hit {
             t: ray.tb + u,
-            normal,
+            normal: self.normal(exact, x, ray.d),
+            value: self.values.map_or(0.0, |v| self.value(exact, x, v)),
         }
     }
 
@@ -478,6 +491,32 @@ impl<'a> Tracer<'a> {
             }
         }
         0.5 * (a + b)
+    }
+
+    /// Σ w_i v_i / Σ w_i at `x` with the metaballs' weights w_i = t_i^α (the nearest metaball's
+    /// value where all weights vanish, as rounding can leave at the surface's edge).
+    fn value(&self, along: &[(u32, Along)], x: Vec3, values: &[f32]) -> f32 {
+        let alpha = self.bvh.field.exponent;
+        let (mut sum, mut weights) = (0.0f32, 0.0f32);
+        let mut nearest = (f32::INFINITY, 0.0);
+        for (original, m) in along {
+            let d2 = (x - self.bvh.points[m.index as usize]).length_squared();
+            let v = values[*original as usize];
+            let k = 1.0 - d2 * self.inv_r2;
+            if k > 0.0 {
+                let w = k.powi(alpha);
+                sum += w * v;
+                weights += w;
+            }
+            if d2 < nearest.0 {
+                nearest = (d2, v);
+            }
+        }
+        if weights > 0.0 {
+            sum / weights
+        } else {
+            nearest.1
+        }
     }
 
     /// The outward unit normal at `x`: ∇f ∝ Σ t_i^(α−1)(x − p_i).

@@ -1,0 +1,60 @@
+//! `[preview]`: how `splash preview` shades its ray-traced images (samples, ambient occlusion,
+//! colouring by a particle attribute); the surface itself is the `[field]` table's metaballs.
+
+use serde::{Deserialize, Serialize};
+
+use crate::error::Result;
+
+/// Most samples per pixel and ambient-occlusion rays per pixel a preview accepts.
+pub const MAX_SAMPLES: u32 = 256;
+
+/// `[preview]` of a configuration (`splash preview`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct PreviewConfig {
+    /// Rays per pixel, stratified (a jittered k×k grid when a square, else N-rooks), averaged.
+    pub samples: u32,
+    /// Ambient-occlusion rays per pixel (spread over its samples); 0 turns it off.
+    pub ao: u32,
+    /// Colours the surface by this particle attribute (|v| for a vector) through viridis.
+    pub color_by: Option<String>,
+    /// Draws the colour scale with its minimum and maximum when colouring by an attribute.
+    pub legend: bool,
+}
+
+impl Default for PreviewConfig {
+    fn default() -> Self {
+        PreviewConfig {
+            samples: 1,
+            ao: 0,
+            color_by: None,
+            legend: true,
+        }
+    }
+}
+
+impl PreviewConfig {
+    /// Checks the ranges the TOML types cannot express, naming the key.
+    pub fn validate(&self) -> Result<()> {
+        if !(1..=MAX_SAMPLES).contains(&self.samples) {
+            bail_config!(
+                "preview.samples must be from 1 to {MAX_SAMPLES}, got {}",
+                self.samples
+            );
+        }
+        if self.ao > MAX_SAMPLES {
+            bail_config!(
+                "preview.ao must be from 0 (off) to {MAX_SAMPLES} rays, got {}",
+                self.ao
+            );
+        }
+        if self
+            .color_by
+            .as_deref()
+            .is_some_and(|a| a.trim().is_empty())
+        {
+            bail_config!("preview.color_by is empty: name a particle attribute, e.g. velocity");
+        }
+        Ok(())
+    }
+}
