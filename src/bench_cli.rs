@@ -20,7 +20,11 @@ frame is reconstructed at every --cell by the scatter (serial), the full gather 
 band (at every --threads count), each run in its own thread pool. Runs whose full grid would
 need more than --max-memory are not attempted and read NA in the tables, with the reason.
 
+`splash bench preview FILE` instead compares the Fitted BVH with each of its parts switched off
+and the plain BVH (Gourmel et al. 2010, Tables 3-5 in shape) on a 640x360 render of FILE.
+
 Example:
+  splash bench preview fixtures/frame_0040.ply --spacing 0.014 --threads 2
   splash bench ../shared/data/cbd-small --frames-per-scene 3 --spacing 0.014 --cell r --cell r/2 --threads 1,2")]
 pub struct BenchArgs {
     /// Scene directories or particle files.
@@ -76,6 +80,21 @@ pub fn bench(args: BenchArgs) -> Result<ExitCode> {
         Some(path) => Config::from_file(path)?,
         None => Config::default(),
     };
+    // `splash bench preview FILE`: the Fitted BVH's ablations.
+    if args
+        .inputs
+        .first()
+        .is_some_and(|i| i.as_os_str() == "preview")
+    {
+        if let Some(&r) = args.spacing.first() {
+            config.spacing = Some(r);
+        }
+        if let Some(&n) = args.threads.first() {
+            config.threads = Some(n);
+        }
+        config.validate()?;
+        return crate::bench_preview::bench(&args.inputs[1..], config, (640, 360));
+    }
     if let Some(m) = &args.max_memory {
         config.max_memory = Some(Bytes::parse(m).context("--max-memory")?);
     }

@@ -9,6 +9,7 @@ use clap::{Args, Parser, Subcommand};
 
 mod bench;
 mod bench_cli;
+mod bench_preview;
 mod farm;
 mod log;
 mod memory;

@@ -8,6 +8,20 @@ use crate::error::Result;
 /// Most samples per pixel and ambient-occlusion rays per pixel a preview accepts.
 pub const MAX_SAMPLES: u32 = 256;
 
+/// How a split is chosen (the ablation of Sec. 5.1.1's cost).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum SplitRule {
+    /// Binned SAH with the paper's metaball cost n² (the leaf test sums n metaballs at each of
+    /// about n samples).
+    #[default]
+    N2,
+    /// The classic SAH, cost linear in the entries.
+    Sah,
+    /// The middle bin of the centres' extent on the longest axis, until 96 (`MAX_LEAF`) entries.
+    Median,
+}
+
 /// `[preview]` of a configuration (`splash preview`).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
@@ -20,6 +34,15 @@ pub struct PreviewConfig {
     pub color_by: Option<String>,
     /// Draws the colour scale with its minimum and maximum when colouring by an attribute.
     pub legend: bool,
+    /// Ablations of the Fitted BVH (Gourmel et al. Tables 4–5); none changes the image.
+    /// Fit each child's box to its metaballs' spheres (Sec. 5.1.2).
+    pub fit: bool,
+    /// Bound those spheres by r_max(n) rather than the cut-off R (Sec. 5.3.1).
+    pub tight_boxes: bool,
+    /// Discard split metaballs that cannot touch a leaf's surface (Sec. 5.3.2).
+    pub discard: bool,
+    /// The split cost: n2 (the paper's), sah (linear) or median.
+    pub split: SplitRule,
 }
 
 impl Default for PreviewConfig {
@@ -29,6 +52,10 @@ impl Default for PreviewConfig {
             ao: 0,
             color_by: None,
             legend: true,
+            fit: true,
+            tight_boxes: true,
+            discard: true,
+            split: SplitRule::N2,
         }
     }
 }

@@ -52,7 +52,7 @@ use crate::io::Attribute;
 pub use crate::config::preview::PreviewConfig;
 pub use camera::{Camera, parse_size, robust_bounds, up_vector};
 pub use colormap::{lightness, viridis, viridis_srgb};
-pub use fitted_bvh::{Aabb, BvhKind, BvhStats, FittedBvh};
+pub use fitted_bvh::{Aabb, BvhKind, BvhOptions, BvhStats, FittedBvh, SplitRule};
 pub use legend::{bar_rect, label};
 pub use metaballs::Metaballs;
 pub use png_file::{Image, encode_png, write_png};
@@ -107,6 +107,7 @@ pub fn metaball_config(config: &Config) -> MetaballConfig {
 pub struct Previewer {
     field: Metaballs,
     kind: BvhKind,
+    options: BvhOptions,
     max_memory: u64,
     pool: Option<Arc<rayon::ThreadPool>>,
 }
@@ -127,6 +128,12 @@ impl Previewer {
         Ok(Previewer {
             field: Metaballs::new(&metaball, r),
             kind: BvhKind::Fitted,
+            options: BvhOptions {
+                fit: config.preview.fit,
+                tight: config.preview.tight_boxes,
+                discard: config.preview.discard,
+                split: config.preview.split,
+            },
             max_memory: config.max_memory.map_or_else(default_limit, |b| b.0),
             pool,
         })
@@ -135,6 +142,12 @@ impl Previewer {
     /// The same previewer with another hierarchy (`--bvh plain` to compare).
     pub fn with_bvh(mut self, kind: BvhKind) -> Previewer {
         self.kind = kind;
+        self
+    }
+
+    /// The same previewer with the Fitted BVH's parts switched as `options` says.
+    pub fn with_options(mut self, options: BvhOptions) -> Previewer {
+        self.options = options;
         self
     }
 
@@ -170,7 +183,9 @@ impl Previewer {
                 p.z
             );
         }
-        self.install(|| FittedBvh::build(positions, self.field, self.kind, budget))
+        self.install(|| {
+            FittedBvh::build_with(positions, self.field, self.kind, self.options, budget)
+        })
     }
 
     /// Builds the hierarchy and renders the image of `camera`.

@@ -758,3 +758,72 @@ fn colouring_by_a_missing_attribute_names_the_file_and_what_it_has() {
             .is_err()
     );
 }
+
+#[test]
+fn each_ablation_changes_the_work_and_never_the_image() {
+    let points = small_frame();
+    let camera = small_camera(&points, 96, 64);
+    let full = BvhOptions::default();
+    let render = |kind, options| {
+        Previewer::new(&config())
+            .unwrap()
+            .with_bvh(kind)
+            .with_options(options)
+            .render(&points, &camera, &shaded_style())
+            .unwrap()
+    };
+    let a = render(BvhKind::Fitted, full);
+    let no_fit = render(BvhKind::Fitted, BvhOptions { fit: false, ..full });
+    let loose = render(
+        BvhKind::Fitted,
+        BvhOptions {
+            tight: false,
+            ..full
+        },
+    );
+    let keep = render(
+        BvhKind::Fitted,
+        BvhOptions {
+            discard: false,
+            ..full
+        },
+    );
+    let sah = render(
+        BvhKind::Fitted,
+        BvhOptions {
+            split: SplitRule::Sah,
+            ..full
+        },
+    );
+    let median = render(
+        BvhKind::Fitted,
+        BvhOptions {
+            split: SplitRule::Median,
+            ..full
+        },
+    );
+    let plain = render(BvhKind::Plain, full);
+    for (name, b) in [
+        ("no fit", &no_fit),
+        ("loose", &loose),
+        ("keep", &keep),
+        ("sah", &sah),
+        ("median", &median),
+        ("plain", &plain),
+    ] {
+        assert_eq!(a.image, b.image, "{name}");
+        assert_eq!(a.stats.hits, b.stats.hits, "{name}");
+        assert_eq!(a.stats.rays.rays, b.stats.rays.rays, "{name}");
+    }
+    // Unfitted boxes and R-wide spheres let rays into more space: more metaballs per ray.
+    assert!(no_fit.stats.rays.metaballs > a.stats.rays.metaballs);
+    assert!(loose.stats.rays.metaballs > a.stats.rays.metaballs);
+    // Discarding only shortens the lists.
+    assert!(keep.stats.bvh.entries > a.stats.bvh.entries);
+    assert_eq!(keep.stats.bvh.nodes, a.stats.bvh.nodes);
+    // Other costs, other trees.
+    assert_ne!(sah.stats.bvh.nodes, a.stats.bvh.nodes);
+    assert_ne!(median.stats.bvh.nodes, a.stats.bvh.nodes);
+    // Pass 2 is counted.
+    assert!(a.stats.rays.refine_nodes > a.stats.hits);
+}

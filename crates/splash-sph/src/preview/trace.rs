@@ -35,7 +35,7 @@ pub struct Hit {
     pub value: f32,
 }
 
-/// The paper's Table 3 counts, summed over rays (pass 1, the hierarchy's work).
+/// The paper's Table 3 counts, summed over rays: pass 1's, and pass 2's node visits.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct RayCounts {
     /// Rays traced (camera and shadow rays).
@@ -48,6 +48,8 @@ pub struct RayCounts {
     pub metaballs: u64,
     /// Of those, the metaballs within R of the ray, whose polynomials were summed.
     pub along_ray: u64,
+    /// Nodes visited by pass 2 (collecting the metaballs to refine a hit or walk out).
+    pub refine_nodes: u64,
 }
 
 impl RayCounts {
@@ -58,6 +60,7 @@ impl RayCounts {
         self.leaves += o.leaves;
         self.metaballs += o.metaballs;
         self.along_ray += o.along_ray;
+        self.refine_nodes += o.refine_nodes;
     }
 }
 
@@ -156,9 +159,9 @@ impl<'a> Tracer<'a> {
         loop {
             let s = self.first_inside(&ray, start, false, scratch, counts)?;
             if s > start {
-                return Some(self.refine_hit(&ray, start, s, scratch));
+                return Some(self.refine_hit(&ray, start, s, scratch, counts));
             }
-            start = self.exit(&ray, start, scratch)?;
+            start = self.exit(&ray, start, scratch, counts)?;
         }
     }
 
@@ -177,9 +180,9 @@ impl<'a> Tracer<'a> {
         let Some(ray) = self.ray(o, d, tmin, tmax) else {
             return false;
         };
-        self.collect_exact(&ray, 0.0, 0.0, scratch);
+        self.collect_exact(&ray, 0.0, 0.0, scratch, counts);
         let start = if self.excess(scratch.exact.iter().map(|e| &e.1), 0.0) >= 0.0 {
-            match self.exit(&ray, 0.0, scratch) {
+            match self.exit(&ray, 0.0, scratch, counts) {
                 Some(s) => s,
                 None => return false,
             }
@@ -353,7 +356,14 @@ impl<'a> Tracer<'a> {
 
     /// Pass 2: every metaball whose sphere meets the ray between `u0` and `u1`, in particle
     /// order, into `scratch.exact`, found through the boxes of the nodes' spheres.
-    fn collect_exact(&self, ray: &Ray, u0: f32, u1: f32, scratch: &mut Scratch) {
+    fn collect_exact(
+        &self,
+        ray: &Ray,
+        u0: f32,
+        u1: f32,
+        scratch: &mut Scratch,
+        counts: &mut RayCounts,
+    ) {
         let (nodes, reach) = (&self.bvh.nodes, &self.bvh.reach);
         let exact = &mut scratch.exact;
         exact.clear();
@@ -365,6 +375,7 @@ impl<'a> Tracer<'a> {
         let (t0, t1) = (ray.tb + u0, ray.tb + u1);
         while let Some((n, _)) = stack.pop() {
             let n = n as usize;
+            counts.refine_nodes += 1;
             if slab(&reach[n].bounds, ray.o, ray.inv, t0, t1, self.margin).is_none() {
                 continue;
             }
@@ -387,11 +398,17 @@ impl<'a> Tracer<'a> {
     }
 
     /// The first sample after `start` outside the fluid, walking on with pass 2.
-    fn exit(&self, ray: &Ray, start: f32, scratch: &mut Scratch) -> Option<f32> {
+    fn exit(
+        &self,
+        ray: &Ray,
+        start: f32,
+        scratch: &mut Scratch,
+        counts: &mut RayCounts,
+    ) -> Option<f32> {
         let mut u = start;
         while u <= ray.end {
             let next = u + 4.0 * self.step;
-            self.collect_exact(ray, u, next, scratch);
+            self.collect_exact(ray, u, next, scratch, counts);
             let samples = &mut scratch.samples;
             samples.clear();
             let exact = &scratch.exact;
@@ -412,14 +429,21 @@ impl<'a> Tracer<'a> {
     }
 
     /// The hit between the sample before `s` (outside) and `s` (the first inside one).
-    fn refine_hit(&self, ray: &Ray, start: f32, s: f32, scratch: &mut Scratch) -> Hit {
+    fn refine_hit(
+        &self,
+        ray: &Ray,
+        start: f32,
+        s: f32,
+        scratch: &mut Scratch,
+        counts: &mut RayCounts,
+    ) -> Hit {
         // The largest multiple of the step below s, or the start.
         let mut k = (s / self.step).floor() + 1.0;
         while k * self.step >= s {
             k -= 1.0;
         }
         let w0 = (k * self.step).max(start);
-        self.collect_exact(ray, w0, s, scratch);
+        self.collect_exact(ray, w0, s, scratch, counts);
         let exact = &scratch.exact;
         let a = exact
             .iter()
