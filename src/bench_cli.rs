@@ -20,7 +20,11 @@ frame is reconstructed at every --cell by the scatter (serial), the full gather 
 band (at every --threads count), each run in its own thread pool. Runs whose full grid would
 need more than --max-memory are not attempted and read NA in the tables, with the reason.
 
+`splash bench iso FRAME` and `splash bench preview FRAME` print the Marching Correctors' and the
+Fitted BVH's tables instead (see their --help).
+
 Example:
+  splash bench preview fixtures/frame_0040.ply --spacing 0.014 --threads 2
   splash bench ../shared/data/cbd-small --frames-per-scene 3 --spacing 0.014 --cell r --cell r/2 --threads 1,2")]
 #[command(args_conflicts_with_subcommands = true, subcommand_negates_reqs = true)]
 pub struct BenchArgs {
@@ -82,11 +86,16 @@ enum BenchTable {
     /// Marching Correctors' Tables I–V on one frame: stage times at kernel scales 1, 0.75,
     /// 0.5 and cells r/2, r with and without correction, for the vorticity, |v| and λ2.
     Iso(crate::bench_iso::BenchIsoArgs),
+    /// Fitted BVH's ablations (Gourmel et al. 2010, Tables 3-5 in shape): each part switched
+    /// off, and the plain BVH, on a 640x360 render of one frame.
+    Preview(crate::bench_preview::BenchPreviewArgs),
 }
 
 pub fn bench(args: BenchArgs) -> Result<ExitCode> {
-    if let Some(BenchTable::Iso(iso)) = args.table {
-        return crate::bench_iso::run(iso);
+    match args.table {
+        Some(BenchTable::Iso(iso)) => return crate::bench_iso::run(iso),
+        Some(BenchTable::Preview(preview)) => return crate::bench_preview::run(preview),
+        None => {}
     }
     let mut config = match &args.config {
         Some(path) => Config::from_file(path)?,

@@ -10,6 +10,7 @@ use clap::{Args, Parser, Subcommand};
 mod bench;
 mod bench_cli;
 mod bench_iso;
+mod bench_preview;
 mod farm;
 mod log;
 mod memory;

@@ -13,8 +13,8 @@ use clap::Args;
 use serde_json::json;
 
 use splash_sph::preview::{
-    BvhKind, Camera, PreviewStats, Previewer, Style, parse_colour, parse_size, robust_bounds,
-    up_vector, write_png,
+    BvhKind, Camera, Colouring, PreviewStats, Previewer, Style, parse_colour, parse_size,
+    robust_bounds, up_vector, write_png,
 };
 use splash_sph::{Bytes, Config, InputFormat, Vec3, estimate_spacing, read_particles};
 
@@ -28,9 +28,12 @@ use crate::log::{Console, FrameFigures, RunArgs, Verbosity};
 #[command(after_help = "\
 The surface is the metaball field's, the one `splash recon --field metaball` meshes (its
 kernel, cut-off and iso level from the config's [field] table when that is a metaball field,
-else the defaults), ray-traced through a Fitted BVH (Gourmel et al. 2010) with Phong shading,
-one light above-left behind the camera and hard shadows. The image does not depend on
---threads.
+else the defaults), ray-traced through a Fitted BVH (Gourmel et al. 2010) with Blinn-Phong
+shading: a key light from the camera's side (above-left of the viewer) with hard shadows, a fill
+from the right and a sky ambient. --samples N averages N stratified rays per pixel, --ao adds
+ambient occlusion, --color-by colours by an attribute (viridis, with a legend); every sample
+is a hash of pixel and sample number, so the image does not depend on --threads or the run.
+The config's [preview] table holds the same settings (samples, ao, color_by, legend).
 
 Camera: without --camera, it frames the 0.5–99.5 % percentile box of the first frame of the
 selected sequence (whatever the shard), seen from the front, right and above: direction
@@ -40,7 +43,8 @@ sets another direction. --camera without --look-at looks at that box's centre.
 Examples:
   splash preview frames/*.ply --spacing 0.014 -o preview/ --size 1280x720
   splash preview frame_0040.ply --camera 0.6,0.5,2.2 --look-at 0.6,0.3,0.4 --fov 40 -o f40.png
-  splash preview sim/ --frames 1-400x10 --shard auto/8 -o preview/")]
+  splash preview sim/ --frames 1-400x10 --shard auto/8 -o preview/
+  splash preview frames/ --samples 4 --ao --color-by velocity -o png/")]
 pub struct PreviewArgs {
     /// Particle files, directories of them, or quoted glob patterns ('sim/frame_*.ply').
     #[arg(required = true)]
@@ -91,6 +95,24 @@ pub struct PreviewArgs {
     /// No shadow rays.
     #[arg(long)]
     no_shadows: bool,
+
+    /// Rays per pixel, stratified and deterministic (default: the config's [preview] samples, 1).
+    #[arg(long, value_name = "N")]
+    samples: Option<u32>,
+
+    /// Ambient occlusion with N hemisphere rays per pixel (8 when N is left out; default: the
+    /// config's [preview] ao, 0 = off).
+    #[arg(long, value_name = "N", num_args = 0..=1, default_missing_value = "8")]
+    ao: Option<u32>,
+
+    /// Colour the surface by a particle attribute through viridis (a vector by its magnitude,
+    /// e.g. velocity → |v|), with a legend of its minimum and maximum.
+    #[arg(long, value_name = "ATTRIBUTE")]
+    color_by: Option<String>,
+
+    /// No colour scale in images coloured by an attribute.
+    #[arg(long)]
+    no_legend: bool,
 
     /// Acceleration structure: fitted (the paper's FBVH, default) or plain (its Sec. 4 BVH,
     /// to compare).
@@ -159,6 +181,18 @@ impl PreviewArgs {
         if let Some(m) = &self.max_memory {
             config.max_memory = Some(Bytes::parse(m).context("--max-memory")?);
         }
+        if let Some(n) = self.samples {
+            config.preview.samples = n;
+        }
+        if let Some(n) = self.ao {
+            config.preview.ao = n;
+        }
+        if let Some(a) = &self.color_by {
+            config.preview.color_by = Some(a.clone());
+        }
+        if self.no_legend {
+            config.preview.legend = false;
+        }
         config.validate()?;
         Ok(config)
     }
@@ -211,7 +245,11 @@ pub fn preview(args: PreviewArgs) -> Result<ExitCode> {
         background: parse_colour(&args.background).context("--background")?,
         colour: parse_colour(&args.colour).context("--colour")?,
         shadows: !args.no_shadows,
+        samples: config.preview.samples,
+        ao: config.preview.ao,
+        legend: config.preview.legend,
     };
+    let color_by = config.preview.color_by.clone();
     let bvh = BvhKind::parse(&args.bvh).context("--bvh")?;
     let input_format = args.run.input_format()?;
     let log_format = args.run.log_format()?;
@@ -252,8 +290,17 @@ pub fn preview(args: PreviewArgs) -> Result<ExitCode> {
         &mut console,
         |input, output, _| {
             let start = Instant::now();
-            let particles = read_particles(input, input_format)?;
-            let preview = previewer.render(&particles.positions, &camera, &style)?;
+            let mut particles = read_particles(input, input_format)?;
+            let colouring = color_by
+                .as_deref()
+                .map(|name| Colouring::from_frame(input, &mut particles.attributes, name))
+                .transpose()?;
+            let preview = previewer.render_coloured(
+                &particles.positions,
+                colouring.as_ref(),
+                &camera,
+                &style,
+            )?;
             write_png(output, &preview.image)?;
             Ok(PreviewFrame {
                 stats: preview.stats,

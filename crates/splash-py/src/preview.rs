@@ -7,7 +7,7 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use splash_sph::Vec3;
 use splash_sph::preview::{
-    BvhKind, Camera, Previewer, Style, parse_colour, robust_bounds, up_vector,
+    BvhKind, Camera, Colouring, Previewer, Style, parse_colour, robust_bounds, up_vector,
 };
 
 use crate::arrays;
@@ -29,13 +29,18 @@ fn vector(v: Option<(f32, f32, f32)>) -> Option<Vec3> {
 /// direction, default the data's ``up_axis`` (``"y"`` or ``"z"``). ``fov``: vertical field of
 /// view in degrees. ``background``, ``colour``: ``"#rrggbb"`` or ``"R,G,B"``. ``bvh``:
 /// ``"fitted"`` (default) or ``"plain"``. ``config`` and ``threads`` as for ``reconstruct``;
-/// the image does not depend on the thread count. The GIL is released while rendering.
+/// ``samples``: rays per pixel, stratified; ``ao``: ambient-occlusion rays per pixel (0 off);
+/// both default to the config's ``[preview]`` table. ``values``: an (N,) array, or (N, 3) for
+/// its magnitude (e.g. velocities), colouring the surface through viridis, with a legend
+/// unless ``legend=False``. The image does not depend on the thread count. The GIL is released
+/// while rendering.
 /// Raises ValueError for bad settings, cameras or sizes.
 #[allow(clippy::too_many_arguments)]
 #[pyfunction]
 #[pyo3(signature = (positions, spacing=None, *, size=(1280, 720), camera=None, look_at=None,
     up=None, up_axis="y", view=None, fov=40.0, background="#eceef2", colour="#3a7bd5",
-    shadows=true, bvh="fitted", threads=None, config=None))]
+    shadows=true, bvh="fitted", threads=None, config=None, samples=None, ao=None, values=None,
+    legend=None))]
 pub fn preview<'py>(
     py: Python<'py>,
     positions: &Bound<'py, PyAny>,
@@ -53,6 +58,10 @@ pub fn preview<'py>(
     bvh: &str,
     threads: Option<i64>,
     config: Option<&Bound<'py, PyAny>>,
+    samples: Option<u32>,
+    ao: Option<u32>,
+    values: Option<&Bound<'py, PyAny>>,
+    legend: Option<bool>,
 ) -> PyResult<Bound<'py, PyArray3<u8>>> {
     let overrides = Overrides {
         spacing,
@@ -79,12 +88,25 @@ pub fn preview<'py>(
         background: parse_colour(background).map_err(to_py)?,
         colour: parse_colour(colour).map_err(to_py)?,
         shadows,
+        samples: samples.unwrap_or(config.preview.samples),
+        ao: ao.unwrap_or(config.preview.ao),
+        legend: legend.unwrap_or(config.preview.legend),
     };
+
     let kind = BvhKind::parse(bvh).map_err(to_py)?;
     let threads = config.threads.take();
     let previewer = Previewer::new(&config).map_err(to_py)?.with_bvh(kind);
     let points = arrays::points(positions, "positions")?;
     let positions = points.as_slice();
+    // (N,) values as they are, (N, 3) by magnitude.
+    let colouring = match values {
+        Some(v) => Some(Colouring::new(&arrays::column(
+            v,
+            "values",
+            positions.len(),
+        )?)),
+        None => None,
+    };
     let (w, h) = size;
     let up = vector(up).unwrap_or_else(|| up_vector(z_up));
     let (position, target, view) = (vector(camera), vector(look_at), vector(view));
@@ -109,7 +131,9 @@ pub fn preview<'py>(
                 }
                 (None, None) => Camera::auto(positions, previewer.margin(), up, view, fov, w, h)?,
             };
-            pools::install(threads, || previewer.render(positions, &cam, &style))?
+            pools::install(threads, || {
+                previewer.render_coloured(positions, colouring.as_ref(), &cam, &style)
+            })?
         })
         .map_err(to_py)?;
     let array = Array3::from_shape_vec((h as usize, w as usize, 3), image.image.rgb)

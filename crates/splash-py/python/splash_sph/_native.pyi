@@ -351,12 +351,19 @@ def preview(
     bvh: str = "fitted",
     threads: Optional[int] = None,
     config: Union[None, _Path, Mapping[str, Any]] = None,
+    samples: Optional[int] = None,
+    ao: Optional[int] = None,
+    values: Optional[_Array] = None,
+    legend: Optional[bool] = None,
 ) -> "npt.NDArray[np.uint8]":
     """A ray-traced picture of the metaball surface of ``positions`` (the surface
     ``reconstruct(..., field="metaball")`` meshes) as an (H, W, 3) uint8 RGB array, as
     ``splash preview`` renders it: Fitted BVH, Phong shading, a hard shadow. ``size``:
     (width, height) in pixels, default (1280, 720). Without
-    ``camera`` the particles' 0.5-99.5 % percentile box is framed automatically. The image
+    ``camera`` the particles' 0.5-99.5 % percentile box is framed automatically. ``samples``
+    (stratified rays per pixel) and ``ao`` (ambient-occlusion rays per pixel, 0 off) default to
+    the config's ``[preview]`` table; ``values`` ((N,), or (N, 3) by magnitude) colours the
+    surface through viridis with a legend unless ``legend=False``. The image
     does not depend on ``threads``. Raises ValueError for bad settings, cameras or sizes.
     """
 

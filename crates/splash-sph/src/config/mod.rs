@@ -5,6 +5,7 @@
 
 mod errors;
 pub(crate) mod iso;
+pub(crate) mod preview;
 
 use std::fmt;
 use std::path::Path;
@@ -57,6 +58,8 @@ pub struct Config {
     pub output: OutputConfig,
     /// Isosurfaces of particle quantities (`splash iso`, Marching Correctors).
     pub iso: iso::IsoConfig,
+    /// How previews are shaded (`splash preview`).
+    pub preview: preview::PreviewConfig,
     /// `[min x, min y, min z, max x, max y, max z]`: particles outside this box (bounds
     /// included in it) are dropped before the reconstruction, with their attributes. All are
     /// kept when absent.
@@ -279,6 +282,7 @@ impl Default for Config {
             max_memory: None,
             output: OutputConfig::default(),
             iso: iso::IsoConfig::default(),
+            preview: preview::PreviewConfig::default(),
             particle_aabb: None,
             post: crate::mesh::post::PostConfig::default(),
         }
@@ -407,6 +411,7 @@ impl Config {
         }
         self.field.validate()?;
         self.iso.validate()?;
+        self.preview.validate()?;
         Ok(())
     }
 

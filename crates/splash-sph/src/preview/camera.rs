@@ -194,8 +194,14 @@ impl Camera {
 
     /// The unit direction of the ray through the centre of pixel (`x`, `y`), y downwards.
     pub fn direction(&self, x: u32, y: u32) -> Vec3 {
-        let u = ((x as f32 + 0.5) / self.width as f32 * 2.0 - 1.0) * self.tan_half_h;
-        let v = (1.0 - (y as f32 + 0.5) / self.height as f32 * 2.0) * self.tan_half_v;
+        self.direction_at(x as f32 + 0.5, y as f32 + 0.5)
+    }
+
+    /// The unit direction of the ray through image point (`x`, `y`) in pixels from the top
+    /// left corner.
+    pub fn direction_at(&self, x: f32, y: f32) -> Vec3 {
+        let u = (x / self.width as f32 * 2.0 - 1.0) * self.tan_half_h;
+        let v = (1.0 - y / self.height as f32 * 2.0) * self.tan_half_v;
         (self.forward + u * self.right + v * self.up).normalize()
     }
 

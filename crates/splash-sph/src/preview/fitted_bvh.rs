@@ -29,6 +29,7 @@ use rayon::prelude::*;
 use std::sync::atomic::{AtomicU64, Ordering};
 
 use super::metaballs::Metaballs;
+pub use crate::config::preview::SplitRule;
 use crate::error::Result;
 
 /// Which hierarchy to build.
@@ -57,6 +58,31 @@ impl BvhKind {
         match self {
             BvhKind::Fitted => "fitted",
             BvhKind::Plain => "plain",
+        }
+    }
+}
+
+/// The Fitted BVH's parts, each switchable to measure what it buys (the paper's Tables 4–5):
+/// none changes a hit, only the hierarchy's shape and the work per ray.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct BvhOptions {
+    /// Cut each child's box down to its metaballs' spheres (Sec. 5.1.2).
+    pub fit: bool,
+    /// Spheres of radius min(R, r_max(n)) rather than R (Sec. 5.3.1).
+    pub tight: bool,
+    /// Drop split metaballs that cannot touch a leaf's surface (Sec. 5.3.2).
+    pub discard: bool,
+    /// The split cost.
+    pub split: SplitRule,
+}
+
+impl Default for BvhOptions {
+    fn default() -> Self {
+        BvhOptions {
+            fit: true,
+            tight: true,
+            discard: true,
+            split: SplitRule::N2,
         }
     }
 }
@@ -190,6 +216,7 @@ struct Ctx<'a> {
     points: &'a [Vec3],
     field: Metaballs,
     kind: BvhKind,
+    options: BvhOptions,
     /// Entries of the node lists alive, checked against `budget`.
     entries: AtomicU64,
     budget: u64,
@@ -270,6 +297,17 @@ impl FittedBvh {
         kind: BvhKind,
         max_bytes: u64,
     ) -> Result<FittedBvh> {
+        Self::build_with(points, field, kind, BvhOptions::default(), max_bytes)
+    }
+
+    /// [`build`](Self::build) with some of the Fitted BVH's parts switched off.
+    pub fn build_with(
+        points: &[Vec3],
+        field: Metaballs,
+        kind: BvhKind,
+        options: BvhOptions,
+        max_bytes: u64,
+    ) -> Result<FittedBvh> {
         if points.len() >= u32::MAX as usize / 2 {
             bail_limit!("{} particles are too many for one preview", points.len());
         }
@@ -308,13 +346,14 @@ impl FittedBvh {
             points: &sorted,
             field,
             kind,
+            options,
             entries: AtomicU64::new(0),
             budget: (max_bytes - fixed) / 4,
         };
         let own: Vec<u32> = (0..points.len() as u32).collect();
         let reach = match kind {
-            BvhKind::Fitted => field.max_radius(points.len()),
-            BvhKind::Plain => field.cutoff,
+            BvhKind::Fitted if options.tight => field.max_radius(points.len()),
+            _ => field.cutoff,
         };
         let bounds = centres.grown(reach);
         ctx.charge(own.len())?;
@@ -593,13 +632,16 @@ fn gather(ctx: &Ctx, b: &Aabb, split: &[u32], sibling: &[u32]) -> Vec<u32> {
 /// metaballs (Sec. 5.1.2, 5.3.1), then the split metaballs that miss it dropped. `centres`
 /// bounds the child's own metaballs.
 fn fit(ctx: &Ctx, b: Aabb, centres: &Aabb, own: usize, split: Vec<u32>) -> (Aabb, Vec<u32>) {
-    if ctx.kind == BvhKind::Plain {
+    if ctx.kind == BvhKind::Plain || !ctx.options.fit {
         return (b, split);
     }
-    let reach = ctx
-        .field
-        .max_radius(own + split.len())
-        .min(ctx.field.cutoff);
+    let reach = if ctx.options.tight {
+        ctx.field
+            .max_radius(own + split.len())
+            .min(ctx.field.cutoff)
+    } else {
+        ctx.field.cutoff
+    };
     let mut spheres = centres.grown(reach);
     for &i in &split {
         spheres.grow_sphere(ctx.p(i), reach);
@@ -624,7 +666,11 @@ fn choose_split(
     let (cmin, cmax) = (centres.min, centres.max);
     let extent = cmax - cmin;
     let n = own.len() + split.len();
-    if own.len() > TOP_LEVEL {
+    let median = ctx.options.split == SplitRule::Median;
+    if median && n <= MAX_LEAF {
+        return None;
+    }
+    if own.len() > TOP_LEVEL || median {
         let axis = extent.max_position();
         if extent[axis] <= 0.0 {
             return None;
@@ -684,7 +730,10 @@ fn choose_split(
             let mut rb = *bounds;
             rb.min[axis] = rb.min[axis].max(plane);
             let (nl, nr) = (left as f32, right as f32);
-            let cost = TRAVERSAL_COST + (lb.area() * nl * nl + rb.area() * nr * nr) / area;
+            let cost = match ctx.options.split {
+                SplitRule::Sah => TRAVERSAL_COST + (lb.area() * nl + rb.area() * nr) / area,
+                _ => TRAVERSAL_COST + (lb.area() * nl * nl + rb.area() * nr * nr) / area,
+            };
             if best.is_none_or(|(c, _)| cost < c) {
                 let split = Split {
                     axis,
@@ -698,7 +747,11 @@ fn choose_split(
         }
     }
     let (cost, s) = best?;
-    let leaf_cost = (n * n) as f32;
+    let leaf_cost = match ctx.options.split {
+        SplitRule::N2 => (n * n) as f32,
+        SplitRule::Sah => n as f32,
+        SplitRule::Median => return None,
+    };
     (cost < leaf_cost || n > MAX_LEAF).then_some(s)
 }
 
@@ -754,7 +807,7 @@ fn ceil_minus_one(v: f32) -> usize {
 
 fn leaf(ctx: &Ctx, own: Vec<u32>, mut split: Vec<u32>, bounds: &Aabb) -> Tree {
     let n = own.len() + split.len();
-    if ctx.kind == BvhKind::Fitted && n <= DISCARD_MAX && !split.is_empty() {
+    if ctx.kind == BvhKind::Fitted && ctx.options.discard && n <= DISCARD_MAX && !split.is_empty() {
         // Sec. 5.3.2: a split metaball whose r_max ball misses the box and whose sphere stays
         // r_max away from every other centre of the list is zero wherever the field can be ≤ 0.
         let r = ctx.field.cutoff;

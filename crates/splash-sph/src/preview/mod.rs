@@ -3,9 +3,12 @@
 //!
 //! The surface is the zero set of the `metaball` field (the configuration's `[field]` table
 //! when it is of that kind, else the metaball defaults), the one `splash recon --field
-//! metaball` meshes. [`Previewer::render`] builds the hierarchy ([`FittedBvh`]), traces one
-//! ray per pixel through a [`Camera`] ([`Tracer`]), shades hits with Phong and a hard shadow
-//! ([`Style`]), rows in parallel; the image does not depend on the number of threads.
+//! metaball` meshes. [`Previewer::render`] builds the hierarchy ([`FittedBvh`]), traces
+//! stratified samples per pixel through a [`Camera`] ([`Tracer`]), shades hits with a key
+//! light from the camera's side, a fill and a sky ambient, a hard shadow and optional ambient
+//! occlusion ([`Style`]), coloured by a particle attribute through viridis with a legend
+//! ([`Colouring`]) or plain; rows in parallel, every random number a hash of pixel and sample,
+//! so the image does not depend on the number of threads.
 //!
 //! ```
 //! use splash_sph::preview::{Camera, Previewer, Style};
@@ -20,15 +23,20 @@
 //! ```
 
 mod camera;
+mod colormap;
 mod fitted_bvh;
+mod legend;
 mod metaballs;
 mod png_file;
+mod sampling;
 mod shade;
 mod trace;
 
 #[cfg(test)]
 mod tests;
 
+use std::collections::BTreeMap;
+use std::path::Path;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
@@ -36,15 +44,19 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use crate::bytes::default_limit;
-use crate::config::Config;
+use crate::config::{self, Config};
 use crate::error::Result;
 use crate::field::{FieldConfig, MetaballConfig};
+use crate::io::Attribute;
 
+pub use crate::config::preview::PreviewConfig;
 pub use camera::{Camera, parse_size, robust_bounds, up_vector};
-pub use fitted_bvh::{Aabb, BvhKind, BvhStats, FittedBvh};
+pub use colormap::{lightness, viridis, viridis_srgb};
+pub use fitted_bvh::{Aabb, BvhKind, BvhOptions, BvhStats, FittedBvh, SplitRule};
+pub use legend::{bar_rect, label};
 pub use metaballs::Metaballs;
 pub use png_file::{Image, encode_png, write_png};
-pub use shade::{Style, parse_colour};
+pub use shade::{Lights, Style, parse_colour};
 pub use trace::{Hit, RayCounts, Scratch, Tracer};
 
 /// One rendered frame and what it took.
@@ -68,9 +80,9 @@ pub struct PreviewStats {
     pub bvh: BvhStats,
     /// Camera rays that hit the fluid.
     pub hits: u64,
-    /// Camera rays.
+    /// Camera rays (samples).
     pub camera_rays: u64,
-    /// Counts over all rays, camera and shadow.
+    /// Counts over all rays, camera, shadow and ambient occlusion.
     pub rays: RayCounts,
 }
 
@@ -95,6 +107,7 @@ pub fn metaball_config(config: &Config) -> MetaballConfig {
 pub struct Previewer {
     field: Metaballs,
     kind: BvhKind,
+    options: BvhOptions,
     max_memory: u64,
     pool: Option<Arc<rayon::ThreadPool>>,
 }
@@ -115,6 +128,12 @@ impl Previewer {
         Ok(Previewer {
             field: Metaballs::new(&metaball, r),
             kind: BvhKind::Fitted,
+            options: BvhOptions {
+                fit: config.preview.fit,
+                tight: config.preview.tight_boxes,
+                discard: config.preview.discard,
+                split: config.preview.split,
+            },
             max_memory: config.max_memory.map_or_else(default_limit, |b| b.0),
             pool,
         })
@@ -123,6 +142,12 @@ impl Previewer {
     /// The same previewer with another hierarchy (`--bvh plain` to compare).
     pub fn with_bvh(mut self, kind: BvhKind) -> Previewer {
         self.kind = kind;
+        self
+    }
+
+    /// The same previewer with the Fitted BVH's parts switched as `options` says.
+    pub fn with_options(mut self, options: BvhOptions) -> Previewer {
+        self.options = options;
         self
     }
 
@@ -158,11 +183,45 @@ impl Previewer {
                 p.z
             );
         }
-        self.install(|| FittedBvh::build(positions, self.field, self.kind, budget))
+        self.install(|| {
+            FittedBvh::build_with(positions, self.field, self.kind, self.options, budget)
+        })
     }
 
     /// Builds the hierarchy and renders the image of `camera`.
     pub fn render(&self, positions: &[Vec3], camera: &Camera, style: &Style) -> Result<Preview> {
+        self.render_coloured(positions, None, camera, style)
+    }
+
+    /// [`render`](Self::render), the surface coloured by `colouring` when given (one value per
+    /// position) with its legend when `style.legend`.
+    pub fn render_coloured(
+        &self,
+        positions: &[Vec3],
+        colouring: Option<&Colouring>,
+        camera: &Camera,
+        style: &Style,
+    ) -> Result<Preview> {
+        if let Some(c) = colouring
+            && c.values.len() != positions.len()
+        {
+            bail_input!(
+                "{} particles but {} values to colour them by",
+                positions.len(),
+                c.values.len()
+            );
+        }
+        if !(1..=config::preview::MAX_SAMPLES).contains(&style.samples)
+            || style.ao > config::preview::MAX_SAMPLES
+        {
+            bail_config!(
+                "{} samples and {} ambient-occlusion rays per pixel: samples must be from 1 to \
+                 {max}, ao from 0 to {max}",
+                style.samples,
+                style.ao,
+                max = config::preview::MAX_SAMPLES
+            );
+        }
         camera::check_size(camera.width, camera.height)?;
         let image_bytes = camera.width as u64 * camera.height as u64 * 3;
         if image_bytes >= self.max_memory {
@@ -177,7 +236,12 @@ impl Previewer {
         let bvh = self.build_within(positions, self.max_memory - image_bytes)?;
         let build = start.elapsed();
         let start = Instant::now();
-        let (image, rays, hits) = self.install(|| render_image(&bvh, camera, style));
+        let (mut image, rays, hits) = self.install(|| render_image(&bvh, camera, style, colouring));
+        if let Some(c) = colouring
+            && style.legend
+        {
+            legend::draw(&mut image, c.min, c.max);
+        }
         Ok(Preview {
             image,
             stats: PreviewStats {
@@ -186,22 +250,96 @@ impl Previewer {
                 render: start.elapsed(),
                 bvh: bvh.stats(),
                 hits,
-                camera_rays: camera.width as u64 * camera.height as u64,
+                camera_rays: camera.width as u64 * camera.height as u64 * style.samples as u64,
                 rays,
             },
         })
     }
 }
 
+/// Per-particle values that colour the surface, and the range viridis spans.
+#[derive(Debug, Clone)]
+pub struct Colouring {
+    /// One value per particle, in the particles' order.
+    pub values: Vec<f32>,
+    /// The value drawn dark purple.
+    pub min: f32,
+    /// The value drawn yellow.
+    pub max: f32,
+}
+
+impl Colouring {
+    /// `attribute`'s values (a vector's magnitude), spanning their minimum to maximum.
+    pub fn new(attribute: &Attribute) -> Colouring {
+        let values: Vec<f32> = match attribute {
+            Attribute::Scalar(s) => s.clone(),
+            Attribute::Vector(v) => v.iter().map(|v| v.length()).collect(),
+        };
+        let finite = values.iter().copied().filter(|v| v.is_finite());
+        let min = finite.clone().fold(f32::INFINITY, f32::min);
+        let max = finite.fold(f32::NEG_INFINITY, f32::max);
+        let (min, max) = if min <= max { (min, max) } else { (0.0, 0.0) };
+        Colouring { values, min, max }
+    }
+
+    /// The colouring by attribute `name` of frame `input` (found through the usual spellings,
+    /// `v` for velocity, or its x, y, z components), or an error naming the file and listing
+    /// the attributes it has.
+    pub fn from_frame(
+        input: &Path,
+        attributes: &mut BTreeMap<String, Attribute>,
+        name: &str,
+    ) -> Result<Colouring> {
+        match crate::attribute_names::take(attributes, name) {
+            Some(a) => Ok(Colouring::new(&a)),
+            None => {
+                let has: Vec<&str> = attributes.keys().map(String::as_str).collect();
+                bail_input!(
+                    "'{}' has no particle attribute '{name}' to colour by; it has {}",
+                    input.display(),
+                    if has.is_empty() {
+                        "none".to_string()
+                    } else {
+                        has.join(", ")
+                    }
+                )
+            }
+        }
+    }
+
+    /// Where `v` falls in the range, 0 to 1 (0 for an empty range).
+    fn position(&self, v: f32) -> f32 {
+        if self.max > self.min {
+            (v - self.min) / (self.max - self.min)
+        } else {
+            0.0
+        }
+    }
+}
+
 /// Traces and shades every pixel of `camera`'s image, rows in parallel: each pixel depends on
-/// nothing but its ray, and the counts are integer sums, so any thread count gives the same.
-pub fn render_image(bvh: &FittedBvh, camera: &Camera, style: &Style) -> (Image, RayCounts, u64) {
+/// nothing but its rays, whose samples are hashes of pixel and sample number, and the counts
+/// are integer sums, so any thread count gives the same.
+pub fn render_image(
+    bvh: &FittedBvh,
+    camera: &Camera,
+    style: &Style,
+    colouring: Option<&Colouring>,
+) -> (Image, RayCounts, u64) {
     let (w, h) = (camera.width as usize, camera.height as usize);
-    let tracer = Tracer::new(bvh);
+    let tracer = match colouring {
+        Some(c) => Tracer::new(bvh).with_values(&c.values),
+        None => Tracer::new(bvh),
+    };
     let (right, up) = camera.basis();
-    let light = shade::light_direction(camera.forward(), right, up);
+    let lights = shade::Lights::new(camera.forward(), right, up);
     let colour = shade::to_linear(style.colour);
+    let background = shade::to_linear(style.background);
     let offset = bvh.field().cutoff * 0.02;
+    // Occluders within a few metaball radii darken; farther ones are the scene, not the crease.
+    let ao_reach = 4.0 * bvh.field().cutoff;
+    let n = style.samples.max(1);
+    let ao_rays = style.ao.div_ceil(n);
     let mut rgb = vec![0u8; w * h * 3];
     let (counts, hits) = rgb
         .par_chunks_mut(w * 3)
@@ -210,34 +348,55 @@ pub fn render_image(bvh: &FittedBvh, camera: &Camera, style: &Style) -> (Image, 
             let mut scratch = trace::Scratch::default();
             let mut counts = RayCounts::default();
             let mut hits = 0u64;
+            let y = y as u32;
             for (x, px) in row.chunks_exact_mut(3).enumerate() {
-                let d = camera.direction(x as u32, y as u32);
-                let o = camera.position;
-                let hit = tracer.first_hit(o, d, 0.0, f32::INFINITY, &mut scratch, &mut counts);
-                let value = match hit {
-                    None => style.background,
-                    Some(hit) => {
-                        hits += 1;
-                        let p = o + hit.t * d;
-                        let facing = if hit.normal.dot(d) > 0.0 {
-                            -hit.normal
-                        } else {
-                            hit.normal
-                        };
-                        let shadowed = style.shadows
-                            && facing.dot(light) > 0.0
-                            && tracer.occluded(
-                                p + offset * facing,
-                                light,
-                                0.0,
-                                f32::INFINITY,
-                                &mut scratch,
-                                &mut counts,
-                            );
-                        shade::to_srgb(shade::phong(hit.normal, d, light, shadowed, colour))
+                let x = x as u32;
+                let mut sum = Vec3::ZERO;
+                for s in 0..n {
+                    let (fx, fy) = sampling::pixel_offset(x, y, s, n);
+                    let d = camera.direction_at(x as f32 + fx, y as f32 + fy);
+                    let o = camera.position;
+                    let hit = tracer.first_hit(o, d, 0.0, f32::INFINITY, &mut scratch, &mut counts);
+                    let Some(hit) = hit else {
+                        sum += background;
+                        continue;
+                    };
+                    hits += 1;
+                    let p = o + hit.t * d;
+                    let facing = if hit.normal.dot(d) > 0.0 {
+                        -hit.normal
+                    } else {
+                        hit.normal
+                    };
+                    let start = p + offset * facing;
+                    let shadowed = style.shadows
+                        && facing.dot(lights.key) > 0.0
+                        && tracer.occluded(
+                            start,
+                            lights.key,
+                            0.0,
+                            f32::INFINITY,
+                            &mut scratch,
+                            &mut counts,
+                        );
+                    let mut blocked = 0;
+                    for j in 0..ao_rays {
+                        let k = s * ao_rays + j;
+                        let (u1, u2) =
+                            (sampling::uniform(x, y, k, 2), sampling::uniform(x, y, k, 3));
+                        let dir = sampling::cosine_direction(facing, u1, u2);
+                        if tracer.occluded(start, dir, 0.0, ao_reach, &mut scratch, &mut counts) {
+                            blocked += 1;
+                        }
                     }
-                };
-                px.copy_from_slice(&value);
+                    let open = 1.0 - blocked as f32 / ao_rays.max(1) as f32;
+                    let albedo = match colouring {
+                        Some(c) => shade::to_linear(viridis_srgb(c.position(hit.value))),
+                        None => colour,
+                    };
+                    sum += shade::shade(hit.normal, d, &lights, shadowed, open, albedo);
+                }
+                px.copy_from_slice(&shade::to_srgb(sum / n as f32));
             }
             (counts, hits)
         })

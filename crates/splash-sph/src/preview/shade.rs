@@ -1,4 +1,6 @@
-//! Phong shading with one directional light and a hard shadow, in linear RGB, stored as sRGB.
+//! Blinn–Phong shading in linear RGB, stored as sRGB: a key light from the camera's side (above
+//! and left of the viewer) with a hard shadow, a dimmer fill from the right and a sky ambient,
+//! the fill and ambient scaled by ambient occlusion where it is traced.
 
 use glam::Vec3;
 
@@ -11,6 +13,12 @@ pub struct Style {
     pub colour: [u8; 3],
     /// Whether shadow rays are traced.
     pub shadows: bool,
+    /// Rays per pixel (`[preview] samples`).
+    pub samples: u32,
+    /// Ambient-occlusion rays per pixel, 0 for none (`[preview] ao`).
+    pub ao: u32,
+    /// Whether an image coloured by an attribute gets its colour scale.
+    pub legend: bool,
 }
 
 impl Default for Style {
@@ -19,6 +27,9 @@ impl Default for Style {
             background: [236, 238, 242],
             colour: [58, 123, 213],
             shadows: true,
+            samples: 1,
+            ao: 0,
+            legend: true,
         }
     }
 }
@@ -46,36 +57,59 @@ pub fn parse_colour(text: &str) -> crate::Result<[u8; 3]> {
     Ok([byte(0)?, byte(2)?, byte(4)?])
 }
 
-const AMBIENT: f32 = 0.18;
-const DIFFUSE: f32 = 0.8;
-const SPECULAR: f32 = 0.35;
-const SHININESS: i32 = 48;
+const AMBIENT: f32 = 0.16;
+const KEY: f32 = 0.78;
+const FILL: f32 = 0.28;
+const SPECULAR: f32 = 0.3;
+const SHININESS: i32 = 64;
 
-/// The light's direction (towards it) for a camera with viewing direction `forward` and image
-/// axes `right`, `up`: above, to the left and behind the camera.
-pub fn light_direction(forward: Vec3, right: Vec3, up: Vec3) -> Vec3 {
-    (-0.45 * right + 0.85 * up - 0.6 * forward).normalize()
+/// The directions towards the lights of a camera, and its up direction (the sky's).
+#[derive(Debug, Clone, Copy)]
+pub struct Lights {
+    /// Key light: from the viewer's side, above and to the left, so that the faces turned
+    /// to the camera are lit and the relief shades (not a silhouette lit from behind).
+    pub key: Vec3,
+    /// Fill light: low on the right, no shadow, lifting the key's shadowed side.
+    pub fill: Vec3,
+    /// The image's up direction: the ambient is brighter on faces turned up.
+    pub up: Vec3,
+}
+
+impl Lights {
+    /// The lights of a camera with viewing direction `forward` and image axes `right`, `up`.
+    pub fn new(forward: Vec3, right: Vec3, up: Vec3) -> Lights {
+        Lights {
+            key: (-0.55 * right + 0.6 * up - 0.75 * forward).normalize(),
+            fill: (0.8 * right + 0.1 * up - 0.6 * forward).normalize(),
+            up,
+        }
+    }
 }
 
 /// Linear RGB of a surface point with unit `normal` seen along unit `view` (from the eye),
-/// lit from `light` unless `shadowed`.
-pub fn phong(normal: Vec3, view: Vec3, light: Vec3, shadowed: bool, colour: Vec3) -> Vec3 {
+/// lit by `lights` (the key unless `shadowed`), its fill and ambient scaled by `open` (1 where
+/// nothing occludes the hemisphere).
+pub fn shade(
+    normal: Vec3,
+    view: Vec3,
+    lights: &Lights,
+    shadowed: bool,
+    open: f32,
+    colour: Vec3,
+) -> Vec3 {
     // Seen from behind (a camera inside the fluid looks at the surface's inner side).
     let n = if normal.dot(view) > 0.0 {
         -normal
     } else {
         normal
     };
-    let mut c = AMBIENT * colour;
-    if !shadowed {
-        let diffuse = n.dot(light).max(0.0);
-        let reflected = light - 2.0 * light.dot(n) * n;
-        let specular = if diffuse > 0.0 {
-            reflected.dot(view).max(0.0).powi(SHININESS)
-        } else {
-            0.0
-        };
-        c += DIFFUSE * diffuse * colour + Vec3::splat(SPECULAR * specular);
+    let sky = 0.7 + 0.3 * n.dot(lights.up);
+    let mut c = (AMBIENT * sky + FILL * n.dot(lights.fill).max(0.0)) * open * colour;
+    let diffuse = n.dot(lights.key);
+    if !shadowed && diffuse > 0.0 {
+        let half = (lights.key - view).normalize_or_zero();
+        let specular = n.dot(half).max(0.0).powi(SHININESS);
+        c += KEY * diffuse * colour + Vec3::splat(SPECULAR * specular);
     }
     c
 }

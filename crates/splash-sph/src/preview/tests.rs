@@ -576,3 +576,254 @@ fn a_camera_inside_the_fluid_renders() {
         .render(&points, &camera, &Style::default())
         .unwrap();
 }
+
+fn shaded_style() -> Style {
+    Style {
+        samples: 4,
+        ao: 4,
+        ..Style::default()
+    }
+}
+
+/// The small frame coloured by height.
+fn height_colouring(points: &[Vec3]) -> Colouring {
+    Colouring::new(&crate::Attribute::Scalar(
+        points.iter().map(|p| p.y).collect(),
+    ))
+}
+
+#[test]
+fn samples_ambient_occlusion_and_colour_are_the_same_bytes_for_any_threads_and_run() {
+    let points = small_frame();
+    let camera = small_camera(&points, 96, 64);
+    let colouring = height_colouring(&points);
+    let render = |threads, kind| {
+        let config = Config {
+            threads: Some(threads),
+            ..config()
+        };
+        Previewer::new(&config)
+            .unwrap()
+            .with_bvh(kind)
+            .render_coloured(&points, Some(&colouring), &camera, &shaded_style())
+            .unwrap()
+    };
+    let a = render(1, BvhKind::Fitted);
+    let b = render(2, BvhKind::Fitted);
+    let c = render(2, BvhKind::Fitted);
+    let d = render(2, BvhKind::Plain);
+    assert!(a.stats.hits > 1000, "{} hits", a.stats.hits);
+    assert_eq!(a.stats.camera_rays, 96 * 64 * 4);
+    assert_eq!(a.image, b.image);
+    assert_eq!(b.image, c.image);
+    assert_eq!(a.stats.rays, b.stats.rays);
+    // The hierarchy accelerates only, samples and occlusion rays included.
+    assert_eq!(a.image, d.image);
+    // Samples and occlusion change the picture (edges antialiased, creases darker).
+    let plain = Previewer::new(&config())
+        .unwrap()
+        .render_coloured(&points, Some(&colouring), &camera, &Style::default())
+        .unwrap();
+    assert_ne!(plain.image, a.image);
+    assert!(a.stats.rays.rays > 4 * plain.stats.rays.rays);
+}
+
+#[test]
+fn stratified_samples_cover_the_pixel_once_per_stratum() {
+    for n in [4u32, 9, 5] {
+        let offsets: Vec<(f32, f32)> = (0..n).map(|s| sampling::pixel_offset(3, 7, s, n)).collect();
+        let k = (n as f64).sqrt().round() as u32;
+        let (cols, rows) = if k * k == n { (k, k) } else { (n, n) };
+        let mut seen = std::collections::BTreeSet::new();
+        for &(x, y) in &offsets {
+            assert!((0.0..1.0).contains(&x) && (0.0..1.0).contains(&y));
+            seen.insert(((x * cols as f32) as u32, (y * rows as f32) as u32));
+        }
+        assert_eq!(seen.len(), n as usize, "{n}: {offsets:?}");
+        if k * k != n {
+            // N-rooks: one sample in each row and each column.
+            let rows: std::collections::BTreeSet<u32> = seen.iter().map(|&(_, r)| r).collect();
+            assert_eq!(rows.len(), n as usize);
+        }
+    }
+    assert_eq!(sampling::pixel_offset(3, 7, 0, 1), (0.5, 0.5));
+}
+
+#[test]
+fn viridis_runs_from_purple_to_yellow_with_rising_lightness() {
+    let close = |a: [u8; 3], b: [u8; 3]| a.iter().zip(b).all(|(&x, y)| x.abs_diff(y) <= 5);
+    // matplotlib's tabulated viridis at 0, 0.5 and 1: #440154, #21918c, #fde725.
+    assert!(
+        close(viridis_srgb(0.0), [68, 1, 84]),
+        "{:?}",
+        viridis_srgb(0.0)
+    );
+    assert!(
+        close(viridis_srgb(0.5), [33, 145, 140]),
+        "{:?}",
+        viridis_srgb(0.5)
+    );
+    assert!(
+        close(viridis_srgb(1.0), [253, 231, 37]),
+        "{:?}",
+        viridis_srgb(1.0)
+    );
+    // The map itself (before rounding to bytes) rises in lightness at every step of 1/255.
+    let l: Vec<f32> = (0..256)
+        .map(|i| lightness(viridis(i as f32 / 255.0)))
+        .collect();
+    for i in 1..256 {
+        assert!(
+            l[i] > l[i - 1],
+            "L* falls at {i}: {} then {}",
+            l[i - 1],
+            l[i]
+        );
+    }
+    assert!(l[0] < 20.0 && l[255] > 85.0);
+}
+
+#[test]
+fn the_legend_shows_the_scale_and_its_range() {
+    assert_eq!(label(4.1), "4.10");
+    assert_eq!(label(0.02771), "0.0277");
+    assert_eq!(label(-12.5), "-12.5");
+    assert_eq!(label(1.0e-5), "1.00e-5");
+    let points = small_frame();
+    let camera = small_camera(&points, 320, 180);
+    let colouring = height_colouring(&points);
+    let previewer = Previewer::new(&config()).unwrap();
+    let with = |legend| {
+        let style = Style {
+            legend,
+            ..Style::default()
+        };
+        previewer
+            .render_coloured(&points, Some(&colouring), &camera, &style)
+            .unwrap()
+            .image
+    };
+    let (a, b) = (with(true), with(false));
+    let (x, y, w, h) = bar_rect(320, 180).unwrap();
+    // The bar: yellow (the maximum) at the top, purple (the minimum) at the bottom.
+    assert_eq!(a.pixel(x + w / 2, y), viridis_srgb(1.0));
+    assert_eq!(a.pixel(x + w / 2, y + h - 1), viridis_srgb(0.0));
+    // Labels: dark ink above and below the bar.
+    let ink = |img: &Image, y0: u32, y1: u32| {
+        (y0..y1)
+            .flat_map(|yy| (x.saturating_sub(40)..x + w).map(move |xx| (xx, yy)))
+            .filter(|&(xx, yy)| img.pixel(xx, yy) == [40, 40, 48])
+            .count()
+    };
+    assert!(ink(&a, y - 8, y) > 10);
+    assert!(ink(&a, y + h, y + h + 8) > 10);
+    assert_eq!(ink(&b, y - 8, y) + ink(&b, y + h, y + h + 8), 0);
+    let differ = a
+        .rgb
+        .chunks(3)
+        .zip(b.rgb.chunks(3))
+        .filter(|(p, q)| p != q)
+        .count();
+    assert!(differ as u32 >= w * (h - 4), "{differ}");
+}
+
+#[test]
+fn colouring_by_a_missing_attribute_names_the_file_and_what_it_has() {
+    let path = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../fixtures/frame_0040.ply");
+    let mut particles = read_particles(&path, None).unwrap();
+    let c = Colouring::from_frame(&path, &mut particles.attributes.clone(), "v").unwrap();
+    assert_eq!(c.values.len(), particles.positions.len());
+    assert!(c.min >= 0.0 && c.max > c.min);
+    let e = Colouring::from_frame(&path, &mut particles.attributes, "vorticity")
+        .err()
+        .unwrap()
+        .to_string();
+    assert!(
+        e.contains("frame_0040.ply") && e.contains("'vorticity'"),
+        "{e}"
+    );
+    assert!(e.contains("velocity"), "{e}");
+    // Values that do not match the particles are refused, not misread.
+    let short = Colouring::new(&crate::Attribute::Scalar(vec![1.0; 3]));
+    let camera = small_camera(&particles.positions, 32, 24);
+    let previewer = Previewer::new(&config()).unwrap();
+    assert!(
+        previewer
+            .render_coloured(
+                &particles.positions,
+                Some(&short),
+                &camera,
+                &Style::default()
+            )
+            .is_err()
+    );
+}
+
+#[test]
+fn each_ablation_changes_the_work_and_never_the_image() {
+    let points = small_frame();
+    let camera = small_camera(&points, 96, 64);
+    let full = BvhOptions::default();
+    let render = |kind, options| {
+        Previewer::new(&config())
+            .unwrap()
+            .with_bvh(kind)
+            .with_options(options)
+            .render(&points, &camera, &shaded_style())
+            .unwrap()
+    };
+    let a = render(BvhKind::Fitted, full);
+    let no_fit = render(BvhKind::Fitted, BvhOptions { fit: false, ..full });
+    let loose = render(
+        BvhKind::Fitted,
+        BvhOptions {
+            tight: false,
+            ..full
+        },
+    );
+    let keep = render(
+        BvhKind::Fitted,
+        BvhOptions {
+            discard: false,
+            ..full
+        },
+    );
+    let sah = render(
+        BvhKind::Fitted,
+        BvhOptions {
+            split: SplitRule::Sah,
+            ..full
+        },
+    );
+    let median = render(
+        BvhKind::Fitted,
+        BvhOptions {
+            split: SplitRule::Median,
+            ..full
+        },
+    );
+    let plain = render(BvhKind::Plain, full);
+    for (name, b) in [
+        ("no fit", &no_fit),
+        ("loose", &loose),
+        ("keep", &keep),
+        ("sah", &sah),
+        ("median", &median),
+        ("plain", &plain),
+    ] {
+        assert_eq!(a.image, b.image, "{name}");
+        assert_eq!(a.stats.hits, b.stats.hits, "{name}");
+        assert_eq!(a.stats.rays.rays, b.stats.rays.rays, "{name}");
+    }
+    // Unfitted boxes and R-wide spheres let rays into more space: more metaballs per ray.
+    assert!(no_fit.stats.rays.metaballs > a.stats.rays.metaballs);
+    assert!(loose.stats.rays.metaballs > a.stats.rays.metaballs);
+    // Discarding only shortens the lists.
+    assert!(keep.stats.bvh.entries > a.stats.bvh.entries);
+    assert_eq!(keep.stats.bvh.nodes, a.stats.bvh.nodes);
+    // Other costs, other trees.
+    assert_ne!(sah.stats.bvh.nodes, a.stats.bvh.nodes);
+    assert_ne!(median.stats.bvh.nodes, a.stats.bvh.nodes);
+    // Pass 2 is counted.
+    assert!(a.stats.rays.refine_nodes > a.stats.hits);
+}

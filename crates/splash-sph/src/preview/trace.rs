@@ -30,9 +30,12 @@ pub struct Hit {
     pub t: f32,
     /// Outward unit normal: the normalised gradient of the field.
     pub normal: Vec3,
+    /// The per-particle values of [`Tracer::with_values`] at the hit, weighted by the metaballs'
+    /// t_i^α there (in particle order, so independent of the hierarchy); 0 without values.
+    pub value: f32,
 }
 
-/// The paper's Table 3 counts, summed over rays (pass 1, the hierarchy's work).
+/// The paper's Table 3 counts, summed over rays: pass 1's, and pass 2's node visits.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
 pub struct RayCounts {
     /// Rays traced (camera and shadow rays).
@@ -45,6 +48,8 @@ pub struct RayCounts {
     pub metaballs: u64,
     /// Of those, the metaballs within R of the ray, whose polynomials were summed.
     pub along_ray: u64,
+    /// Nodes visited by pass 2 (collecting the metaballs to refine a hit or walk out).
+    pub refine_nodes: u64,
 }
 
 impl RayCounts {
@@ -55,6 +60,7 @@ impl RayCounts {
         self.leaves += o.leaves;
         self.metaballs += o.metaballs;
         self.along_ray += o.along_ray;
+        self.refine_nodes += o.refine_nodes;
     }
 }
 
@@ -82,6 +88,7 @@ pub struct Scratch {
 /// Traces rays through a built hierarchy.
 pub struct Tracer<'a> {
     bvh: &'a FittedBvh,
+    values: Option<&'a [f32]>,
     step: f32,
     r2: f32,
     inv_r2: f32,
@@ -106,11 +113,19 @@ impl<'a> Tracer<'a> {
         let f = bvh.field;
         Tracer {
             bvh,
+            values: None,
             step: f.lone_radius().max(f.cutoff * 1e-3),
             r2: f.cutoff * f.cutoff,
             inv_r2: f.inv_r2(),
             margin: f.cutoff * 1e-3,
         }
+    }
+
+    /// The same tracer interpolating `values` (one per particle, in the particles' order) at
+    /// its hits.
+    pub fn with_values(mut self, values: &'a [f32]) -> Tracer<'a> {
+        self.values = Some(values);
+        self
     }
 
     fn ray(&self, o: Vec3, d: Vec3, tmin: f32, tmax: f32) -> Option<Ray> {
@@ -144,9 +159,9 @@ impl<'a> Tracer<'a> {
         loop {
             let s = self.first_inside(&ray, start, false, scratch, counts)?;
             if s > start {
-                return Some(self.refine_hit(&ray, start, s, scratch));
+                return Some(self.refine_hit(&ray, start, s, scratch, counts));
             }
-            start = self.exit(&ray, start, scratch)?;
+            start = self.exit(&ray, start, scratch, counts)?;
         }
     }
 
@@ -165,9 +180,9 @@ impl<'a> Tracer<'a> {
         let Some(ray) = self.ray(o, d, tmin, tmax) else {
             return false;
         };
-        self.collect_exact(&ray, 0.0, 0.0, scratch);
+        self.collect_exact(&ray, 0.0, 0.0, scratch, counts);
         let start = if self.excess(scratch.exact.iter().map(|e| &e.1), 0.0) >= 0.0 {
-            match self.exit(&ray, 0.0, scratch) {
+            match self.exit(&ray, 0.0, scratch, counts) {
                 Some(s) => s,
                 None => return false,
             }
@@ -341,7 +356,14 @@ impl<'a> Tracer<'a> {
 
     /// Pass 2: every metaball whose sphere meets the ray between `u0` and `u1`, in particle
     /// order, into `scratch.exact`, found through the boxes of the nodes' spheres.
-    fn collect_exact(&self, ray: &Ray, u0: f32, u1: f32, scratch: &mut Scratch) {
+    fn collect_exact(
+        &self,
+        ray: &Ray,
+        u0: f32,
+        u1: f32,
+        scratch: &mut Scratch,
+        counts: &mut RayCounts,
+    ) {
         let (nodes, reach) = (&self.bvh.nodes, &self.bvh.reach);
         let exact = &mut scratch.exact;
         exact.clear();
@@ -353,6 +375,7 @@ impl<'a> Tracer<'a> {
         let (t0, t1) = (ray.tb + u0, ray.tb + u1);
         while let Some((n, _)) = stack.pop() {
             let n = n as usize;
+            counts.refine_nodes += 1;
             if slab(&reach[n].bounds, ray.o, ray.inv, t0, t1, self.margin).is_none() {
                 continue;
             }
@@ -375,11 +398,17 @@ impl<'a> Tracer<'a> {
     }
 
     /// The first sample after `start` outside the fluid, walking on with pass 2.
-    fn exit(&self, ray: &Ray, start: f32, scratch: &mut Scratch) -> Option<f32> {
+    fn exit(
+        &self,
+        ray: &Ray,
+        start: f32,
+        scratch: &mut Scratch,
+        counts: &mut RayCounts,
+    ) -> Option<f32> {
         let mut u = start;
         while u <= ray.end {
             let next = u + 4.0 * self.step;
-            self.collect_exact(ray, u, next, scratch);
+            self.collect_exact(ray, u, next, scratch, counts);
             let samples = &mut scratch.samples;
             samples.clear();
             let exact = &scratch.exact;
@@ -400,14 +429,21 @@ impl<'a> Tracer<'a> {
     }
 
     /// The hit between the sample before `s` (outside) and `s` (the first inside one).
-    fn refine_hit(&self, ray: &Ray, start: f32, s: f32, scratch: &mut Scratch) -> Hit {
+    fn refine_hit(
+        &self,
+        ray: &Ray,
+        start: f32,
+        s: f32,
+        scratch: &mut Scratch,
+        counts: &mut RayCounts,
+    ) -> Hit {
         // The largest multiple of the step below s, or the start.
         let mut k = (s / self.step).floor() + 1.0;
         while k * self.step >= s {
             k -= 1.0;
         }
         let w0 = (k * self.step).max(start);
-        self.collect_exact(ray, w0, s, scratch);
+        self.collect_exact(ray, w0, s, scratch, counts);
         let exact = &scratch.exact;
         let a = exact
             .iter()
@@ -415,10 +451,11 @@ impl<'a> Tracer<'a> {
             .filter(|&t| t > w0 && t < s)
             .fold(w0, f32::max);
         let u = self.refine(exact, a, s);
-        let normal = self.normal(exact, ray.base + u * ray.d, ray.d);
+        let x = ray.base + u * ray.d;
         Hit {
             t: ray.tb + u,
-            normal,
+            normal: self.normal(exact, x, ray.d),
+            value: self.values.map_or(0.0, |v| self.value(exact, x, v)),
         }
     }
 
@@ -478,6 +515,32 @@ impl<'a> Tracer<'a> {
             }
         }
         0.5 * (a + b)
+    }
+
+    /// Σ w_i v_i / Σ w_i at `x` with the metaballs' weights w_i = t_i^α (the nearest metaball's
+    /// value where all weights vanish, as rounding can leave at the surface's edge).
+    fn value(&self, along: &[(u32, Along)], x: Vec3, values: &[f32]) -> f32 {
+        let alpha = self.bvh.field.exponent;
+        let (mut sum, mut weights) = (0.0f32, 0.0f32);
+        let mut nearest = (f32::INFINITY, 0.0);
+        for (original, m) in along {
+            let d2 = (x - self.bvh.points[m.index as usize]).length_squared();
+            let v = values[*original as usize];
+            let k = 1.0 - d2 * self.inv_r2;
+            if k > 0.0 {
+                let w = k.powi(alpha);
+                sum += w * v;
+                weights += w;
+            }
+            if d2 < nearest.0 {
+                nearest = (d2, v);
+            }
+        }
+        if weights > 0.0 {
+            sum / weights
+        } else {
+            nearest.1
+        }
     }
 
     /// The outward unit normal at `x`: ∇f ∝ Σ t_i^(α−1)(x − p_i).
