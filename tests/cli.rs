@@ -836,10 +836,13 @@ fn completion_scripts_name_every_subcommand() {
         String::from_utf8(output.stdout).unwrap()
     };
     let (bash, zsh, fish) = (script("bash"), script("zsh"), script("fish"));
-    assert!(bash.contains("complete -F _splash"), "bash: no completion function");
+    assert!(
+        bash.contains("complete -F _splash"),
+        "bash: no completion function"
+    );
     assert!(zsh.starts_with("#compdef splash"), "zsh: no #compdef line");
     for sub in ["recon", "iso", "preview", "config", "bench", "completions"] {
-        assert!(bash.contains(&format!("splash__{sub}")), "bash: no {sub}");
+        assert!(bash.contains(&format!("splash,{sub})")), "bash: no {sub}");
         assert!(zsh.contains(&format!("'{sub}:")), "zsh: no {sub}");
         assert!(fish.contains(&format!("-a \"{sub}\"")), "fish: no {sub}");
     }
