@@ -54,6 +54,12 @@ enum Command {
     /// Compare the engines on scenes at several cell sizes and thread counts; print the paper's
     /// Tables 1, 3/4 and 5/6 and write the raw records as JSON.
     Bench(bench_cli::BenchArgs),
+    /// Print a shell completion script, e.g. `splash completions bash >
+    /// ~/.local/share/bash-completion/completions/splash`.
+    Completions {
+        /// bash, zsh, fish, elvish or powershell.
+        shell: clap_complete::Shell,
+    },
 }
 
 #[derive(Subcommand)]
@@ -342,11 +348,24 @@ fn main() -> ExitCode {
         Command::Preview(args) => preview::preview(*args),
         Command::Bench(args) => bench_cli::bench(args),
         Command::Config(ConfigCommand::Show(args)) => show_config(&args),
+        Command::Completions { shell } => completions(shell),
     };
     result.unwrap_or_else(|e| {
         log::print_error(log_format, &format!("{e:#}"));
         ExitCode::FAILURE
     })
+}
+
+fn completions(shell: clap_complete::Shell) -> Result<ExitCode> {
+    use clap::CommandFactory;
+    use std::io::Write;
+    // Into memory first: clap_complete panics on a failed write (a closed pipe).
+    let mut script = Vec::new();
+    clap_complete::generate(shell, &mut Cli::command(), "splash", &mut script);
+    std::io::stdout()
+        .write_all(&script)
+        .context("writing the completion script")?;
+    Ok(ExitCode::SUCCESS)
 }
 
 fn show_config(args: &ConfigArgs) -> Result<ExitCode> {

@@ -824,3 +824,29 @@ fn spacing_is_estimated_when_not_given() {
         .assert_stderr_has("at most 4r");
     assert!(!output.exists());
 }
+
+#[test]
+fn completion_scripts_name_every_subcommand() {
+    let script = |shell: &str| {
+        let output = Command::new(env!("CARGO_BIN_EXE_splash"))
+            .args(["completions", shell])
+            .output()
+            .expect("cannot start splash");
+        assert!(output.status.success(), "splash completions {shell} failed");
+        String::from_utf8(output.stdout).unwrap()
+    };
+    let (bash, zsh, fish) = (script("bash"), script("zsh"), script("fish"));
+    assert!(
+        bash.contains("complete -F _splash"),
+        "bash: no completion function"
+    );
+    assert!(zsh.starts_with("#compdef splash"), "zsh: no #compdef line");
+    for sub in ["recon", "iso", "preview", "config", "bench", "completions"] {
+        assert!(bash.contains(&format!("splash,{sub})")), "bash: no {sub}");
+        assert!(zsh.contains(&format!("'{sub}:")), "zsh: no {sub}");
+        assert!(fish.contains(&format!("-a \"{sub}\"")), "fish: no {sub}");
+    }
+    splash!["completions", "tcsh"]
+        .assert_failure()
+        .assert_stderr_has("invalid value 'tcsh'");
+}

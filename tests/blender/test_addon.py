@@ -3,21 +3,24 @@
     blender -b --factory-startup --python tests/blender/test_addon.py
 
 with SPLASH_ADDON_ZIP (the built add-on), SPLASH_BIN (the splash command), SPLASH_REPO and
-SPLASH_TEST_DIR (a scratch directory) in the environment. It installs and enables the zip,
-imports 3-frame sequences that `splash recon` writes as PLY, VTU and OBJ (two real frames of
-fixtures/ and a ball of particles moving at one known velocity), steps the frames and checks
-counts, normals and velocities against the files, checks live mode against the package,
-its post-processing options (raw, decimate, smallest component, clip box) by what each
-does to the mesh, errors in the UI, the command line round trip, and renders with Workbench and Cycles
-(motion blur by velocity). Any failure exits Blender with status 1.
+SPLASH_TEST_DIR (a scratch directory) in the environment. It installs and enables the zip (a
+legacy add-on, or a 4.2+ extension when it has blender_manifest.toml), imports 3-frame
+sequences that `splash recon` writes as PLY, VTU and OBJ (two real frames of fixtures/ and a
+ball of particles moving at one known velocity), steps the frames and checks counts, normals
+and velocities against the files, checks live mode against the package, its post-processing
+options (raw, decimate, smallest component, clip box) by what each does to the mesh, errors in
+the UI, the command line round trip, and renders with Workbench and Cycles (motion blur by
+velocity). Any failure exits Blender with status 1.
 """
 
+import importlib
 import os
 import shlex
 import shutil
 import subprocess
 import sys
 import traceback
+import zipfile
 
 import bpy
 import numpy as np
@@ -591,13 +594,40 @@ def test_renders(seqs):
     )
 
 
-def main():
-    bpy.ops.preferences.addon_install(filepath=ZIP)
-    bpy.ops.preferences.addon_enable(module="splash_blender")
-    from splash_blender import command, live, sequence, ui, vendor
+def install():
+    """Installs and enables the zip: an extension (it has blender_manifest.toml) through the
+    extensions platform into the local repository, whose Python package is
+    bl_ext.user_default.splash_blender and which installs the bundled wheel itself; a legacy
+    add-on as `splash_blender`. Returns the add-on's modules and where splash_sph must come
+    from."""
+    with zipfile.ZipFile(ZIP) as z:
+        extension = "blender_manifest.toml" in z.namelist()
+    if extension:
+        result = bpy.ops.extensions.package_install_files(
+            filepath=ZIP, repo="user_default", enable_on_install=True
+        )
+        check(result == {"FINISHED"}, f"extension installed ({result})")
+        package = "bl_ext.user_default.splash_blender"
+        check(package in bpy.context.preferences.addons, "extension enabled")
+        # Blender unpacks the extensions' wheels into a site-packages of its own.
+        origin = bpy.utils.user_resource("EXTENSIONS", path=".local")
+    else:
+        bpy.ops.preferences.addon_install(filepath=ZIP)
+        bpy.ops.preferences.addon_enable(module="splash_blender")
+        package = "splash_blender"
+        origin = None
+    modules = [importlib.import_module(f"{package}.{m}") for m in MODULES]
+    print(f"splash: installed {os.path.basename(ZIP)} as {package}")
+    return modules, origin or os.path.dirname(modules[1].__file__)
 
+
+MODULES = ("command", "live", "sequence", "ui", "vendor")
+
+
+def main():
+    (command, live, sequence, ui, vendor), origin = install()
     splash_sph = vendor.splash_sph()
-    check(splash_sph.__file__.startswith(os.path.dirname(live.__file__)), "the bundled package")
+    check(splash_sph.__file__.startswith(origin), f"the bundled package ({splash_sph.__file__})")
     particles = make_particles()
     seqs = test_sequences(sequence, particles)
     test_errors(sequence)
