@@ -82,6 +82,23 @@ pub fn refine_bends(
     rings: VertexFaces,
     angle: f32,
 ) -> Vec<u32> {
+    let first = vertices.len() as u32;
+    let (parents, twin) = bisect(vertices, normals, triangles, rings, angle);
+    if !parents.is_empty() {
+        flip_around(vertices, triangles, twin, first);
+    }
+    parents
+}
+
+/// [`refine_bends`] before the flips; also returns the twins of the refined triangles (empty
+/// when nothing is bisected).
+fn bisect(
+    vertices: &mut Vec<Vec3>,
+    normals: &mut Vec<Vec3>,
+    triangles: &mut Vec<[u32; 3]>,
+    rings: VertexFaces,
+    angle: f32,
+) -> (Vec<u32>, Vec<[u32; 3]>) {
     let twin = twins(triangles, &rings);
     drop(rings);
     let ids =
@@ -120,7 +137,7 @@ pub fn refine_bends(
         })
         .collect();
     if work.is_empty() {
-        return Vec::new();
+        return (Vec::new(), Vec::new());
     }
     while let Some(f) = work.pop() {
         let f = f as usize;
@@ -154,44 +171,85 @@ pub fn refine_bends(
         })
         .unzip();
     let midpoint = |e: u32| -> u32 {
-        if e == NONE || !split[e as usize] {
-            return NONE;
-        }
         bisected
             .binary_search(&e)
             .map_or(NONE, |i| first + i as u32)
     };
-    // Each triangle's pieces in its place: counted per chunk, then written into one array.
-    let piece_count = |f: usize| 1 + ids(f).map(midpoint).iter().filter(|&&m| m != NONE).count();
-    let counts: Vec<usize> = (0..triangles.len())
+    // Each triangle's layout (bisected edges and longest edge), and where its pieces start.
+    let codes: Vec<u8> = (0..triangles.len())
         .into_par_iter()
         .with_min_len(CHUNK)
-        .chunks(CHUNK)
-        .map(|fs| fs.into_iter().map(piece_count).sum())
+        .map(|f| {
+            let mask = ids(f)
+                .iter()
+                .enumerate()
+                .map(|(k, &e)| u8::from(e != NONE && split[e as usize]) << k)
+                .sum::<u8>();
+            let l = if mask == 0 { 0 } else { longest(f) as u8 };
+            mask | l << 3
+        })
         .collect();
-    let mut refined = vec![[0u32; 3]; counts.iter().sum()];
-    let mut parts = Vec::with_capacity(counts.len());
-    let mut rest = refined.as_mut_slice();
-    for &n in &counts {
-        let (part, tail) = rest.split_at_mut(n);
-        parts.push(part);
-        rest = tail;
+    drop(split);
+    let layouts = Layout::all();
+    let mut start = Vec::with_capacity(triangles.len() + 1);
+    start.push(0u32);
+    for &code in &codes {
+        start.push(start[start.len() - 1] + layouts[code as usize].count as u32);
     }
-    parts.into_par_iter().enumerate().for_each(|(c, part)| {
-        let mut out = Vec::with_capacity(part.len());
-        for (f, &t) in triangles.iter().enumerate().skip(c * CHUNK).take(CHUNK) {
-            let mids = ids(f).map(midpoint);
-            let l = if mids == [NONE; 3] { 3 } else { longest(f) };
-            pieces(t, mids, l, &mut out);
+    // Each triangle's pieces in place of the triangles, from the last triangle back (piece
+    // `start[f]` never comes before triangle `f`, so no triangle is overwritten before it is
+    // read): one array of triangles at a time, not two. Serial, a few ms a million.
+    let old = triangles.len();
+    let total = start[old] as usize;
+    triangles.resize(total, [0; 3]);
+    for f in (0..old).rev() {
+        let t = triangles[f];
+        let e = ids(f);
+        let mids: [u32; 3] = std::array::from_fn(|k| {
+            if codes[f] >> k & 1 == 1 {
+                midpoint(e[k])
+            } else {
+                NONE
+            }
+        });
+        let ends = [t[0], t[1], t[2], mids[0], mids[1], mids[2]];
+        let layout = &layouts[codes[f] as usize];
+        let out = &mut triangles[start[f] as usize..start[f + 1] as usize];
+        for (piece, slots) in out.iter_mut().zip(&layout.pieces) {
+            *piece = slots.map(|s| ends[s as usize]);
         }
-        part.copy_from_slice(&out);
-    });
-    drop((split, twin));
+    }
+    drop(bisected);
+    // The refined mesh's twins from the old ones, in place the same way: a piece's edge on half
+    // `h` of its parent's edge `k` meets the other half (or the whole edge) of the twin
+    // triangle's edge.
+    let mut twin = twin;
+    twin.resize(total, [NONE; 3]);
+    for f in (0..old).rev() {
+        let tw = twin[f];
+        let layout = &layouts[codes[f] as usize];
+        let out = &mut twin[start[f] as usize..start[f + 1] as usize];
+        for (piece, edges) in out.iter_mut().zip(&layout.edges) {
+            *piece = edges.map(|edge| match edge {
+                Edge::Inner(p, i) => 3 * (start[f] + u32::from(p)) + u32::from(i),
+                Edge::Side(k, h) => {
+                    let o = tw[k as usize];
+                    if o == NONE {
+                        return NONE;
+                    }
+                    let (g, j) = ((o / 3) as usize, (o % 3) as usize);
+                    let half = if codes[f] >> k & 1 == 1 { 1 - h } else { 0 };
+                    3 * start[g] + u32::from(layouts[codes[g] as usize].sides[j][half as usize])
+                }
+            });
+        }
+    }
+    drop((codes, start));
+    vertices.reserve_exact(mids.len());
     vertices.extend(mids);
+    normals.reserve_exact(mid_normals.len());
     normals.extend(mid_normals);
-    *triangles = refined;
-    flip_around(vertices, triangles, first);
-    parents
+    (parents, twin)
 }
 
 /// The index (0 for `ab`, 1 for `bc`, 2 for `ca`) of the longest splittable edge of `t`, ties
@@ -215,28 +273,119 @@ fn curved_midpoint(p: Vec3, q: Vec3, n: Vec3, m: Vec3) -> Vec3 {
     0.5 * (p + q) + (d.dot(m) * m - d.dot(n) * n) / 8.0
 }
 
-/// Appends the pieces of `t = [a, b, c]` given the midpoints of its edges `ab`, `bc`, `ca`
-/// ([`NONE`] where not bisected), keeping its winding. With one or two bisected edges the
-/// longest, `longest`, is one of them (the closure) and is bisected first, as Rivara does.
-fn pieces(t: [u32; 3], mids: [u32; 3], longest: usize, out: &mut Vec<[u32; 3]>) {
-    match mids.iter().filter(|&&m| m != NONE).count() {
-        0 => out.push(t),
-        1 | 2 => {
-            let [a, b, c] = rotate(t, longest);
-            let [m0, m1, m2] = rotate(mids, longest);
-            if m1 != NONE {
-                out.extend([[a, m0, c], [m0, b, m1], [m0, m1, c]]);
-            } else if m2 != NONE {
-                out.extend([[a, m0, m2], [m2, m0, c], [m0, b, c]]);
-            } else {
-                out.extend([[a, m0, c], [m0, b, c]]);
+/// What an edge of a piece lies on: half `h` of the parent triangle's edge `k` (`Side(k, h)`;
+/// `h` 0 for the whole edge or its first half from corner `k`, 1 for its second half), or,
+/// inside the parent, the edge at corner `i` of its piece `p` (`Inner(p, i)`), walked the other
+/// way.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Edge {
+    Side(u8, u8),
+    Inner(u8, u8),
+}
+
+/// The pieces of a triangle `a b c`, in the triangle's own terms: `pieces` name its corners 0-2
+/// and the midpoints 3-5 of its edges `ab`, `bc`, `ca`, keeping its winding; `edges` say what
+/// each piece's edge (from its corner `i` to `i + 1`) lies on.
+#[derive(Debug, Clone, Copy)]
+struct Layout {
+    count: usize,
+    pieces: [[u8; 3]; 4],
+    edges: [[Edge; 3]; 4],
+    /// `3 p + i` for the piece `p` whose edge at corner `i` lies on half `h` of edge `k`, at
+    /// `[k][h]`.
+    sides: [[u8; 2]; 3],
+}
+
+impl Layout {
+    /// The layout of a triangle whose bisected edges are the bits 0-2 of `code` and whose
+    /// longest edge, bits 3-4, is one of them (Rivara's closure): with one or two bisected edges
+    /// the longest is bisected first, as Rivara does; with three, red refinement.
+    fn of(code: u8) -> Layout {
+        use Edge::{Inner as I, Side as S};
+        let (mask, l) = (code & 7, code >> 3);
+        // Corner, midpoint and edge `i` of the triangle turned so that its longest edge is 0.
+        let c = |i: u8| (i + l) % 3;
+        let m = |i: u8| 3 + (i + l) % 3;
+        let s = |e: u8, h: u8| S((e + l) % 3, h);
+        let rotated_mask = (mask >> l | mask << (3 - l)) & 7;
+        let none = [I(0, 0); 3];
+        let (count, pieces, edges) = match (mask, rotated_mask) {
+            (0, _) => (
+                1,
+                [[0, 1, 2]; 4],
+                [[S(0, 0), S(1, 0), S(2, 0)], none, none, none],
+            ),
+            (7, _) => (
+                4,
+                [[0, 3, 5], [3, 1, 4], [5, 4, 2], [3, 4, 5]],
+                [
+                    [S(0, 0), I(3, 2), S(2, 1)],
+                    [S(0, 1), S(1, 0), I(3, 0)],
+                    [I(3, 1), S(1, 1), S(2, 0)],
+                    [I(1, 2), I(2, 0), I(0, 1)],
+                ],
+            ),
+            (_, 0b011) => (
+                3,
+                [
+                    [c(0), m(0), c(2)],
+                    [m(0), c(1), m(1)],
+                    [m(0), m(1), c(2)],
+                    [0; 3],
+                ],
+                [
+                    [s(0, 0), I(2, 2), s(2, 0)],
+                    [s(0, 1), s(1, 0), I(2, 0)],
+                    [I(1, 2), s(1, 1), I(0, 1)],
+                    none,
+                ],
+            ),
+            (_, 0b101) => (
+                3,
+                [
+                    [c(0), m(0), m(2)],
+                    [m(2), m(0), c(2)],
+                    [m(0), c(1), c(2)],
+                    [0; 3],
+                ],
+                [
+                    [s(0, 0), I(1, 0), s(2, 1)],
+                    [I(0, 1), I(2, 2), s(2, 0)],
+                    [s(0, 1), s(1, 0), I(1, 1)],
+                    none,
+                ],
+            ),
+            // Only the longest bisected (codes that break the closure never occur).
+            _ => (
+                2,
+                [[c(0), m(0), c(2)], [m(0), c(1), c(2)], [0; 3], [0; 3]],
+                [
+                    [s(0, 0), I(1, 2), s(2, 0)],
+                    [s(0, 1), s(1, 0), I(0, 1)],
+                    none,
+                    none,
+                ],
+            ),
+        };
+        let mut sides = [[0; 2]; 3];
+        for (p, piece) in edges.iter().enumerate().take(count) {
+            for (i, edge) in piece.iter().enumerate() {
+                if let S(k, h) = *edge {
+                    sides[k as usize][h as usize] = (3 * p + i) as u8;
+                }
             }
         }
-        _ => {
-            let [a, b, c] = t;
-            let [m0, m1, m2] = mids;
-            out.extend([[a, m0, m2], [m0, b, m1], [m2, m1, c], [m0, m1, m2]]);
+        Layout {
+            count,
+            pieces,
+            edges,
+            sides,
         }
+    }
+
+    /// The layouts of all codes (longest edge 0 to 2, any bisected edges), by code.
+    fn all() -> [Layout; 24] {
+        std::array::from_fn(|code| Layout::of(code as u8))
     }
 }
 
@@ -255,9 +404,8 @@ const FLIP_FLATNESS: f32 = 0.98;
 /// sum to more than π (the Delaunay criterion) and the two triangles are nearly coplanar, in
 /// passes whose flips share no vertex (so each pass is a function of the mesh, not of the
 /// thread count or the order). Only edges of triangles using a vertex `>= first` are tried.
-fn flip_around(vertices: &[Vec3], triangles: &mut [[u32; 3]], first: u32) {
-    let mut twin = twins(triangles, &VertexFaces::new(vertices.len(), triangles));
-    // (the rows are dropped here: flips keep the twins up to date themselves)
+/// `twin`: the triangles' twins, which the flips keep up to date.
+fn flip_around(vertices: &[Vec3], triangles: &mut [[u32; 3]], mut twin: Vec<[u32; 3]>, first: u32) {
     let mut locked = vec![false; vertices.len()];
     // Flips keep triangle numbers, so the triangles to try are found once.
     let mut near: Vec<u32> = (0..triangles.len() as u32)
@@ -439,6 +587,31 @@ mod tests {
             );
         }
         assert!(bumpiness(&out) < bumpiness(&mesh));
+    }
+
+    #[test]
+    fn the_bisected_meshs_twins_are_those_found_from_its_rows() {
+        // A coarse torus with its vertices jittered, refined at several angles, meets every
+        // layout: one, two (either pair) and three bisected edges.
+        for degrees in [10.0, 20.0, 30.0, 45.0] {
+            let mut mesh = torus(12, 8, 1.0, 0.3, 0.0);
+            for (i, p) in mesh.vertices.iter_mut().enumerate() {
+                let h = |k: u32| ((i as u32 * 2654435761 ^ k).wrapping_mul(40503) % 1000) as f32;
+                *p += 0.00004 * Vec3::new(h(1), h(2), h(3));
+            }
+            let before = mesh.triangles.len();
+            let rings = VertexFaces::new(mesh.vertices.len(), &mesh.triangles);
+            let (parents, twin) = bisect(
+                &mut mesh.vertices,
+                &mut mesh.normals,
+                &mut mesh.triangles,
+                rings,
+                f32::to_radians(degrees),
+            );
+            assert!(!parents.is_empty() && mesh.triangles.len() > before);
+            let rows = VertexFaces::new(mesh.vertices.len(), &mesh.triangles);
+            assert_eq!(twin, twins(&mesh.triangles, &rows), "at {degrees}°");
+        }
     }
 
     #[test]
