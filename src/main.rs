@@ -327,6 +327,7 @@ struct Iso {
 }
 
 fn main() -> ExitCode {
+    memory::return_freed_memory();
     let args: Vec<std::ffi::OsString> = std::env::args_os().collect();
     // Known before clap runs, so that its usage errors are JSON lines too.
     let log_format = log::format_in_args(&args);
