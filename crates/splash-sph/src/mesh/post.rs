@@ -48,7 +48,7 @@ pub struct PostConfig {
     /// Bisect the edges whose two triangles meet at more than this angle, in degrees, after the
     /// volume rounds ([`refine_bends`]; default 0: never). 16 takes cbd-large f23 from 2.57° to
     /// 1.91° (with 15 relaxation steps) for 25 % more triangles, at 1.4× the `raw` run's wall
-    /// time on 2 threads (default 1.2×) and 141 MiB peak (default 102, `raw` 91).
+    /// time on 2 threads (default 1.2×) and 108 MiB peak (default 95, `raw` 83; the CLI).
     pub refine_angle: f32,
     /// Tangential relaxation steps after the volume rounds (default 10: slivers on cbd-large
     /// f23 1.29 % → 0.39 %).
