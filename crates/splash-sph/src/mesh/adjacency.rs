@@ -2,19 +2,19 @@
 //! compressed rows (CSR): the one-ring that smoothing, vertex normals and component labels read,
 //! and the counting pass that the decimation's working stars share.
 
-/// For vertex `v`, `faces[offsets[v]..offsets[v + 1]]` are the triangles that use it, in
-/// increasing order (so whatever reads them sums in the same order on any thread count), and
-/// `next[offsets[v]..offsets[v + 1]]` the vertex that follows `v` in each of them: on a closed
-/// oriented manifold every edge from `v` is walked away from `v` by exactly one triangle, so
-/// these are `v`'s neighbours, each once.
+/// For vertex `v`, `corners[offsets[v]..offsets[v + 1]]` are its corners `3 f + k` (vertex
+/// `v` is corner `k` of triangle `f`), in increasing order (so whatever reads them sums in the
+/// same order on any thread count). [`VertexFaces::neighbours`] reads the vertex that follows
+/// `v` in each triangle: on a closed oriented manifold every edge from `v` is walked away from
+/// `v` by exactly one triangle, so these are `v`'s neighbours, each once. (Looked up in the
+/// triangles rather than stored beside the corners: a third less memory for the rows, which
+/// are post-processing's largest array.)
 #[derive(Debug, Clone, Default)]
 pub struct VertexFaces {
     /// `vertices + 1` row starts.
     pub offsets: Vec<u32>,
-    /// Triangle indices, row after row.
-    pub faces: Vec<u32>,
-    /// The vertex after the row's vertex in each of those triangles.
-    pub next: Vec<u32>,
+    /// Corners `3 f + k`, row after row.
+    pub corners: Vec<u32>,
 }
 
 impl VertexFaces {
@@ -25,38 +25,54 @@ impl VertexFaces {
             "at most 2^32 / 3 triangles"
         );
         let mut offsets = Vec::new();
-        let mut faces = Vec::new();
-        let mut after = vec![0u32; 3 * triangles.len()];
+        let mut corners = Vec::new();
         vertex_rows(
             &mut offsets,
-            &mut faces,
+            &mut corners,
             vertices,
             triangles,
             |_| true,
-            |slot, t, k| after[slot] = triangles[t][(k + 1) % 3],
+            |t, k| (3 * t + k) as u32,
         );
-        VertexFaces {
-            offsets,
-            faces,
-            next: after,
-        }
+        VertexFaces { offsets, corners }
     }
 
-    /// The triangles around `v`.
-    pub fn of(&self, v: usize) -> &[u32] {
-        &self.faces[self.offsets[v] as usize..self.offsets[v + 1] as usize]
+    /// The corners of `v`.
+    #[inline]
+    fn row(&self, v: usize) -> &[u32] {
+        &self.corners[self.offsets[v] as usize..self.offsets[v + 1] as usize]
     }
 
-    /// The neighbours of `v` (see the type's docs).
-    pub fn neighbours(&self, v: usize) -> &[u32] {
-        &self.next[self.offsets[v] as usize..self.offsets[v + 1] as usize]
+    /// Whether no triangle uses `v`.
+    pub fn is_empty(&self, v: usize) -> bool {
+        self.offsets[v] == self.offsets[v + 1]
+    }
+
+    /// The triangles around `v`, in increasing order.
+    #[inline]
+    pub fn of(&self, v: usize) -> impl ExactSizeIterator<Item = usize> + '_ {
+        self.row(v).iter().map(|&c| c as usize / 3)
+    }
+
+    /// The vertex after `v` in each of its triangles (`triangles` those of the rows), in row
+    /// order: its neighbours (see the type's docs).
+    #[inline]
+    pub fn neighbours<'a>(
+        &'a self,
+        triangles: &'a [[u32; 3]],
+        v: usize,
+    ) -> impl ExactSizeIterator<Item = u32> + 'a {
+        let indices = triangles.as_flattened();
+        self.row(v).iter().map(move |&c| {
+            let next = if c % 3 == 2 { c - 2 } else { c + 1 };
+            indices[next as usize]
+        })
     }
 }
 
 /// The triangles around each vertex as rows: `offsets` gets `vertices + 1` row starts and
-/// `faces`, row after row, the indices of the triangles that `keep` accepts, in increasing
-/// order; `place(slot, triangle, corner)` sees where each corner went, for arrays that run
-/// beside `faces`. Counting then placing, serially: two passes over the indices, no sort (a
+/// `faces`, row after row, `entry(triangle, corner)` for the corners of the triangles that
+/// `keep` accepts, in increasing order of triangle. Counting then placing, serially: two passes over the indices, no sort (a
 /// few ms per million triangles); the arrays' allocations are reused.
 pub(crate) fn vertex_rows(
     offsets: &mut Vec<u32>,
@@ -64,7 +80,7 @@ pub(crate) fn vertex_rows(
     vertices: usize,
     triangles: &[[u32; 3]],
     keep: impl Fn(&[u32; 3]) -> bool,
-    mut place: impl FnMut(usize, usize, usize),
+    entry: impl Fn(usize, usize) -> u32,
 ) {
     offsets.clear();
     offsets.resize(vertices + 1, 0);
@@ -85,8 +101,7 @@ pub(crate) fn vertex_rows(
         }
         for (k, &v) in t.iter().enumerate() {
             let slot = &mut offsets[v as usize];
-            faces[*slot as usize] = i as u32;
-            place(*slot as usize, i, k);
+            faces[*slot as usize] = entry(i, k);
             *slot += 1;
         }
     }

@@ -47,8 +47,8 @@ pub struct PostConfig {
     pub max_offset: f32,
     /// Bisect the edges whose two triangles meet at more than this angle, in degrees, after the
     /// volume rounds ([`refine_bends`]; default 0: never). 16 takes cbd-large f23 from 2.57° to
-    /// 1.91° (with 15 relaxation steps) for 25 % more triangles, at 1.4× the `raw` run's wall
-    /// time on 2 threads (default 1.2×) and 108 MiB peak (default 95, `raw` 83; the CLI).
+    /// 1.91° (with 15 relaxation steps) for 25 % more triangles, at about 1.45× the `raw` run's
+    /// wall time on 2 threads (default 1.2×) and 98 MiB peak (default and `raw` 83; the CLI).
     pub refine_angle: f32,
     /// Tangential relaxation steps after the volume rounds (default 10: slivers on cbd-large
     /// f23 1.29 % → 0.39 %).
@@ -287,13 +287,14 @@ fn smooth_and_restore(
         triangles,
     } = mesh;
     let mut rings = VertexFaces::new(vertices.len(), triangles);
-    let mut components = Components::new(&rings);
+    let mut components = Components::new(triangles, &rings);
     let raw_volumes = components.volumes_and_areas(vertices, triangles);
     let (lambda, mu) = (config.lambda, config.mu);
     let mut scratch = vec![Vec3::ZERO; vertices.len()];
     taubin(
         vertices,
         &mut scratch,
+        triangles,
         &rings,
         config.smoothing_iterations,
         lambda,
@@ -326,7 +327,7 @@ fn smooth_and_restore(
     };
     let max_step = config.max_offset * spacing;
     for _ in 0..config.volume_rounds {
-        taubin(vertices, &mut scratch, &rings, 1, lambda, mu);
+        taubin(vertices, &mut scratch, triangles, &rings, 1, lambda, mu);
         normals_and_measures(vertices, triangles, &rings, normals, &mut measures);
         restore(
             vertices,
@@ -364,6 +365,7 @@ fn smooth_and_restore(
         vertices,
         &mut scratch,
         normals,
+        triangles,
         &rings,
         config.relax_iterations,
         0.5,

@@ -28,15 +28,16 @@ fn twins(triangles: &[[u32; 3]], rings: &VertexFaces) -> Vec<[u32; 3]> {
         .map(|t| {
             std::array::from_fn(|k| {
                 let (a, b) = (t[k], t[(k + 1) % 3]);
-                let row =
-                    rings.offsets[b as usize] as usize..rings.offsets[b as usize + 1] as usize;
                 let mut found = NONE;
-                for s in row {
-                    if rings.next[s] == a {
+                for (u, f) in rings
+                    .neighbours(triangles, b as usize)
+                    .zip(rings.of(b as usize))
+                {
+                    if u == a {
                         if found != NONE {
                             return NONE;
                         }
-                        found = rings.faces[s];
+                        found = f as u32;
                     }
                 }
                 if found == NONE {

@@ -18,6 +18,7 @@ const CHUNK: usize = 4096;
 pub fn taubin(
     vertices: &mut [Vec3],
     scratch: &mut [Vec3],
+    triangles: &[[u32; 3]],
     rings: &VertexFaces,
     iterations: u32,
     lambda: f32,
@@ -25,28 +26,35 @@ pub fn taubin(
 ) {
     debug_assert_eq!(vertices.len(), scratch.len());
     for _ in 0..iterations {
-        umbrella_step(vertices, scratch, rings, lambda);
-        umbrella_step(scratch, vertices, rings, mu);
+        umbrella_step(vertices, scratch, triangles, rings, lambda);
+        umbrella_step(scratch, vertices, triangles, rings, mu);
     }
 }
 
 /// The umbrella operator: the mean of `v`'s neighbours minus `v`.
 #[inline]
-fn umbrella(from: &[Vec3], rings: &VertexFaces, v: usize) -> Vec3 {
-    let ring = rings.neighbours(v);
-    if ring.is_empty() {
+fn umbrella(from: &[Vec3], triangles: &[[u32; 3]], rings: &VertexFaces, v: usize) -> Vec3 {
+    let ring = rings.neighbours(triangles, v);
+    let n = ring.len();
+    if n == 0 {
         return Vec3::ZERO;
     }
-    let sum: Vec3 = ring.iter().map(|&u| from[u as usize]).sum();
-    sum / ring.len() as f32 - from[v]
+    let sum: Vec3 = ring.map(|u| from[u as usize]).sum();
+    sum / n as f32 - from[v]
 }
 
 /// `to[v] = from[v] + factor · umbrella(v)`.
-fn umbrella_step(from: &[Vec3], to: &mut [Vec3], rings: &VertexFaces, factor: f32) {
+fn umbrella_step(
+    from: &[Vec3],
+    to: &mut [Vec3],
+    triangles: &[[u32; 3]],
+    rings: &VertexFaces,
+    factor: f32,
+) {
     to.par_chunks_mut(CHUNK).enumerate().for_each(|(c, out)| {
         for (k, slot) in out.iter_mut().enumerate() {
             let v = c * CHUNK + k;
-            *slot = from[v] + factor * umbrella(from, rings, v);
+            *slot = from[v] + factor * umbrella(from, triangles, rings, v);
         }
     });
 }
@@ -65,8 +73,8 @@ pub fn vertex_normals(
         .for_each(|(c, out)| {
             for (k, n) in out.iter_mut().enumerate() {
                 let mut sum = Vec3::ZERO;
-                for &f in rings.of(c * CHUNK + k) {
-                    let [a, b, d] = triangles[f as usize].map(|i| vertices[i as usize]);
+                for f in rings.of(c * CHUNK + k) {
+                    let [a, b, d] = triangles[f].map(|i| vertices[i as usize]);
                     sum += (b - a).cross(d - a);
                 }
                 *n = sum.normalize_or_zero();
@@ -81,6 +89,7 @@ pub fn relax_tangentially(
     vertices: &mut [Vec3],
     scratch: &mut [Vec3],
     normals: &[Vec3],
+    triangles: &[[u32; 3]],
     rings: &VertexFaces,
     iterations: u32,
     factor: f32,
@@ -93,7 +102,7 @@ pub fn relax_tangentially(
             .for_each(|(c, out)| {
                 for (k, slot) in out.iter_mut().enumerate() {
                     let v = c * CHUNK + k;
-                    let (step, n) = (umbrella(from, rings, v), normals[v]);
+                    let (step, n) = (umbrella(from, triangles, rings, v), normals[v]);
                     *slot = from[v] + factor * (step - step.dot(n) * n);
                 }
             });

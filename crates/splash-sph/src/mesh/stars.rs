@@ -26,7 +26,7 @@ impl Stars {
             vertices,
             triangles,
             |t| t[0] != DEAD,
-            |_, _, _| {},
+            |t, _| t as u32,
         );
     }
 

@@ -19,14 +19,14 @@ pub struct Components {
 }
 
 impl Components {
-    /// Labels the components by a walk over the neighbour rows.
-    pub fn new(rings: &VertexFaces) -> Components {
+    /// Labels the components by a walk over the neighbour rows (`rings` those of `triangles`).
+    pub fn new(triangles: &[[u32; 3]], rings: &VertexFaces) -> Components {
         let n = rings.offsets.len() - 1;
         let mut of_vertex = vec![u32::MAX; n];
         let mut queue = Vec::new();
         let mut count = 0u32;
         for seed in 0..n {
-            if of_vertex[seed] != u32::MAX || rings.of(seed).is_empty() {
+            if of_vertex[seed] != u32::MAX || rings.is_empty(seed) {
                 continue;
             }
             of_vertex[seed] = count;
@@ -34,7 +34,7 @@ impl Components {
             while let Some(v) = queue.pop() {
                 // Every edge is walked away from one of its ends by some triangle, so the
                 // neighbour rows reach the whole component.
-                for &u in rings.neighbours(v as usize) {
+                for u in rings.neighbours(triangles, v as usize) {
                     if of_vertex[u as usize] == u32::MAX {
                         of_vertex[u as usize] = count;
                         queue.push(u);
@@ -104,8 +104,8 @@ pub fn normals_and_measures(
             for (k, (n, m)) in normals.iter_mut().zip(measures).enumerate() {
                 let v = c * CHUNK + k;
                 let mut sum = Vec3::ZERO;
-                for &f in rings.of(v) {
-                    let [a, b, d] = triangles[f as usize].map(|i| vertices[i as usize]);
+                for f in rings.of(v) {
+                    let [a, b, d] = triangles[f].map(|i| vertices[i as usize]);
                     sum += (b - a).cross(d - a);
                 }
                 *n = sum.normalize_or_zero();
