@@ -1,4 +1,4 @@
-//! `splash bench iso`: the Marching Correctors paper's Tables I–V (Rosenthal et al., Sec. IV) on
+//! `splash bench iso`: the Marching Correctors paper's Tables I–V (Schindler et al., Sec. IV) on
 //! one frame: stage times at kernel scales 1, 0.75, 0.5 and virtual cells r/2 and r (0.5h and
 //! h), with and without the correction, for the vorticity (Table I), a scalar (Table II: |v|,
 //! since SPH frames seldom carry pressure) and λ2 (Table III); the cells used (IV) and the

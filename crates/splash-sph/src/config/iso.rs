@@ -1,4 +1,4 @@
-//! `[iso]`: the tunable numbers of Marching Correctors (Rosenthal et al., Sec. III–IV), with the
+//! `[iso]`: the tunable numbers of Marching Correctors (Schindler et al., Sec. III–IV), with the
 //! paper's defaults. The virtual grid's cell is the configuration's `cell` (r/2 ≈ 0.5h).
 
 use serde::{Deserialize, Serialize};

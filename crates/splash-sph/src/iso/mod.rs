@@ -1,4 +1,4 @@
-//! Marching Correctors (Rosenthal, Linsen et al.): isosurfaces of any SPH quantity, exact with
+//! Marching Correctors (Schindler et al. 2012): isosurfaces of any SPH quantity, exact with
 //! respect to the SPH interpolant. A virtual grid whose cells are materialised only as seeds or
 //! when the surface crosses them, seeds from particle pairs, surface following with a slice
 //! cache, Newton correction of every vertex along its edge, trimming at free boundaries by the
