@@ -306,29 +306,24 @@ fn vortex_ply(dir: &TempDir) -> std::path::PathBuf {
     dir.file("vortex.ply", text)
 }
 
+/// `splash iso INPUT --attribute velocity --lambda2 --level -2 --spacing 0.05 -o OUT`.
+fn iso_lambda2(input: &Path, out: &Path) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_splash"))
+        .arg("iso")
+        .arg(input)
+        .args(["--attribute", "velocity", "--lambda2", "--level", "-2"])
+        .args(["--spacing", "0.05", "-o"])
+        .arg(out)
+        .output()
+        .unwrap()
+}
+
 #[test]
 fn lambda2_of_a_vortex_is_a_closed_outward_surface_around_its_core() {
     let dir = TempDir::new("iso-lambda2");
     let input = vortex_ply(&dir);
     let out = dir.path("core.ply");
-    let output = Command::new(env!("CARGO_BIN_EXE_splash"))
-        .args([
-            "iso",
-            input.to_str().unwrap(),
-            "--attribute",
-            "velocity",
-            "--lambda2",
-        ])
-        .args([
-            "--level",
-            "-2",
-            "--spacing",
-            "0.05",
-            "-o",
-            out.to_str().unwrap(),
-        ])
-        .output()
-        .unwrap();
+    let output = iso_lambda2(&input, &out);
     finish("splash iso vortex.ply --lambda2".into(), output).ok();
     let ply = read_ply(&out);
     let vertices: Vec<[f32; 3]> = ply.payload["vertex"]
@@ -380,24 +375,7 @@ fn lambda2_without_a_velocity_names_the_file() {
          property float z\nproperty float density\nend_header\n0 0 0 1000\n0.05 0 0 1000\n",
     );
     let out = dir.path("x.ply");
-    let output = Command::new(env!("CARGO_BIN_EXE_splash"))
-        .args([
-            "iso",
-            input.to_str().unwrap(),
-            "--attribute",
-            "velocity",
-            "--lambda2",
-        ])
-        .args([
-            "--level",
-            "-2",
-            "--spacing",
-            "0.05",
-            "-o",
-            out.to_str().unwrap(),
-        ])
-        .output()
-        .unwrap();
+    let output = iso_lambda2(&input, &out);
     finish("splash iso still.ply --lambda2".into(), output)
         .failed()
         .has("still.ply")
