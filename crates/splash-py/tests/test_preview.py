@@ -80,3 +80,39 @@ def test_bad_cameras_raise(frame):
         splash_sph.preview(p, spacing=FRAME_SPACING, size=(8, 8), camera=(1, 1, 1), look_at=(1, 1, 1))
     with pytest.raises(ValueError, match="spacing"):
         splash_sph.preview(p, size=(8, 8))
+
+
+def test_samples_occlusion_and_colours_are_the_cli_image(frame, splash_bin, tmp_path):
+    # 4 stratified samples, 4 occlusion rays, coloured by |v| with its legend: the CLI's
+    # image for the same flags, on any thread count; each setting changes the picture.
+    args = dict(spacing=FRAME_SPACING, size=(64, 40))
+    velocity = frame["velocity"]
+    image = splash_sph.preview(frame.positions, **args, samples=4, ao=4, values=velocity, threads=2)
+    one = splash_sph.preview(frame.positions, **args, samples=4, ao=4, values=velocity, threads=1)
+    np.testing.assert_array_equal(image, one)
+    out = tmp_path / "f.png"
+    subprocess.run(
+        [str(splash_bin), "preview", str(FRAME), "--spacing", str(FRAME_SPACING),
+         "--size", "64x40", "--samples", "4", "--ao", "4", "--color-by", "velocity",
+         "-q", "-o", str(out)],
+        check=True,
+    )
+    np.testing.assert_array_equal(decode_png(out.read_bytes()), image)
+    plain = splash_sph.preview(frame.positions, **args)
+    variants = [
+        splash_sph.preview(frame.positions, **args, samples=4),
+        splash_sph.preview(frame.positions, **args, ao=4),
+        splash_sph.preview(frame.positions, **args, values=velocity, legend=False),
+    ]
+    for k, variant in enumerate(variants):
+        assert (variant != plain).any(), k
+    # The legend, where the image has room for it (not at 64 x 40).
+    wide = dict(spacing=FRAME_SPACING, size=(160, 90), values=velocity)
+    legend = splash_sph.preview(frame.positions, **wide)
+    assert (legend != splash_sph.preview(frame.positions, **wide, legend=False)).any()
+
+
+def test_values_must_have_one_entry_per_particle(frame):
+    with pytest.raises(ValueError):
+        splash_sph.preview(frame.positions, spacing=FRAME_SPACING, size=(8, 8),
+                           values=np.zeros(len(frame.positions) - 1, np.float32))
