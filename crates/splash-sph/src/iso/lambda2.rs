@@ -3,7 +3,6 @@
 //! antisymmetric parts of the SPH velocity gradient; λ2 < 0 inside vortex cores.
 
 use glam::{DMat3, DVec3};
-use rayon::prelude::*;
 
 use super::sph_interpolant::Interpolant;
 
@@ -12,30 +11,20 @@ use super::sph_interpolant::Interpolant;
 /// exact for a constant velocity and, in the bulk, the gradient of a linear one up to the
 /// kernel sums' discretisation.
 pub(crate) fn lambda2(it: &Interpolant, first: usize) -> Vec<f32> {
-    let h = &it.handlers;
-    let (v, vol) = (
-        &h.channels[first..first + 3],
-        &h.channels[it.channels.volume],
-    );
-    let vel = |j: usize| DVec3::new(v[0][j].into(), v[1][j].into(), v[2][j].into());
-    (0..h.positions.len())
-        .into_par_iter()
-        .map(|i| {
-            let vi = vel(i);
-            // Row a of the gradient is ∇v_a.
-            let mut rows = [DVec3::ZERO; 3];
-            it.for_each_near(h.positions[i], |j, d, _, slope| {
-                let dv = (vel(j) - vi) * f64::from(vol[j]);
-                let grad = d * slope;
-                rows[0] += grad * dv.x;
-                rows[1] += grad * dv.y;
-                rows[2] += grad * dv.z;
-            });
-            // The rows as columns: Gᵀ, whose S² + Ω² is G's.
-            let gt = DMat3::from_cols(rows[0], rows[1], rows[2]);
-            middle_eigenvalue(&s2_plus_omega2(gt)) as f32
-        })
-        .collect()
+    it.velocity_sums(
+        first,
+        // Row a of the gradient is ∇v_a.
+        |rows: &mut [DVec3; 3], grad, dv, volume| {
+            let dv = dv * volume;
+            rows[0] += grad * dv.x;
+            rows[1] += grad * dv.y;
+            rows[2] += grad * dv.z;
+        },
+        // The rows as columns: Gᵀ, whose S² + Ω² is G's.
+        |rows| {
+            middle_eigenvalue(&s2_plus_omega2(DMat3::from_cols(rows[0], rows[1], rows[2]))) as f32
+        },
+    )
 }
 
 /// S² + Ω² of a velocity gradient G: ((G + Gᵀ)² + (G − Gᵀ)²) / 4 = (G² + Gᵀ²) / 2, symmetric

@@ -6,7 +6,6 @@
 use std::collections::BTreeMap;
 
 use glam::{DVec3, Vec3};
-use rayon::prelude::*;
 
 use super::sph_interpolant::{Channels, Interpolant};
 use crate::attribute_names;
@@ -224,21 +223,9 @@ fn magnitude(c: &[Vec<f32>]) -> Vec<f32> {
 /// at each particle, minus v_i × Σ V_j ∇W_ij, which vanishes in the bulk but not at the free
 /// surface.
 fn vorticity(it: &Interpolant, first: usize) -> Vec<f32> {
-    let h = &it.handlers;
-    let (v, vol) = (
-        &h.channels[first..first + 3],
-        &h.channels[it.channels.volume],
-    );
-    let vel = |j: usize| DVec3::new(v[0][j].into(), v[1][j].into(), v[2][j].into());
-    (0..h.positions.len())
-        .into_par_iter()
-        .map(|i| {
-            let vi = vel(i);
-            let mut w = DVec3::ZERO;
-            it.for_each_near(h.positions[i], |j, d, _, slope| {
-                w += (d * slope).cross(vel(j) - vi) * f64::from(vol[j]);
-            });
-            w.length() as f32
-        })
-        .collect()
+    it.velocity_sums(
+        first,
+        |w: &mut DVec3, grad, dv, volume| *w += grad.cross(dv) * volume,
+        |w| w.length() as f32,
+    )
 }

@@ -4,6 +4,7 @@
 //! a value does not depend on the thread that asks and the correction can reach 1e-5.
 
 use glam::{DVec3, IVec3, Vec3};
+use rayon::prelude::*;
 
 use crate::neighbours::handler_array::HandlerArray;
 
@@ -69,6 +70,34 @@ impl Interpolant {
                 }
             }
         });
+    }
+
+    /// At every particle i, in handler order: `finish` of what `add(sum, ∇W_ij, v_j − v_i, V_j)`
+    /// sums over the particles j near it, v the velocity in channels `first..first + 3`. The
+    /// difference form of the SPH velocity derivatives (vorticity, gradient), in parallel.
+    pub(crate) fn velocity_sums<S: Default>(
+        &self,
+        first: usize,
+        add: impl Fn(&mut S, DVec3, DVec3, f64) + Sync,
+        finish: impl Fn(S) -> f32 + Sync,
+    ) -> Vec<f32> {
+        let h = &self.handlers;
+        let (v, vol) = (
+            &h.channels[first..first + 3],
+            &h.channels[self.channels.volume],
+        );
+        let vel = |j: usize| DVec3::new(v[0][j].into(), v[1][j].into(), v[2][j].into());
+        (0..h.positions.len())
+            .into_par_iter()
+            .map(|i| {
+                let vi = vel(i);
+                let mut sum = S::default();
+                self.for_each_near(h.positions[i], |j, d, _, slope| {
+                    add(&mut sum, d * slope, vel(j) - vi, f64::from(vol[j]));
+                });
+                finish(sum)
+            })
+            .collect()
     }
 
     /// The mean number of other particles whose kernel reaches a particle, over at most
