@@ -2,6 +2,8 @@
 //! compressed rows (CSR): the one-ring that smoothing, vertex normals and component labels read,
 //! and the counting pass that the decimation's working stars share.
 
+use rayon::prelude::*;
+
 /// For vertex `v`, `corners[offsets[v]..offsets[v + 1]]` are its corners `3 f + k` (vertex
 /// `v` is corner `k` of triangle `f`), in increasing order (so whatever reads them sums in the
 /// same order on any thread count). [`VertexFaces::neighbours`] reads the vertex that follows
@@ -39,7 +41,7 @@ impl VertexFaces {
 
     /// The corners of `v`.
     #[inline]
-    fn row(&self, v: usize) -> &[u32] {
+    pub(crate) fn row(&self, v: usize) -> &[u32] {
         &self.corners[self.offsets[v] as usize..self.offsets[v + 1] as usize]
     }
 
@@ -63,11 +65,62 @@ impl VertexFaces {
         v: usize,
     ) -> impl ExactSizeIterator<Item = u32> + 'a {
         let indices = triangles.as_flattened();
-        self.row(v).iter().map(move |&c| {
-            let next = if c % 3 == 2 { c - 2 } else { c + 1 };
-            indices[next as usize]
-        })
+        self.row(v)
+            .iter()
+            .map(move |&c| indices[next_corner(c) as usize])
     }
+}
+
+/// Each vertex's neighbours as rows beside its [`VertexFaces`] (the same row starts): the vertex
+/// after it in each of its triangles, in the order of its corners (so each neighbour once on a
+/// closed oriented manifold). Smoothing reads the rings dozens of times a mesh: stored, a step
+/// reads one array instead of corners and then triangles, a third faster for 4 bytes a corner.
+#[derive(Debug, Clone, Default)]
+pub struct Neighbours {
+    faces: VertexFaces,
+    next: Vec<u32>,
+}
+
+impl Neighbours {
+    /// The neighbours of `faces`, the rows of `triangles`, kept beside them.
+    pub fn new(faces: VertexFaces, triangles: &[[u32; 3]]) -> Neighbours {
+        let indices = triangles.as_flattened();
+        let next = faces
+            .corners
+            .par_iter()
+            .with_min_len(1 << 14)
+            .map(|&c| indices[next_corner(c) as usize])
+            .collect();
+        Neighbours { faces, next }
+    }
+
+    /// The triangles' rows.
+    pub fn faces(&self) -> &VertexFaces {
+        &self.faces
+    }
+
+    /// The triangles' rows, the neighbours freed.
+    pub fn into_faces(self) -> VertexFaces {
+        self.faces
+    }
+
+    /// The number of vertices.
+    pub fn vertices(&self) -> usize {
+        self.faces.offsets.len().saturating_sub(1)
+    }
+
+    /// The neighbours of `v`.
+    #[inline]
+    pub fn of(&self, v: usize) -> &[u32] {
+        let offsets = &self.faces.offsets;
+        &self.next[offsets[v] as usize..offsets[v + 1] as usize]
+    }
+}
+
+/// The corner after corner `c` of the same triangle.
+#[inline]
+pub(crate) fn next_corner(c: u32) -> u32 {
+    if c % 3 == 2 { c - 2 } else { c + 1 }
 }
 
 /// The triangles around each vertex as rows: `offsets` gets `vertices + 1` row starts and

@@ -11,9 +11,9 @@
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
-use super::adjacency::VertexFaces;
+use super::adjacency::{Neighbours, VertexFaces};
 use super::refinement::refine_bends;
-use super::smoothing::{relax_tangentially, taubin};
+use super::smoothing::{relax_tangentially, taubin, vertex_normals};
 use super::stars::{area_weighted_normals, validate};
 use super::topology::topology;
 use super::volume::{Components, Measures, normals_and_measures, particles_inside, restore};
@@ -286,15 +286,14 @@ fn smooth_and_restore(
         normals,
         triangles,
     } = mesh;
-    let mut rings = VertexFaces::new(vertices.len(), triangles);
-    let mut components = Components::new(triangles, &rings);
+    let mut rings = Neighbours::new(VertexFaces::new(vertices.len(), triangles), triangles);
+    let mut components = Components::new(&rings);
     let raw_volumes = components.volumes_and_areas(vertices, triangles);
     let (lambda, mu) = (config.lambda, config.mu);
     let mut scratch = vec![Vec3::ZERO; vertices.len()];
     taubin(
         vertices,
         &mut scratch,
-        triangles,
         &rings,
         config.smoothing_iterations,
         lambda,
@@ -302,7 +301,7 @@ fn smooth_and_restore(
     );
     normals.resize(vertices.len(), Vec3::ZERO);
     let mut measures = Measures::default();
-    normals_and_measures(vertices, triangles, &rings, normals, &mut measures);
+    normals_and_measures(vertices, triangles, rings.faces(), normals, &mut measures);
 
     let targets: Vec<f64> = match volumes {
         _ if config.volume_rounds + config.volume_steps == 0 => Vec::new(),
@@ -327,32 +326,34 @@ fn smooth_and_restore(
     };
     let max_step = config.max_offset * spacing;
     for _ in 0..config.volume_rounds {
-        taubin(vertices, &mut scratch, triangles, &rings, 1, lambda, mu);
-        normals_and_measures(vertices, triangles, &rings, normals, &mut measures);
+        taubin(vertices, &mut scratch, &rings, 1, lambda, mu);
+        normals_and_measures(vertices, triangles, rings.faces(), normals, &mut measures);
         restore(
             vertices,
             normals,
             &mut measures,
             triangles,
-            &rings,
+            rings.faces(),
             &components,
             &targets,
             1,
             max_step,
         );
     }
-    normals_and_measures(vertices, triangles, &rings, normals, &mut measures);
+    // The normals for the refinement and the relaxation; the measures are made anew after
+    // them, at the refined size, once the neighbours and the scratch are freed.
+    measures = Measures::default();
+    vertex_normals(vertices, triangles, rings.faces(), normals);
     if config.refine_angle > 0.0 {
-        // The scratch is made anew at the refined size, not held through the refinement.
         drop(std::mem::take(&mut scratch));
         let parents = refine_bends(
             vertices,
             normals,
             triangles,
-            std::mem::take(&mut rings),
+            std::mem::take(&mut rings).into_faces(),
             config.refine_angle.to_radians(),
         );
-        rings = VertexFaces::new(vertices.len(), triangles);
+        rings = Neighbours::new(VertexFaces::new(vertices.len(), triangles), triangles);
         // A new vertex joins its edge's component; the numbering stays the same.
         components.of_vertex.reserve_exact(parents.len());
         for p in parents {
@@ -365,11 +366,12 @@ fn smooth_and_restore(
         vertices,
         &mut scratch,
         normals,
-        triangles,
         &rings,
         config.relax_iterations,
         0.5,
     );
+    drop(scratch);
+    let rings = rings.into_faces();
     normals_and_measures(vertices, triangles, &rings, normals, &mut measures);
     restore(
         vertices,

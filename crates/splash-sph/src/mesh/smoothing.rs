@@ -7,7 +7,7 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::adjacency::VertexFaces;
+use super::adjacency::{Neighbours, VertexFaces};
 
 /// Vertices per parallel task: large enough to amortise the task, small enough to balance.
 const CHUNK: usize = 4096;
@@ -18,43 +18,36 @@ const CHUNK: usize = 4096;
 pub fn taubin(
     vertices: &mut [Vec3],
     scratch: &mut [Vec3],
-    triangles: &[[u32; 3]],
-    rings: &VertexFaces,
+    rings: &Neighbours,
     iterations: u32,
     lambda: f32,
     mu: f32,
 ) {
     debug_assert_eq!(vertices.len(), scratch.len());
     for _ in 0..iterations {
-        umbrella_step(vertices, scratch, triangles, rings, lambda);
-        umbrella_step(scratch, vertices, triangles, rings, mu);
+        umbrella_step(vertices, scratch, rings, lambda);
+        umbrella_step(scratch, vertices, rings, mu);
     }
 }
 
 /// The umbrella operator: the mean of `v`'s neighbours minus `v`.
 #[inline]
-fn umbrella(from: &[Vec3], triangles: &[[u32; 3]], rings: &VertexFaces, v: usize) -> Vec3 {
-    let ring = rings.neighbours(triangles, v);
+fn umbrella(from: &[Vec3], rings: &Neighbours, v: usize) -> Vec3 {
+    let ring = rings.of(v);
     let n = ring.len();
     if n == 0 {
         return Vec3::ZERO;
     }
-    let sum: Vec3 = ring.map(|u| from[u as usize]).sum();
+    let sum: Vec3 = ring.iter().map(|&u| from[u as usize]).sum();
     sum / n as f32 - from[v]
 }
 
 /// `to[v] = from[v] + factor · umbrella(v)`.
-fn umbrella_step(
-    from: &[Vec3],
-    to: &mut [Vec3],
-    triangles: &[[u32; 3]],
-    rings: &VertexFaces,
-    factor: f32,
-) {
+fn umbrella_step(from: &[Vec3], to: &mut [Vec3], rings: &Neighbours, factor: f32) {
     to.par_chunks_mut(CHUNK).enumerate().for_each(|(c, out)| {
         for (k, slot) in out.iter_mut().enumerate() {
             let v = c * CHUNK + k;
-            *slot = from[v] + factor * umbrella(from, triangles, rings, v);
+            *slot = from[v] + factor * umbrella(from, rings, v);
         }
     });
 }
@@ -89,8 +82,7 @@ pub fn relax_tangentially(
     vertices: &mut [Vec3],
     scratch: &mut [Vec3],
     normals: &[Vec3],
-    triangles: &[[u32; 3]],
-    rings: &VertexFaces,
+    rings: &Neighbours,
     iterations: u32,
     factor: f32,
 ) {
@@ -102,7 +94,7 @@ pub fn relax_tangentially(
             .for_each(|(c, out)| {
                 for (k, slot) in out.iter_mut().enumerate() {
                     let v = c * CHUNK + k;
-                    let (step, n) = (umbrella(from, triangles, rings, v), normals[v]);
+                    let (step, n) = (umbrella(from, rings, v), normals[v]);
                     *slot = from[v] + factor * (step - step.dot(n) * n);
                 }
             });

@@ -6,7 +6,7 @@
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 
-use super::adjacency::VertexFaces;
+use super::adjacency::{Neighbours, VertexFaces};
 
 /// The connected components of a mesh (vertex connectivity through triangles).
 #[derive(Debug, Clone)]
@@ -19,14 +19,14 @@ pub struct Components {
 }
 
 impl Components {
-    /// Labels the components by a walk over the neighbour rows (`rings` those of `triangles`).
-    pub fn new(triangles: &[[u32; 3]], rings: &VertexFaces) -> Components {
-        let n = rings.offsets.len() - 1;
+    /// Labels the components by a walk over the neighbour rows.
+    pub fn new(rings: &Neighbours) -> Components {
+        let n = rings.vertices();
         let mut of_vertex = vec![u32::MAX; n];
         let mut queue = Vec::new();
         let mut count = 0u32;
         for seed in 0..n {
-            if of_vertex[seed] != u32::MAX || rings.is_empty(seed) {
+            if of_vertex[seed] != u32::MAX || rings.of(seed).is_empty() {
                 continue;
             }
             of_vertex[seed] = count;
@@ -34,7 +34,7 @@ impl Components {
             while let Some(v) = queue.pop() {
                 // Every edge is walked away from one of its ends by some triangle, so the
                 // neighbour rows reach the whole component.
-                for u in rings.neighbours(triangles, v as usize) {
+                for &u in rings.of(v as usize) {
                     if of_vertex[u as usize] == u32::MAX {
                         of_vertex[u as usize] = count;
                         queue.push(u);
