@@ -9,6 +9,7 @@
 
 use glam::Vec3;
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicU32, Ordering};
 
 use super::adjacency::VertexFaces;
 
@@ -19,36 +20,46 @@ const NONE: u32 = u32::MAX;
 
 /// Across each edge `t[k] → t[k + 1]` of each triangle, the triangle `g` on the other side and
 /// the corner `j` of its reverse edge, packed as `3·g + j` ([`NONE`] unless the edge has exactly
-/// one triangle on each side, oriented oppositely: each corner looks for its reverse edge in
-/// the row of its second vertex, and a pair counts only where both find each other).
-fn twins(triangles: &[[u32; 3]], rings: &VertexFaces) -> Vec<[u32; 3]> {
-    let mut twin: Vec<[u32; 3]> = triangles
-        .par_iter()
+/// one triangle on each side, oriented oppositely). Row by row: the edges out of a vertex and
+/// the edges into it are the next and previous corners of its own row's triangles, so each row
+/// pairs its own corners, reading each triangle three times in all rather than once per corner
+/// of every neighbour; a pair counts only where both ends find each other.
+fn twins(triangles: &[[u32; 3]], rings: VertexFaces) -> Vec<[u32; 3]> {
+    let indices = triangles.as_flattened();
+    let (next, prev) = (
+        |c: u32| c - c % 3 + (c + 1) % 3,
+        |c: u32| c - c % 3 + (c + 2) % 3,
+    );
+    // Every corner lies in exactly one row, which alone writes it.
+    let found: Vec<AtomicU32> = (0..indices.len()).map(|_| AtomicU32::new(NONE)).collect();
+    (0..rings.offsets.len() - 1)
+        .into_par_iter()
         .with_min_len(CHUNK)
-        .map(|t| {
-            std::array::from_fn(|k| {
-                let (a, b) = (t[k], t[(k + 1) % 3]);
-                let mut found = NONE;
-                for (u, f) in rings
-                    .neighbours(triangles, b as usize)
-                    .zip(rings.of(b as usize))
-                {
-                    if u == a {
-                        if found != NONE {
-                            return NONE;
+        .for_each(|v| {
+            let row = rings.row(v);
+            for &c in row {
+                // The edge v → u out of corner c meets u → v, ending at a corner of this row.
+                let u = indices[next(c) as usize];
+                let mut twin = NONE;
+                for &d in row {
+                    if indices[prev(d) as usize] == u {
+                        if twin != NONE {
+                            twin = NONE;
+                            break;
                         }
-                        found = f as u32;
+                        twin = prev(d);
                     }
                 }
-                if found == NONE {
-                    return NONE;
-                }
-                let u = triangles[found as usize];
-                let j = (0..3).find(|&j| u[j] == b).unwrap_or(0);
-                3 * found + j as u32
-            })
-        })
+                found[c as usize].store(twin, Ordering::Relaxed);
+            }
+        });
+    drop(rings);
+    let mut twin: Vec<[u32; 3]> = found
+        .par_chunks(3)
+        .with_min_len(CHUNK)
+        .map(|c| std::array::from_fn(|k| c[k].load(Ordering::Relaxed)))
         .collect();
+    drop(found);
     let asymmetric: Vec<u32> = (0..3 * triangles.len() as u32)
         .into_par_iter()
         .with_min_len(3 * CHUNK)
@@ -100,8 +111,7 @@ fn bisect(
     rings: VertexFaces,
     angle: f32,
 ) -> (Vec<u32>, Vec<[u32; 3]>) {
-    let twin = twins(triangles, &rings);
-    drop(rings);
+    let twin = twins(triangles, rings);
     let ids =
         |f: usize| -> [u32; 3] { std::array::from_fn(|k| edge_id((3 * f + k) as u32, twin[f][k])) };
     let face_normal = |f: usize| {
@@ -197,60 +207,87 @@ fn bisect(
     for &code in &codes {
         start.push(start[start.len() - 1] + layouts[code as usize].count as u32);
     }
-    // Each triangle's pieces in place of the triangles, from the last triangle back (piece
-    // `start[f]` never comes before triangle `f`, so no triangle is overwritten before it is
-    // read): one array of triangles at a time, not two. Serial, a few ms a million.
+    // Each triangle's pieces at `start[f]..start[f + 1]` of a new array, in parallel over runs
+    // of triangles. (Both arrays are held for a moment; the peak comes later, in the
+    // relaxation of the refined mesh.)
     let old = triangles.len();
     let total = start[old] as usize;
-    triangles.resize(total, [0; 3]);
-    for f in (0..old).rev() {
-        let t = triangles[f];
-        let e = ids(f);
-        let mids: [u32; 3] = std::array::from_fn(|k| {
-            if codes[f] >> k & 1 == 1 {
-                midpoint(e[k])
-            } else {
-                NONE
+    let mut pieces = vec![[0u32; 3]; total];
+    runs(&mut pieces, &start)
+        .into_par_iter()
+        .for_each(|(first, out)| {
+            let mut out = out.iter_mut();
+            for f in first..(first + CHUNK).min(old) {
+                let t = triangles[f];
+                let e = ids(f);
+                let mids: [u32; 3] = std::array::from_fn(|k| {
+                    if codes[f] >> k & 1 == 1 {
+                        midpoint(e[k])
+                    } else {
+                        NONE
+                    }
+                });
+                let ends = [t[0], t[1], t[2], mids[0], mids[1], mids[2]];
+                let layout = &layouts[codes[f] as usize];
+                for (slots, piece) in layout.pieces[..layout.count].iter().zip(out.by_ref()) {
+                    *piece = slots.map(|s| ends[s as usize]);
+                }
             }
         });
-        let ends = [t[0], t[1], t[2], mids[0], mids[1], mids[2]];
-        let layout = &layouts[codes[f] as usize];
-        let out = &mut triangles[start[f] as usize..start[f + 1] as usize];
-        for (piece, slots) in out.iter_mut().zip(&layout.pieces) {
-            *piece = slots.map(|s| ends[s as usize]);
-        }
-    }
+    *triangles = pieces;
     drop(bisected);
-    // The refined mesh's twins from the old ones, in place the same way: a piece's edge on half
-    // `h` of its parent's edge `k` meets the other half (or the whole edge) of the twin
-    // triangle's edge.
-    let mut twin = twin;
-    twin.resize(total, [NONE; 3]);
-    for f in (0..old).rev() {
-        let tw = twin[f];
-        let layout = &layouts[codes[f] as usize];
-        let out = &mut twin[start[f] as usize..start[f + 1] as usize];
-        for (piece, edges) in out.iter_mut().zip(&layout.edges) {
-            *piece = edges.map(|edge| match edge {
-                Edge::Inner(p, i) => 3 * (start[f] + u32::from(p)) + u32::from(i),
-                Edge::Side(k, h) => {
-                    let o = tw[k as usize];
-                    if o == NONE {
-                        return NONE;
-                    }
-                    let (g, j) = ((o / 3) as usize, (o % 3) as usize);
-                    let half = if codes[f] >> k & 1 == 1 { 1 - h } else { 0 };
-                    3 * start[g] + u32::from(layouts[codes[g] as usize].sides[j][half as usize])
+    // The refined mesh's twins from the old ones the same way: a piece's edge on half `h` of
+    // its parent's edge `k` meets the other half (or the whole edge) of the twin triangle's
+    // edge.
+    let mut refined = vec![[NONE; 3]; total];
+    runs(&mut refined, &start)
+        .into_par_iter()
+        .for_each(|(first, out)| {
+            let mut out = out.iter_mut();
+            for f in first..(first + CHUNK).min(old) {
+                let tw = twin[f];
+                let layout = &layouts[codes[f] as usize];
+                for (edges, piece) in layout.edges[..layout.count].iter().zip(out.by_ref()) {
+                    *piece = edges.map(|edge| match edge {
+                        Edge::Inner(p, i) => 3 * (start[f] + u32::from(p)) + u32::from(i),
+                        Edge::Side(k, h) => {
+                            let o = tw[k as usize];
+                            if o == NONE {
+                                return NONE;
+                            }
+                            let (g, j) = ((o / 3) as usize, (o % 3) as usize);
+                            let half = if codes[f] >> k & 1 == 1 { 1 - h } else { 0 };
+                            3 * start[g]
+                                + u32::from(layouts[codes[g] as usize].sides[j][half as usize])
+                        }
+                    });
                 }
-            });
-        }
-    }
+            }
+        });
+    drop(twin);
+    let twin = refined;
     drop((codes, start));
     vertices.reserve_exact(mids.len());
     vertices.extend(mids);
     normals.reserve_exact(mid_normals.len());
     normals.extend(mid_normals);
     (parents, twin)
+}
+
+/// `out`, the refined triangles (or their twins), cut into the slots of runs of [`CHUNK`]
+/// triangles (`start` as in [`bisect`]): each run's first triangle and its pieces' slots.
+fn runs<'a, T>(mut out: &'a mut [T], start: &[u32]) -> Vec<(usize, &'a mut [T])> {
+    let old = start.len() - 1;
+    (0..old)
+        .step_by(CHUNK)
+        .map(|first| {
+            let end = (first + CHUNK).min(old);
+            let len = (start[end] - start[first]) as usize;
+            let (run, rest) = std::mem::take(&mut out).split_at_mut(len);
+            out = rest;
+            (first, run)
+        })
+        .collect()
 }
 
 /// The index (0 for `ab`, 1 for `bc`, 2 for `ca`) of the longest splittable edge of `t`, ties
@@ -590,6 +627,45 @@ mod tests {
         assert!(bumpiness(&out) < bumpiness(&mesh));
     }
 
+    /// Twins from a map of directed edges, the reference for the rows' pairing: an edge used
+    /// once each way pairs, any other has no twin.
+    fn twins_by_edges(triangles: &[[u32; 3]]) -> Vec<[u32; 3]> {
+        let mut edges: std::collections::HashMap<(u32, u32), Vec<u32>> = Default::default();
+        for (f, t) in triangles.iter().enumerate() {
+            for k in 0..3 {
+                let corner = (3 * f + k) as u32;
+                edges
+                    .entry((t[k], t[(k + 1) % 3]))
+                    .or_default()
+                    .push(corner);
+            }
+        }
+        let twin = |a: u32, b: u32| match (edges[&(a, b)].as_slice(), edges.get(&(b, a))) {
+            ([_], Some(back)) if back.len() == 1 => back[0],
+            _ => NONE,
+        };
+        triangles
+            .iter()
+            .map(|t| std::array::from_fn(|k| twin(t[k], t[(k + 1) % 3])))
+            .collect()
+    }
+
+    #[test]
+    fn twins_pair_each_edge_used_once_each_way_and_no_other() {
+        let closed = torus(12, 8, 1.0, 0.3, 0.0).triangles;
+        // A hole (boundary edges), a triangle used twice (edges used twice one way) and one
+        // that repeats a vertex.
+        let mut broken = closed.clone();
+        broken.remove(5);
+        broken.push(broken[20]);
+        broken.push([broken[40][0], broken[40][1], broken[40][0]]);
+        for triangles in [closed, broken] {
+            let n = 1 + triangles.iter().flatten().max().copied().unwrap_or(0) as usize;
+            let rows = VertexFaces::new(n, &triangles);
+            assert_eq!(twins(&triangles, rows), twins_by_edges(&triangles));
+        }
+    }
+
     #[test]
     fn the_bisected_meshs_twins_are_those_found_from_its_rows() {
         // A coarse torus with its vertices jittered, refined at several angles, meets every
@@ -611,7 +687,7 @@ mod tests {
             );
             assert!(!parents.is_empty() && mesh.triangles.len() > before);
             let rows = VertexFaces::new(mesh.vertices.len(), &mesh.triangles);
-            assert_eq!(twin, twins(&mesh.triangles, &rows), "at {degrees}°");
+            assert_eq!(twin, twins(&mesh.triangles, rows), "at {degrees}°");
         }
     }
 
