@@ -1,14 +1,20 @@
 //! Numbers as text for the text mesh formats: an `f32` byte for byte as Rust's `{}` prints it
-//! (the shortest decimal that reads back as the same `f32`, never in exponent form), from
-//! Żmij's shortest digits (Zverovich 2025) at a fraction of `fmt`'s cost; integers by `itoa`.
+//! (the shortest decimal that reads back as the same `f32`, never in exponent form), by
+//! Schubfach (Giulietti 2020, exact in 128-bit integers over the range meshes use) or else from
+//! Żmij's shortest digits (Zverovich 2025), at a fraction of `fmt`'s cost; integers likewise.
+//!
+//! Each number is composed in registers and stored with fixed-size stores into reserved spare
+//! capacity (the bytes past the number's end are overwritten by the next one): copies of a
+//! variable length are calls to `memmove`, which cost as much as the digits.
 
 use std::fmt::Write as _;
+use std::mem::MaybeUninit;
 
 /// Appends `values` as [`push_f32`] prints them, `separator` between them.
-pub(crate) fn push_f32s(
+pub(crate) fn push_f32s<const S: usize>(
     out: &mut Vec<u8>,
     values: impl IntoIterator<Item = f32>,
-    separator: &[u8],
+    separator: &[u8; S],
 ) {
     for (k, x) in values.into_iter().enumerate() {
         if k > 0 {
@@ -18,7 +24,8 @@ pub(crate) fn push_f32s(
     }
 }
 
-/// Appends `x` as `format!("{x}")` would.
+/// Appends `x` as `format!("{x}")` would: by [`schubfach`] where it applies (all but a few
+/// coordinates of a mesh), else as follows.
 ///
 /// Żmij and `fmt` pick the same shortest digits but for one case: when the two nearest
 /// shortest candidates are exactly equally far from `x`, Żmij rounds to even and `fmt` up.
@@ -26,6 +33,9 @@ pub(crate) fn push_f32s(
 /// shortest (at most 10 digits), which only the few floats of [`tie_possible`] have; those are
 /// printed by `fmt` itself.
 pub(crate) fn push_f32(out: &mut Vec<u8>, x: f32) {
+    if schubfach(out, x) {
+        return;
+    }
     if tie_possible(x) {
         let mut text = String::with_capacity(48);
         // Writing into a String cannot fail.
@@ -129,7 +139,7 @@ fn positional(out: &mut Vec<u8>, mantissa: &[u8], exponent: &[u8]) {
 }
 
 /// Appends `values` in decimal, `separator` between them.
-pub(crate) fn push_ints(out: &mut Vec<u8>, values: [u32; 3], separator: &[u8]) {
+pub(crate) fn push_ints<const S: usize>(out: &mut Vec<u8>, values: [u32; 3], separator: &[u8; S]) {
     for (k, i) in values.into_iter().enumerate() {
         if k > 0 {
             out.extend_from_slice(separator);
@@ -140,8 +150,240 @@ pub(crate) fn push_ints(out: &mut Vec<u8>, values: [u32; 3], separator: &[u8]) {
 
 /// Appends `i` in decimal.
 #[inline]
-pub(crate) fn push_int(out: &mut Vec<u8>, i: impl itoa::Integer) {
-    out.extend_from_slice(itoa::Buffer::new().format(i).as_bytes());
+pub(crate) fn push_int(out: &mut Vec<u8>, i: impl Into<u64>) {
+    let i = i.into();
+    if i >= DIGITS_LIMIT {
+        out.extend_from_slice(itoa::Buffer::new().format(i).as_bytes());
+        return;
+    }
+    let (text, n) = decimal(i);
+    let mut spare = Spare::of(out);
+    spare.put16(0, text);
+    spare.commit(n);
+}
+
+/// Appends `[prefix]a[infix]a` for `a` = `i` in decimal: an OBJ face corner `a//a`, whose
+/// vertex and normal indices are one.
+#[inline]
+pub(crate) fn push_int_twice(out: &mut Vec<u8>, prefix: u8, i: u64, infix: [u8; 2]) {
+    if i >= DIGITS_LIMIT {
+        let mut text = itoa::Buffer::new();
+        let text = text.format(i).as_bytes();
+        out.push(prefix);
+        out.extend_from_slice(text);
+        out.extend_from_slice(&infix);
+        out.extend_from_slice(text);
+        return;
+    }
+    let (text, n) = decimal(i);
+    let mut spare = Spare::of(out);
+    spare.put1(0, prefix);
+    spare.put16(1, text);
+    spare.put1(1 + n, infix[0]);
+    spare.put1(2 + n, infix[1]);
+    spare.put16(3 + n, text);
+    spare.commit(3 + 2 * n);
+}
+
+/// [`digits`] of `v`, by [`digits9`] where it can (a mesh's indices all, or none).
+#[inline]
+fn decimal(v: u64) -> (u128, usize) {
+    if v < 1_000_000_000 {
+        digits9(v)
+    } else {
+        digits(v)
+    }
+}
+
+/// [`digits`] takes numbers below this.
+const DIGITS_LIMIT: u64 = 10_u64.pow(16);
+
+/// Sixteen `'0'`s, as the bytes of a little-endian `u128`.
+const ZEROS: u128 = u128::from_le_bytes([b'0'; 16]);
+
+/// The decimal digits of `v` < 10^16 as the bytes of a little-endian `u128` (the first digit
+/// in the lowest byte), followed by `'0'`s, and their count. Computed in registers, by
+/// splitting 8-digit halves into 4, 2 and 1 digit lanes: digits stored byte by byte and read
+/// back as one word would stall on the store-to-load forwarding.
+#[inline]
+fn digits(v: u64) -> (u128, usize) {
+    debug_assert!(v < DIGITS_LIMIT);
+    let (high, low) = (v / 100_000_000, v % 100_000_000);
+    let raw = u128::from(digits8(high)) | u128::from(digits8(low)) << 64;
+    // Leading zero digits are the zero bytes at the low end.
+    let leading = ((raw.trailing_zeros() / 8) as usize).min(15);
+    ((raw >> (8 * leading)) | ZEROS, 16 - leading)
+}
+
+/// [`digits`] of `v` < 10^9, with one 8-digit conversion instead of two.
+#[inline]
+fn digits9(v: u64) -> (u128, usize) {
+    debug_assert!(v < 1_000_000_000);
+    let raw = u128::from(v / 100_000_000) | u128::from(digits8(v % 100_000_000)) << 8;
+    let leading = ((raw.trailing_zeros() / 8) as usize).min(8);
+    ((raw >> (8 * leading)) | ZEROS, 9 - leading)
+}
+
+/// The 8 decimal digits of `v` < 10^8, leading zeros included, as byte values 0–9 of a
+/// little-endian `u64`, the first digit in the lowest byte.
+#[inline]
+fn digits8(v: u64) -> u64 {
+    // Two 4-digit lanes of 32 bits: the first four digits in the low lane.
+    let y = v / 10_000 | (v % 10_000) << 32;
+    // Two-digit lanes of 16 bits: ⌊y/100⌋ as y·10486 >> 20, exact below 10^4.
+    let high = (y * 10_486 >> 20) & 0x0000_007f_0000_007f;
+    let y = high | (y - high * 100) << 16;
+    // One-digit lanes of 8 bits: ⌊y/10⌋ as y·103 >> 10, exact below 100.
+    let high = (y * 103 >> 10) & 0x000f_000f_000f_000f;
+    high | (y - high * 10) << 8
+}
+
+/// The 64 bytes of spare capacity reserved at the end of a `Vec`, written by fixed-size stores
+/// (a store past the number's end is harmless: the next number overwrites it) and committed.
+struct Spare<'a> {
+    out: &'a mut Vec<u8>,
+}
+
+impl<'a> Spare<'a> {
+    #[inline]
+    fn of(out: &'a mut Vec<u8>) -> Self {
+        out.reserve(64);
+        Self { out }
+    }
+
+    #[inline]
+    fn bytes(&mut self) -> &mut [MaybeUninit<u8>; 64] {
+        (&mut self.out.spare_capacity_mut()[..64])
+            .try_into()
+            .expect("64 bytes reserved")
+    }
+
+    #[inline]
+    fn put1(&mut self, at: usize, byte: u8) {
+        self.bytes()[at].write(byte);
+    }
+
+    #[inline]
+    fn put16(&mut self, at: usize, word: u128) {
+        let bytes = word.to_le_bytes().map(MaybeUninit::new);
+        self.bytes()[at..at + 16].copy_from_slice(&bytes);
+    }
+
+    /// Appends the first `len` bytes written.
+    #[inline]
+    fn commit(self, len: usize) {
+        assert!(len <= 64);
+        // SAFETY: the caller wrote the first `len` bytes of the spare capacity.
+        unsafe { self.out.set_len(self.out.len() + len) };
+    }
+}
+
+/// Powers of ten up to 10^19, the largest below 2^64.
+const POW10: [u64; 20] = {
+    let mut p = [1u64; 20];
+    let mut k = 1;
+    while k < 20 {
+        p[k] = p[k - 1] * 10;
+        k += 1;
+    }
+    p
+};
+
+/// Appends `x` as `{}` prints it and returns true, if `x` is a normal float of 2^-40 ≤ |x| <
+/// 2^24 whose significand is not a power of two (those have an uneven rounding interval) and
+/// whose two nearest shortest candidates are not equally near (where `fmt` and Schubfach
+/// round differently); else appends nothing and returns false.
+///
+/// Schubfach (Giulietti 2020, "The Schubfach way to render doubles", sections 8–9): with
+/// x = c·2^q, k = ⌊q·log10 2⌋ and the rounding interval's bounds and x scaled by 4·10^−k (so
+/// that the interval is 1 to 10 units wide), the shortest decimal is the one multiple of 10
+/// in the interval if there is one, else the nearer of the two integers around x. Here the
+/// scaling is exact: 10^−k ≤ 10^19 and c < 2^24 fit 128 bits, and a value's fraction below
+/// the units survives as a sticky low bit (round to odd), which keeps every comparison exact.
+#[inline]
+fn schubfach(out: &mut Vec<u8>, x: f32) -> bool {
+    let bits = x.to_bits();
+    let biased = (bits >> 23) & 0xff;
+    let fraction = bits & 0x7f_ffff;
+    // |x| = c·2^−shift.
+    let shift = 150 - biased as i32;
+    if fraction == 0 || !(1..=63).contains(&shift) {
+        return false;
+    }
+    let c = u64::from(fraction | 1 << 23);
+    let shift = shift as u32;
+    let (mut d, mut e);
+    if shift <= 23 && c & ((1 << shift) - 1) == 0 {
+        // A whole number, printed whole.
+        (d, e) = (c >> shift, 0);
+    } else {
+        // k = ⌊−shift·log10 2⌋, from −19 to −1.
+        let k = ((-i64::from(shift) * 661_971_961_083) >> 41) as i32;
+        let scale = u128::from(POW10[(-k) as usize]);
+        // ⌊v / 2^shift⌋ with a sticky low bit; shift < 64.
+        let round_to_odd = |v: u128| {
+            let (high, low) = ((v >> 64) as u64, v as u64);
+            let floor = high << (64 - shift) | low >> shift;
+            floor | u64::from(low & ((1 << shift) - 1) != 0)
+        };
+        let v = u128::from(c << 2) * scale;
+        let (vb, vbl, vbr) = (
+            round_to_odd(v),
+            round_to_odd(v - 2 * scale),
+            round_to_odd(v + 2 * scale),
+        );
+        // Bounds are in the interval for an even c, out for an odd one.
+        let open = c & 1;
+        let s = vb >> 2;
+        let sp10 = s / 10 * 10;
+        let tp10 = sp10 + 10;
+        let upin = vbl + open <= sp10 << 2;
+        let wpin = (tp10 << 2) + open <= vbr;
+        let t = s + 1;
+        let uin = vbl + open <= s << 2;
+        let win = (t << 2) + open <= vbr;
+        let midpoint = (s << 2) + 2;
+        if upin == wpin && uin == win && vb == midpoint {
+            // A tie: `fmt` rounds up, Schubfach to even; left to `fmt`.
+            return false;
+        }
+        // Selected without branches, which the digits would make unpredictable.
+        let longer = s + u64::from(if uin != win { win } else { vb > midpoint });
+        // The shorter candidate ends in a zero: dropped here, so that the loop below rarely
+        // turns.
+        let shorter = if upin { sp10 / 10 } else { tp10 / 10 };
+        d = if upin != wpin { shorter } else { longer };
+        e = k + i32::from(upin != wpin);
+        while d % 10 == 0 {
+            d /= 10;
+            e += 1;
+        }
+    }
+    // |x| = d·10^e, d without trailing zeros but for whole numbers; d < 2^24·10 < 10^9.
+    let (text, n) = digits9(d);
+    let at = (bits >> 31) as usize;
+    let mut spare = Spare::of(out);
+    spare.put1(0, b'-');
+    // Digits before the decimal point.
+    let before = n as i32 + e;
+    let len = if e >= 0 {
+        // Whole: the digits, then e zeros; x < 2^24 has at most 8 digits.
+        spare.put16(at, text);
+        at + before as usize
+    } else if before > 0 {
+        let b = 8 * before as u32;
+        let point = (text & ((1 << b) - 1)) | u128::from(b'.') << b | (text >> b) << (b + 8);
+        spare.put16(at, point);
+        at + n + 1
+    } else {
+        // 0.000ddd: at most 12 zeros after the point for x ≥ 2^−40.
+        let zeros = (-before) as usize;
+        spare.put16(at, ZEROS & !(0xff << 8) | u128::from(b'.') << 8);
+        spare.put16(at + 2 + zeros, text);
+        at + 2 + zeros + n
+    };
+    spare.commit(len);
+    true
 }
 
 #[cfg(test)]
@@ -199,13 +441,33 @@ mod tests {
         }
     }
 
+    /// Schubfach's range (2^-40 ≤ |x| < 2^24) densely: every 997th bit pattern, both signs.
+    /// Every float of the range was checked this way once.
+    #[test]
+    fn schubfach_prints_as_fmt_prints() {
+        for bits in (0x2b80_0000u32..0x4b80_0000).step_by(997) {
+            check(f32::from_bits(bits));
+            check(-f32::from_bits(bits));
+        }
+    }
+
+    /// Every width from 1 to 20 digits, the edges of each, alone and twice (`a//a`).
     #[test]
     fn integers_print_in_decimal() {
-        let mut out = Vec::new();
-        for i in [0u32, 7, 10, 4_294_967_295] {
-            push_int(&mut out, i);
-            out.push(b' ');
+        let mut values = vec![0u64, u64::MAX];
+        for k in 1..20 {
+            let p = 10u64.pow(k);
+            values.extend([p - 1, p, p + 7]);
         }
-        assert_eq!(out, b"0 7 10 4294967295 ");
+        let (mut ours, mut expected) = (Vec::new(), String::new());
+        for i in values {
+            push_int(&mut ours, i);
+            push_int_twice(&mut ours, b' ', i, *b"//");
+            ours.push(b'\n');
+            expected += &format!("{i} {i}//{i}\n");
+        }
+        push_int(&mut ours, 4_294_967_295u32);
+        expected += "4294967295";
+        assert_eq!(String::from_utf8(ours).unwrap(), expected);
     }
 }

@@ -2,7 +2,9 @@
 
 use std::io::{self, Write};
 
-use super::float_text::push_f32s;
+use glam::Vec3;
+
+use super::float_text::{push_f32s, push_int, push_int_twice};
 use super::text_records::write_records;
 use crate::mesh::TriMesh;
 
@@ -16,26 +18,33 @@ pub(super) fn write(mesh: &TriMesh, out: &mut impl Write) -> io::Result<()> {
         mesh.vertices.len(),
         mesh.triangles.len()
     )?;
-    for (key, vectors) in [(&b"v "[..], &mesh.vertices), (b"vn ", &mesh.normals)] {
-        write_records(out, vectors.len(), |i, line| {
-            line.extend_from_slice(key);
-            push_f32s(line, vectors[i].to_array(), b" ");
-            line.push(b'\n');
-        })?;
-    }
+    vectors(out, b"v ", &mesh.vertices)?;
+    vectors(out, b"vn ", &mesh.normals)?;
     let with_normals = !mesh.normals.is_empty();
     write_records(out, mesh.triangles.len(), |i, line| {
         line.push(b'f');
-        let mut text = itoa::Buffer::new();
         for corner in mesh.triangles[i] {
-            let index = text.format(u64::from(corner) + 1).as_bytes();
-            line.push(b' ');
-            line.extend_from_slice(index);
+            let index = u64::from(corner) + 1;
             if with_normals {
-                line.extend_from_slice(b"//");
-                line.extend_from_slice(index);
+                push_int_twice(line, b' ', index, *b"//");
+            } else {
+                line.push(b' ');
+                push_int(line, index);
             }
         }
+        line.push(b'\n');
+    })
+}
+
+/// One `{key}x y z` line per vector.
+fn vectors<const K: usize>(
+    out: &mut impl Write,
+    key: &[u8; K],
+    vectors: &[Vec3],
+) -> io::Result<()> {
+    write_records(out, vectors.len(), |i, line| {
+        line.extend_from_slice(key);
+        push_f32s(line, vectors[i].to_array(), b" ");
         line.push(b'\n');
     })
 }
