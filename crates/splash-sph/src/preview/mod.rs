@@ -52,7 +52,7 @@ use crate::io::Attribute;
 pub use crate::config::preview::PreviewConfig;
 pub use camera::{Camera, parse_size, robust_bounds, up_vector};
 pub use colormap::{lightness, viridis, viridis_srgb};
-pub use fitted_bvh::{Aabb, BvhKind, BvhOptions, BvhStats, FittedBvh, SplitRule};
+pub use fitted_bvh::{Aabb, BvhKind, BvhOptions, BvhStats, FittedBvh, LEAF_K_COST, SplitRule};
 pub use legend::{bar_rect, label};
 pub use metaballs::Metaballs;
 pub use png_file::{Image, encode_png, write_png};

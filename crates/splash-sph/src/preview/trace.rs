@@ -46,10 +46,17 @@ pub struct RayCounts {
     pub leaves: u64,
     /// Entries of the lists of those leaves ("metaballs considered").
     pub metaballs: u64,
+    /// Σ n² over those leaves: the paper's model of their cost.
+    pub metaballs_squared: u64,
     /// Of those, the metaballs within R of the ray, whose polynomials were summed.
     pub along_ray: u64,
+    /// Terms of the field sums at pass 1's samples: the k metaballs along the ray times the
+    /// samples tested, the leaf test's part that grows as k².
+    pub terms: u64,
     /// Nodes visited by pass 2 (collecting the metaballs to refine a hit or walk out).
     pub refine_nodes: u64,
+    /// Metaballs pass 2 tested against the ray.
+    pub refine_metaballs: u64,
 }
 
 impl RayCounts {
@@ -59,8 +66,11 @@ impl RayCounts {
         self.nodes += o.nodes;
         self.leaves += o.leaves;
         self.metaballs += o.metaballs;
+        self.metaballs_squared += o.metaballs_squared;
         self.along_ray += o.along_ray;
+        self.terms += o.terms;
         self.refine_nodes += o.refine_nodes;
+        self.refine_metaballs += o.refine_metaballs;
     }
 }
 
@@ -302,6 +312,7 @@ impl<'a> Tracer<'a> {
         let list = &self.bvh.items[node.first as usize..(node.first + node.count) as usize];
         counts.leaves += 1;
         counts.metaballs += list.len() as u64;
+        counts.metaballs_squared += (list.len() * list.len()) as u64;
         let along = &mut scratch.along;
         along.clear();
         let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
@@ -330,10 +341,13 @@ impl<'a> Tracer<'a> {
         samples.extend(along.iter().map(|m| m.t).filter(|&t| t >= a0 && t <= b0));
         self.grid(a0, b0, samples);
         samples.sort_unstable_by(f32::total_cmp);
-        samples
-            .iter()
-            .copied()
-            .find(|&s| self.excess(along.iter(), s) >= 0.0)
+        let mut tested = 0;
+        let found = samples.iter().copied().find(|&s| {
+            tested += 1;
+            self.excess(along.iter(), s) >= 0.0
+        });
+        counts.terms += tested * along.len() as u64;
+        found
     }
 
     /// The multiples of the step in [`a`, `b`].
@@ -385,6 +399,7 @@ impl<'a> Tracer<'a> {
                 continue;
             }
             let [a, b] = reach[n].own;
+            counts.refine_metaballs += (b - a) as u64;
             for index in a..b {
                 if let Some(m) = self.along(ray, index)
                     && m.t + m.half >= u0
