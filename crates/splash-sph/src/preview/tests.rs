@@ -838,3 +838,70 @@ fn each_ablation_changes_the_work_and_never_the_image() {
     // Pass 2 is counted.
     assert!(a.stats.rays.refine_nodes > a.stats.hits);
 }
+
+#[test]
+fn packets_of_rays_hit_and_shadow_rays_stop_as_single_rays_do() {
+    let points = small_frame();
+    let camera = small_camera(&points, 48, 32);
+    let field = Previewer::new(&config()).unwrap().field();
+    let reference = brute(&points, field);
+    let hierarchies = [
+        FittedBvh::build(&points, field, BvhKind::Fitted, u64::MAX / 4).unwrap(),
+        FittedBvh::build(&points, field, BvhKind::Plain, u64::MAX / 4).unwrap(),
+    ];
+    let key = Vec3::new(0.3, 1.0, 0.5).normalize();
+    let (mut scratch, mut counts) = (trace::Scratch::default(), RayCounts::default());
+    let mut shadow_starts = (0, 0);
+    for bvh in &hierarchies {
+        let tracer = Tracer::new(bvh);
+        let brute = Tracer::new(&reference);
+        let mut found = Vec::new();
+        for y in 0..camera.height {
+            for x in 0..camera.width {
+                // A pixel's four samples, and four pixels' centres (a wider packet).
+                let samples: Vec<Vec3> = (0..4)
+                    .map(|s| {
+                        let (fx, fy) = sampling::pixel_offset(x, y, s, 4);
+                        camera.direction_at(x as f32 + fx, y as f32 + fy)
+                    })
+                    .collect();
+                let wide: Vec<Vec3> = (0..4)
+                    .map(|s| camera.direction_at((x + s % 2) as f32, (y + s / 2) as f32))
+                    .collect();
+                for dirs in [&samples, &wide] {
+                    tracer.first_hits(camera.position, dirs, &mut found, &mut scratch, &mut counts);
+                    for (&d, hit) in dirs.iter().zip(&found) {
+                        let single = tracer.first_hit(
+                            camera.position,
+                            d,
+                            0.0,
+                            f32::INFINITY,
+                            &mut scratch,
+                            &mut counts,
+                        );
+                        assert_eq!(*hit, single, "{:?} pixel {x},{y}", bvh.kind());
+                        // Shadow rays from just outside and just inside the surface.
+                        let Some(h) = single else { continue };
+                        for side in [1.0, -1.0] {
+                            let o = camera.position + h.t * d + side * 0.3 * R * h.normal;
+                            let inf = f32::INFINITY;
+                            let got = tracer.occluded(o, key, 0.0, inf, &mut scratch, &mut counts);
+                            let want = brute.occluded(o, key, 0.0, inf, &mut scratch, &mut counts);
+                            assert_eq!(got, want, "{:?} shadow from {o}", bvh.kind());
+                            if got {
+                                shadow_starts.0 += 1;
+                            } else {
+                                shadow_starts.1 += 1;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+    // Both answers occur.
+    assert!(
+        shadow_starts.0 > 20 && shadow_starts.1 > 20,
+        "{shadow_starts:?}"
+    );
+}
