@@ -760,7 +760,7 @@ fn choose_split(
 /// test (`Tracer::leaf_inside`) tests each entry's distance from the ray, then samples the
 /// field of the k metaballs within R of it until a sample is inside. Timed on the rays of
 /// cbd-small f40 (1.1 M leaf tests of five hierarchies, n from 1 to 3500) it costs about 9
-/// cycles an entry and 150 a metaball along the ray, no k² part showing; k stayed 2.4–2.9 per
+/// cycles an entry and 150 a metaball along the ray, no k² part showing; k stayed 2.6–3.6 per
 /// test on FBVHs whose leaves hold 18 to 134 entries (R is a few particle spacings whatever
 /// the leaf), hence n + 16·3.
 fn leaf_cost(ctx: &Ctx, n: usize) -> f32 {
