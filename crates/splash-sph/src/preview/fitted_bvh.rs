@@ -213,7 +213,8 @@ const DISCARD_MAX: usize = 64;
 const BINS: usize = 16;
 /// Cost of a traversal step relative to testing one leaf entry against the ray.
 const TRAVERSAL_COST: f32 = 4.0;
-/// Cost of a metaball within R of the ray in a leaf test, in entry tests (see [`leaf_cost`]).
+/// Cost of a metaball within R of the ray in a leaf test, in entry tests: splash's leaf test,
+/// timed on the rays of cbd-small f40, costs about 9 cycles an entry and 150 such a metaball.
 pub const LEAF_K_COST: f32 = 16.0;
 /// Metaballs within R of the ray per leaf test, as measured (see [`leaf_cost`]).
 const ALONG_PER_TEST: f32 = 3.0;
