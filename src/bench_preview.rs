@@ -10,7 +10,9 @@ use std::time::Duration;
 use anyhow::{Result, anyhow};
 use clap::Args;
 
-use splash_sph::preview::{BvhKind, BvhOptions, Camera, Previewer, SplitRule, Style, up_vector};
+use splash_sph::preview::{
+    BvhKind, BvhOptions, Camera, LEAF_K_COST, Previewer, SplitRule, Style, up_vector,
+};
 use splash_sph::{Config, estimate_spacing, read_particles};
 
 /// The hierarchies compared: a name, the kind and the switches.
@@ -40,6 +42,14 @@ fn variants() -> Vec<(&'static str, BvhKind, BvhOptions)> {
             },
         ),
         (
+            "n² SAH (paper)",
+            BvhKind::Fitted,
+            BvhOptions {
+                split: SplitRule::N2,
+                ..full
+            },
+        ),
+        (
             "linear SAH",
             BvhKind::Fitted,
             BvhOptions {
@@ -56,6 +66,14 @@ fn variants() -> Vec<(&'static str, BvhKind, BvhOptions)> {
             },
         ),
         ("plain BVH", BvhKind::Plain, full),
+        (
+            "plain, n² SAH",
+            BvhKind::Plain,
+            BvhOptions {
+                split: SplitRule::N2,
+                ..full
+            },
+        ),
         (
             "plain, linear SAH",
             BvhKind::Plain,
@@ -162,18 +180,35 @@ fn bench(input: &Path, mut config: Config, size: (u32, u32)) -> Result<ExitCode>
     }
     println!("\nTable 3 (shape): work per ray (camera and shadow rays)");
     println!(
-        "| hierarchy | traversals (pass 1) | traversals (pass 2) | intersection tests | metaballs considered | within R | image |"
+        "| hierarchy | traversals (pass 1) | traversals (pass 2) | intersection tests | metaballs considered (pass 1) | within R (k) | field terms | metaballs (pass 2) | image |"
     );
-    println!("|---|---:|---:|---:|---:|---:|---|");
+    println!("|---|---:|---:|---:|---:|---:|---:|---:|---|");
     for (name, s, same) in &rows {
         let r = s.rays.rays.max(1) as f64;
         println!(
-            "| {name} | {:.1} | {:.1} | {:.2} | {:.1} | {:.1} | {same} |",
+            "| {name} | {:.1} | {:.1} | {:.2} | {:.1} | {:.1} | {:.1} | {:.1} | {same} |",
             s.rays.nodes as f64 / r,
             s.rays.refine_nodes as f64 / r,
             s.rays.leaves as f64 / r,
             s.rays.metaballs as f64 / r,
             s.rays.along_ray as f64 / r,
+            s.rays.terms as f64 / r,
+            s.rays.refine_metaballs as f64 / r,
+        );
+    }
+    println!(
+        "\nLeaf-test cost per ray, in entry tests: the measured model n + 16·k against the paper's \
+         n² (Σ over the leaf tests of the list length n and the metaballs k within R of the ray)"
+    );
+    println!("| hierarchy | n + 16·k | Σ n² | field terms (Σ k·samples) |");
+    println!("|---|---:|---:|---:|");
+    for (name, s, _) in &rows {
+        let r = s.rays.rays.max(1) as f64;
+        println!(
+            "| {name} | {:.0} | {:.0} | {:.1} |",
+            (s.rays.metaballs as f64 + LEAF_K_COST as f64 * s.rays.along_ray as f64) / r,
+            s.rays.metaballs_squared as f64 / r,
+            s.rays.terms as f64 / r,
         );
     }
     println!("\nTables 4–5 (shape): hierarchy, build and render time (best of 3)");

@@ -4,7 +4,8 @@
 //! Every node holds its metaballs (those whose centre lies in it, each in exactly one leaf)
 //! and its split metaballs (others whose bounding sphere reaches into its box), so that a leaf
 //! computes the field anywhere in its box from its own list. The build is top-down:
-//! - binned SAH with the paper's metaball cost C = n² (Sec. 5.1.1), n counting both kinds,
+//! - binned SAH (Sec. 5.1.1) with the measured cost of splash's leaf test, n + 16·k with
+//!   k ≈ 3 ([`leaf_cost`]; the paper's n² and the linear n are ablations), n counting both kinds,
 //!   along the longest axis of the centres; above [`TOP_LEVEL`] metaballs that axis is halved
 //!   instead (the paper's conclusion); the metaballs are read in Z order, and each node's
 //!   centre box comes from its parent's partition;
@@ -13,8 +14,9 @@
 //!   and 5.3.1), so siblings never overlap; split metaballs whose sphere misses the fitted box
 //!   are dropped;
 //! - at a leaf, split metaballs that cannot touch its surface are discarded (Sec. 5.3.2);
-//! - a leaf has one metaball, or is cheaper than any split and holds at most [`MAX_LEAF`]
-//!   entries; subtrees with more than [`PARALLEL`] metaballs are built in parallel.
+//! - a leaf has one metaball, or is cheaper than any split by the SAH's own cost (the same
+//!   rule for both hierarchies, whose child boxes it estimates each its own way); subtrees
+//!   with more than [`PARALLEL`] metaballs are built in parallel.
 //!
 //! Why every inside point is found in a leaf with the right sign: a point x with f(x) ≤ 0 lies
 //! in one child's split box; every metaball reaching x reaches that box, so it is in that
@@ -82,7 +84,7 @@ impl Default for BvhOptions {
             fit: true,
             tight: true,
             discard: true,
-            split: SplitRule::N2,
+            split: SplitRule::Measured,
         }
     }
 }
@@ -203,14 +205,19 @@ impl BvhStats {
 pub const TOP_LEVEL: usize = 1 << 16;
 /// Subtrees with more metaballs than this are built in parallel.
 pub const PARALLEL: usize = 4096;
-/// A leaf holds at most this many entries, unless it has one metaball of its own.
-pub const MAX_LEAF: usize = 96;
+/// The median rule, having no cost to weigh, splits nodes of more entries than this.
+pub const MEDIAN_LEAF: usize = 96;
 /// Split metaballs are tested for discarding in leaves of at most this many entries (the
 /// test is quadratic; the paper suggests skipping it in crowded leaves).
 const DISCARD_MAX: usize = 64;
 const BINS: usize = 16;
-/// Cost of a traversal step relative to one kernel evaluation.
+/// Cost of a traversal step relative to testing one leaf entry against the ray.
 const TRAVERSAL_COST: f32 = 4.0;
+/// Cost of a metaball within R of the ray in a leaf test, in entry tests: splash's leaf test,
+/// timed on the rays of cbd-small f40, costs about 9 cycles an entry and 150 such a metaball.
+pub const LEAF_K_COST: f32 = 16.0;
+/// Metaballs within R of the ray per leaf test, as measured (see [`leaf_cost`]).
+const ALONG_PER_TEST: f32 = 3.0;
 
 struct Ctx<'a> {
     points: &'a [Vec3],
@@ -655,7 +662,7 @@ fn fit(ctx: &Ctx, b: Aabb, centres: &Aabb, own: usize, split: Vec<u32>) -> (Aabb
     (fitted, split)
 }
 
-/// Binned SAH with cost n² (Sec. 5.1.1); None when a leaf is cheaper and small enough.
+/// Binned SAH (Sec. 5.1.1); None when a leaf is cheaper than the best split.
 fn choose_split(
     ctx: &Ctx,
     own: &[u32],
@@ -667,7 +674,7 @@ fn choose_split(
     let extent = cmax - cmin;
     let n = own.len() + split.len();
     let median = ctx.options.split == SplitRule::Median;
-    if median && n <= MAX_LEAF {
+    if median && n <= MEDIAN_LEAF {
         return None;
     }
     if own.len() > TOP_LEVEL || median {
@@ -684,6 +691,9 @@ fn choose_split(
         });
     }
     let r = ctx.field.cutoff;
+    // A plain child's box is its centres' box grown by R: it reaches R past the plane, and
+    // so does its list (an upper bound: its centres lie on their side of the plane).
+    let overlap = if ctx.kind == BvhKind::Plain { r } else { 0.0 };
     let area = bounds.area().max(f32::MIN_POSITIVE);
     let mut best: Option<(f32, Split)> = None;
     // The longest axis only: metaballs fill space evenly, so the other two seldom win, and
@@ -707,9 +717,9 @@ fn choose_split(
         for &i in own.iter().chain(split) {
             let x = ctx.p(i)[axis];
             // Low end below plane j ⇔ j > (x − R − cmin)·scale: j ≥ ⌊·⌋ + 1.
-            lows[floor_plus_one((x - r - cmin[axis]) * scale)] += 1;
+            lows[floor_plus_one((x - r - overlap - cmin[axis]) * scale)] += 1;
             // High end above plane j ⇔ j < (x + R − cmin)·scale: j ≤ ⌈·⌉ − 1.
-            highs[ceil_minus_one((x + r - cmin[axis]) * scale)] += 1;
+            highs[ceil_minus_one((x + r + overlap - cmin[axis]) * scale)] += 1;
         }
         let mut own_left = 0;
         let mut left = lows[0];
@@ -726,14 +736,11 @@ fn choose_split(
             }
             let plane = cmin[axis] + j as f32 / scale;
             let mut lb = *bounds;
-            lb.max[axis] = lb.max[axis].min(plane);
+            lb.max[axis] = lb.max[axis].min(plane + overlap);
             let mut rb = *bounds;
-            rb.min[axis] = rb.min[axis].max(plane);
-            let (nl, nr) = (left as f32, right as f32);
-            let cost = match ctx.options.split {
-                SplitRule::Sah => TRAVERSAL_COST + (lb.area() * nl + rb.area() * nr) / area,
-                _ => TRAVERSAL_COST + (lb.area() * nl * nl + rb.area() * nr * nr) / area,
-            };
+            rb.min[axis] = rb.min[axis].max(plane - overlap);
+            let cost = TRAVERSAL_COST
+                + (lb.area() * leaf_cost(ctx, left) + rb.area() * leaf_cost(ctx, right)) / area;
             if best.is_none_or(|(c, _)| cost < c) {
                 let split = Split {
                     axis,
@@ -747,12 +754,23 @@ fn choose_split(
         }
     }
     let (cost, s) = best?;
-    let leaf_cost = match ctx.options.split {
-        SplitRule::N2 => (n * n) as f32,
-        SplitRule::Sah => n as f32,
-        SplitRule::Median => return None,
-    };
-    (cost < leaf_cost || n > MAX_LEAF).then_some(s)
+    (cost < leaf_cost(ctx, n)).then_some(s)
+}
+
+/// The cost of testing a ray against a leaf of `n` entries, in entry tests. splash's leaf
+/// test (`Tracer::leaf_inside`) tests each entry's distance from the ray, then samples the
+/// field of the k metaballs within R of it until a sample is inside. Timed on the rays of
+/// cbd-small f40 (1.1 M leaf tests of five hierarchies, n from 1 to 3500) it costs about 9
+/// cycles an entry and 150 a metaball along the ray, no k² part showing; k stayed 2.6–3.6 per
+/// test on FBVHs whose leaves hold 18 to 134 entries (R is a few particle spacings whatever
+/// the leaf), hence n + 16·3.
+fn leaf_cost(ctx: &Ctx, n: usize) -> f32 {
+    let n = n as f32;
+    match ctx.options.split {
+        SplitRule::Measured => n + LEAF_K_COST * ALONG_PER_TEST,
+        SplitRule::N2 => n * n,
+        SplitRule::Sah | SplitRule::Median => n,
+    }
 }
 
 /// The particles' indices in Morton (Z-curve) order of their position in `centres` (10 bits

@@ -52,7 +52,7 @@ use crate::io::Attribute;
 pub use crate::config::preview::PreviewConfig;
 pub use camera::{Camera, parse_size, robust_bounds, up_vector};
 pub use colormap::{lightness, viridis, viridis_srgb};
-pub use fitted_bvh::{Aabb, BvhKind, BvhOptions, BvhStats, FittedBvh, SplitRule};
+pub use fitted_bvh::{Aabb, BvhKind, BvhOptions, BvhStats, FittedBvh, LEAF_K_COST, SplitRule};
 pub use legend::{bar_rect, label};
 pub use metaballs::Metaballs;
 pub use png_file::{Image, encode_png, write_png};
@@ -348,15 +348,20 @@ pub fn render_image(
             let mut scratch = trace::Scratch::default();
             let mut counts = RayCounts::default();
             let mut hits = 0u64;
+            let (mut dirs, mut found) = (Vec::new(), Vec::new());
             let y = y as u32;
+            let o = camera.position;
             for (x, px) in row.chunks_exact_mut(3).enumerate() {
                 let x = x as u32;
                 let mut sum = Vec3::ZERO;
-                for s in 0..n {
+                dirs.clear();
+                dirs.extend((0..n).map(|s| {
                     let (fx, fy) = sampling::pixel_offset(x, y, s, n);
-                    let d = camera.direction_at(x as f32 + fx, y as f32 + fy);
-                    let o = camera.position;
-                    let hit = tracer.first_hit(o, d, 0.0, f32::INFINITY, &mut scratch, &mut counts);
+                    camera.direction_at(x as f32 + fx, y as f32 + fy)
+                }));
+                // The pixel's samples traverse together.
+                tracer.first_hits(o, &dirs, &mut found, &mut scratch, &mut counts);
+                for (s, (&d, &hit)) in (0..n).zip(dirs.iter().zip(&found)) {
                     let Some(hit) = hit else {
                         sum += background;
                         continue;

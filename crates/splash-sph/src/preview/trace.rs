@@ -21,7 +21,7 @@
 
 use glam::Vec3;
 
-use super::fitted_bvh::{Aabb, FittedBvh, Node};
+use super::fitted_bvh::{Aabb, FittedBvh};
 
 /// Where a ray meets the surface.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -46,10 +46,17 @@ pub struct RayCounts {
     pub leaves: u64,
     /// Entries of the lists of those leaves ("metaballs considered").
     pub metaballs: u64,
+    /// Σ n² over those leaves: the paper's model of their cost.
+    pub metaballs_squared: u64,
     /// Of those, the metaballs within R of the ray, whose polynomials were summed.
     pub along_ray: u64,
+    /// Terms of the field sums at pass 1's samples: the k metaballs along the ray times the
+    /// samples tested, the leaf test's part that grows as k².
+    pub terms: u64,
     /// Nodes visited by pass 2 (collecting the metaballs to refine a hit or walk out).
     pub refine_nodes: u64,
+    /// Metaballs pass 2 tested against the ray.
+    pub refine_metaballs: u64,
 }
 
 impl RayCounts {
@@ -59,8 +66,11 @@ impl RayCounts {
         self.nodes += o.nodes;
         self.leaves += o.leaves;
         self.metaballs += o.metaballs;
+        self.metaballs_squared += o.metaballs_squared;
         self.along_ray += o.along_ray;
+        self.terms += o.terms;
         self.refine_nodes += o.refine_nodes;
+        self.refine_metaballs += o.refine_metaballs;
     }
 }
 
@@ -83,6 +93,12 @@ pub struct Scratch {
     along: Vec<Along>,
     exact: Vec<(u32, Along)>,
     samples: Vec<f32>,
+    /// A packet's rays (the index of their direction) and first inside samples.
+    packet: Vec<(usize, Ray, f32)>,
+    /// The packet's rays crossing a node, and where.
+    crossing: Vec<(usize, f32, f32)>,
+    /// The entries of a leaf near some ray of the packet.
+    near: Vec<u32>,
 }
 
 /// Traces rays through a built hierarchy.
@@ -97,6 +113,7 @@ pub struct Tracer<'a> {
 }
 
 /// A ray with its origin of distances `base` = o + tb·d, where it enters the scene's box.
+#[derive(Clone, Copy)]
 struct Ray {
     o: Vec3,
     d: Vec3,
@@ -155,14 +172,60 @@ impl<'a> Tracer<'a> {
     ) -> Option<Hit> {
         counts.rays += 1;
         let ray = self.ray(o, d, tmin, tmax)?;
-        let mut start = 0.0;
+        let first = self.first_inside(&ray, 0.0, false, scratch, counts);
+        self.hit_from(&ray, first, scratch, counts)
+    }
+
+    /// The hit of `ray` whose first inside sample from its start is `first`.
+    fn hit_from(
+        &self,
+        ray: &Ray,
+        first: Option<f32>,
+        scratch: &mut Scratch,
+        counts: &mut RayCounts,
+    ) -> Option<Hit> {
+        let (mut start, mut s) = (0.0, first?);
         loop {
-            let s = self.first_inside(&ray, start, false, scratch, counts)?;
             if s > start {
-                return Some(self.refine_hit(&ray, start, s, scratch, counts));
+                return Some(self.refine_hit(ray, start, s, scratch, counts));
             }
-            start = self.exit(&ray, start, scratch, counts)?;
+            start = self.exit(ray, start, scratch, counts)?;
+            s = self.first_inside(ray, start, false, scratch, counts)?;
         }
+    }
+
+    /// [`first_hit`](Self::first_hit) of the rays from `o` along each of `dirs` over all
+    /// distances, into `hits`: the samples of a pixel, whose directions differ by little. They
+    /// traverse the hierarchy together, and a leaf's entries too far from all of them for any
+    /// to pass within R are dropped once for all; each ray then meets the same entries, in the
+    /// same order, as alone, so each hit is [`first_hit`](Self::first_hit)'s to the bit.
+    pub fn first_hits(
+        &self,
+        o: Vec3,
+        dirs: &[Vec3],
+        hits: &mut Vec<Option<Hit>>,
+        scratch: &mut Scratch,
+        counts: &mut RayCounts,
+    ) {
+        hits.clear();
+        if dirs.len() == 1 {
+            hits.push(self.first_hit(o, dirs[0], 0.0, f32::INFINITY, scratch, counts));
+            return;
+        }
+        counts.rays += dirs.len() as u64;
+        let mut packet = std::mem::take(&mut scratch.packet);
+        packet.clear();
+        packet.extend(
+            (dirs.iter().enumerate()).filter_map(|(i, &d)| {
+                Some((i, self.ray(o, d, 0.0, f32::INFINITY)?, f32::INFINITY))
+            }),
+        );
+        self.first_inside_packet(&mut packet, scratch, counts);
+        hits.resize(dirs.len(), None);
+        for &(i, ray, best) in &packet {
+            hits[i] = self.hit_from(&ray, best.is_finite().then_some(best), scratch, counts);
+        }
+        scratch.packet = packet;
     }
 
     /// Whether [`first_hit`](Self::first_hit) would find a surface; stops at the first inside
@@ -180,17 +243,22 @@ impl<'a> Tracer<'a> {
         let Some(ray) = self.ray(o, d, tmin, tmax) else {
             return false;
         };
+        // Pass 1 from the start finds an inside sample whenever the start is inside (its
+        // leaf sums the exact field there): none, and the ray is free without pass 2.
+        if self
+            .first_inside(&ray, 0.0, true, scratch, counts)
+            .is_none()
+        {
+            return false;
+        }
         self.collect_exact(&ray, 0.0, 0.0, scratch, counts);
-        let start = if self.excess(scratch.exact.iter().map(|e| &e.1), 0.0) >= 0.0 {
-            match self.exit(&ray, 0.0, scratch, counts) {
-                Some(s) => s,
-                None => return false,
-            }
-        } else {
-            0.0
-        };
-        self.first_inside(&ray, start, true, scratch, counts)
-            .is_some()
+        if self.excess(scratch.exact.iter().map(|e| &e.1), 0.0) < 0.0 {
+            return true;
+        }
+        match self.exit(&ray, 0.0, scratch, counts) {
+            Some(s) => self.first_inside(&ray, s, true, scratch, counts).is_some(),
+            None => false,
+        }
     }
 
     /// Pass 1: the first sample at or after `start` inside the fluid (with `any`, some such
@@ -227,7 +295,11 @@ impl<'a> Tracer<'a> {
                     continue;
                 };
                 let (u0, u1) = (t0 - ray.tb, (t1 - ray.tb).min(best));
-                if let Some(s) = self.leaf_inside(node, ray, start, u0, u1, scratch, counts)
+                let list = &self.bvh.items[node.first as usize..(node.first + node.count) as usize];
+                counts.leaves += 1;
+                counts.metaballs += list.len() as u64;
+                counts.metaballs_squared += (list.len() * list.len()) as u64;
+                if let Some(s) = self.leaf_inside(list, ray, start, u0, u1, scratch, counts)
                     && s < best
                 {
                     best = s;
@@ -287,11 +359,101 @@ impl<'a> Tracer<'a> {
         })
     }
 
-    /// The first sample in [`u0`, `u1`] (and after `start`) inside by `node`'s list.
+    /// Pass 1 for a packet of rays from one origin, each `(_, ray, best)` from its start:
+    /// `best` becomes its first inside sample (the minimum over the leaves it crosses, as
+    /// alone, whatever order they are visited in).
+    fn first_inside_packet(
+        &self,
+        packet: &mut [(usize, Ray, f32)],
+        scratch: &mut Scratch,
+        counts: &mut RayCounts,
+    ) {
+        let (nodes, m) = (&self.bvh.nodes, self.margin);
+        let Some((_, first, _)) = packet.first() else {
+            return;
+        };
+        let (o, d0) = (first.o, first.d);
+        let spread = packet
+            .iter()
+            .map(|(_, r, _)| (r.d - d0).length())
+            .fold(0.0, f32::max);
+        let mut stack = std::mem::take(&mut scratch.stack);
+        let mut crossing = std::mem::take(&mut scratch.crossing);
+        let mut near = std::mem::take(&mut scratch.near);
+        stack.clear();
+        if !nodes.is_empty() {
+            stack.push((0, 0.0));
+        }
+        while let Some((n, _)) = stack.pop() {
+            let node = &nodes[n as usize];
+            crossing.clear();
+            for (k, (_, ray, best)) in packet.iter().enumerate() {
+                let limit = ray.tb + best.min(ray.end);
+                if let Some((t0, t1)) = slab(&node.bounds, ray.o, ray.inv, ray.tb, limit, m) {
+                    crossing.push((k, t0, t1));
+                }
+            }
+            counts.nodes += crossing.len() as u64;
+            if crossing.is_empty() {
+                continue;
+            }
+            if node.count == 0 {
+                // Nearer child (by its centre along the first ray) popped first.
+                let (l, r) = (n + 1, node.first);
+                let depth = |c: u32| {
+                    let b = &nodes[c as usize].bounds;
+                    (0.5 * (b.min + b.max) - o).dot(d0)
+                };
+                if depth(l) <= depth(r) {
+                    stack.push((r, 0.0));
+                    stack.push((l, 0.0));
+                } else {
+                    stack.push((l, 0.0));
+                    stack.push((r, 0.0));
+                }
+                continue;
+            }
+            let list = &self.bvh.items[node.first as usize..(node.first + node.count) as usize];
+            counts.leaves += crossing.len() as u64;
+            counts.metaballs_squared += (list.len() * list.len()) as u64 * crossing.len() as u64;
+            let list = if crossing.len() > 1 {
+                // A centre p is at least |(p − o) × d0| − |p − o|·spread from every ray: keep
+                // those that may be within R of one (with slack for rounding), in list order.
+                let b = node.bounds;
+                let far = (b.min - o).abs().max((b.max - o).abs()).length() + self.bvh.field.cutoff;
+                let reach = self.bvh.field.cutoff + far * (spread + 1e-5) + m;
+                let reach2 = reach * reach;
+                near.clear();
+                near.extend(list.iter().copied().filter(|&i| {
+                    (self.bvh.points[i as usize] - o).cross(d0).length_squared() <= reach2
+                }));
+                counts.metaballs += list.len() as u64;
+                &near[..]
+            } else {
+                list
+            };
+            for &(k, t0, t1) in &crossing {
+                let (_, ray, best) = &mut packet[k];
+                let (u0, u1) = (t0 - ray.tb, (t1 - ray.tb).min(*best));
+                counts.metaballs += list.len() as u64;
+                if let Some(s) = self.leaf_inside(list, ray, 0.0, u0, u1, scratch, counts)
+                    && s < *best
+                {
+                    *best = s;
+                }
+            }
+        }
+        scratch.stack = stack;
+        scratch.crossing = crossing;
+        scratch.near = near;
+    }
+
+    /// The first sample in [`u0`, `u1`] (and after `start`) inside by a leaf's `list` (or
+    /// the part of it that may be within R of the ray).
     #[allow(clippy::too_many_arguments)]
     fn leaf_inside(
         &self,
-        node: &Node,
+        list: &[u32],
         ray: &Ray,
         start: f32,
         u0: f32,
@@ -299,9 +461,6 @@ impl<'a> Tracer<'a> {
         scratch: &mut Scratch,
         counts: &mut RayCounts,
     ) -> Option<f32> {
-        let list = &self.bvh.items[node.first as usize..(node.first + node.count) as usize];
-        counts.leaves += 1;
-        counts.metaballs += list.len() as u64;
         let along = &mut scratch.along;
         along.clear();
         let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
@@ -330,10 +489,13 @@ impl<'a> Tracer<'a> {
         samples.extend(along.iter().map(|m| m.t).filter(|&t| t >= a0 && t <= b0));
         self.grid(a0, b0, samples);
         samples.sort_unstable_by(f32::total_cmp);
-        samples
-            .iter()
-            .copied()
-            .find(|&s| self.excess(along.iter(), s) >= 0.0)
+        let mut tested = 0;
+        let found = samples.iter().copied().find(|&s| {
+            tested += 1;
+            self.excess(along.iter(), s) >= 0.0
+        });
+        counts.terms += tested * along.len() as u64;
+        found
     }
 
     /// The multiples of the step in [`a`, `b`].
@@ -385,6 +547,7 @@ impl<'a> Tracer<'a> {
                 continue;
             }
             let [a, b] = reach[n].own;
+            counts.refine_metaballs += (b - a) as u64;
             for index in a..b {
                 if let Some(m) = self.along(ray, index)
                     && m.t + m.half >= u0
@@ -467,7 +630,7 @@ impl<'a> Tracer<'a> {
             let dt = t - m.t;
             let k = m.q - dt * dt * self.inv_r2;
             if k > 0.0 {
-                sum += k.powi(alpha);
+                sum += powi(k, alpha);
             }
         }
         sum - self.bvh.field.level
@@ -481,7 +644,7 @@ impl<'a> Tracer<'a> {
             let dt = t - m.t;
             let k = m.q - dt * dt * self.inv_r2;
             if k > 0.0 {
-                let p = k.powi(alpha - 1);
+                let p = powi(k, alpha - 1);
                 sum += p * k;
                 slope += alpha as f32 * p * (-2.0 * dt * self.inv_r2);
             }
@@ -528,7 +691,7 @@ impl<'a> Tracer<'a> {
             let v = values[*original as usize];
             let k = 1.0 - d2 * self.inv_r2;
             if k > 0.0 {
-                let w = k.powi(alpha);
+                let w = powi(k, alpha);
                 sum += w * v;
                 weights += w;
             }
@@ -551,7 +714,7 @@ impl<'a> Tracer<'a> {
             let v = x - self.bvh.points[m.index as usize];
             let k = 1.0 - v.length_squared() * self.inv_r2;
             if k > 0.0 {
-                g += k.powi(alpha - 1) * v;
+                g += powi(k, alpha - 1) * v;
             }
         }
         g.try_normalize().unwrap_or(-d)
@@ -566,4 +729,24 @@ fn slab(b: &Aabb, o: Vec3, inv: Vec3, tmin: f32, tmax: f32, slack: f32) -> Optio
     let near = t1.min(t2).max_element().max(tmin) - slack;
     let far = t1.max(t2).min_element().min(tmax) + slack;
     (near <= far).then_some((near, far))
+}
+
+/// x^n for n ≥ 0 by the square-and-multiply of `f32::powi`'s runtime routine (libgcc's and
+/// compiler-rt's `__powisf2`), inlined: the same products in the same order, so the same bits,
+/// without the call.
+#[inline]
+fn powi(mut x: f32, n: i32) -> f32 {
+    debug_assert!(n >= 0);
+    let mut n = n as u32;
+    let mut y = if n & 1 == 1 { x } else { 1.0 };
+    loop {
+        n >>= 1;
+        if n == 0 {
+            return y;
+        }
+        x *= x;
+        if n & 1 == 1 {
+            y *= x;
+        }
+    }
 }
