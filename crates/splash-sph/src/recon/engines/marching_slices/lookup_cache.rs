@@ -42,6 +42,8 @@ pub struct LookupCache {
     /// Tile t's particles are `entries[start[t]..start[t + 1]]`.
     start: Vec<u32>,
     entries: Vec<u32>,
+    /// Where the tile's last lookup started.
+    cursor: Vec<u32>,
     /// Scratch of the insertion.
     fill: Vec<u32>,
     /// The last lookup's particles within reach.
@@ -90,6 +92,7 @@ impl LookupCache {
             start: budget::try_filled(tiles * tiles + 1, 0, what)?,
             entries: Vec::new(),
             fill: budget::try_filled(tiles * tiles, 0, what)?,
+            cursor: budget::try_filled(tiles * tiles, 0, what)?,
             kept: Vec::new(),
         };
         // The fullest window: its particles, and their entries.
@@ -114,10 +117,11 @@ impl LookupCache {
     }
 
     /// The particles within reach of slices lo..=hi: those whose own slab lies within reach
-    /// (plus one for rounding), as for one lookup.
+    /// (a particle reaches at most `reach_slabs` cubes, and rounds the ends of its reach
+    /// inwards).
     fn particles(&self, lo: i32, hi: i32) -> (u32, u32) {
         let r = self.reach_slabs;
-        (self.slab(lo - r - 1), self.slab(hi + r + 2))
+        (self.slab(lo - r), self.slab(hi + r + 1))
     }
 
     /// The particles within reach of corner `c`, in z order, each with `true` (the lookup is
@@ -140,25 +144,43 @@ impl LookupCache {
 
     fn keep_within_reach(&mut self, c: IVec3) {
         let t = (c.y / TILE) as usize * self.tiles + (c.x / TILE) as usize;
-        let list = &self.entries[self.start[t] as usize..self.start[t + 1] as usize];
+        let (first, end) = (self.start[t] as usize, self.start[t + 1] as usize);
         let (lowest, highest) = self.particles(c.z, c.z);
-        let from = list.partition_point(|&p| p < lowest);
-        let list = &list[from..];
+        // From where the tile's last lookup started: the next, a slice up or down, starts near.
+        let mut at = (self.cursor[t] as usize).clamp(first, end);
+        while at > first && self.entries[at - 1] >= lowest {
+            at -= 1;
+        }
+        while at < end && self.entries[at] < lowest {
+            at += 1;
+        }
+        self.cursor[t] = at as u32;
+        let list = &self.entries[at..end];
         let list = &list[..list.partition_point(|&p| p < highest)];
+        let (near, tolerance) = (&self.near[..], self.tolerance);
         let at = c.as_dvec3();
+        let excess = |p: u32| {
+            let q = near[(p - self.first) as usize];
+            ((at.x - q[0]).powi(2) + (at.y - q[1]).powi(2) + (at.z - q[2]).powi(2) - q[3], q)
+        };
         // Branch-free: each particle is written, and the next overwrites it unless it is kept.
         self.kept.resize(list.len(), 0);
-        let mut n = 0;
+        let (mut n, mut unsure) = (0, false);
         for &p in list {
-            let q = self.near[(p - self.first) as usize];
-            let e = (at.x - q[0]).powi(2) + (at.y - q[1]).powi(2) + (at.z - q[2]).powi(2) - q[3];
-            let kept = if e.abs() > self.tolerance {
-                e < 0.0
-            } else {
-                within_reach(q, c)
-            };
+            let (e, _) = excess(p);
             self.kept[n] = p;
-            n += usize::from(kept);
+            n += usize::from(e < -tolerance);
+            unsure |= e.abs() <= tolerance;
+        }
+        if unsure {
+            // A particle about at reach (rare): the exact test for those.
+            n = 0;
+            for &p in list {
+                let (e, q) = excess(p);
+                let kept = if e.abs() > tolerance { e < 0.0 } else { within_reach(q, c) };
+                self.kept[n] = p;
+                n += usize::from(kept);
+            }
         }
         self.kept.truncate(n);
     }
@@ -189,6 +211,7 @@ impl LookupCache {
             self.start[t + 1] += self.start[t];
         }
         self.fill.copy_from_slice(&self.start[..tiles * tiles]);
+        self.cursor.copy_from_slice(&self.start[..tiles * tiles]);
         self.entries.resize(self.start[tiles * tiles] as usize, 0);
         for (k, &q) in self.near.iter().enumerate() {
             for_each_tile(q, cubes, tiles, tolerance, |t| {
@@ -207,7 +230,7 @@ impl LookupCache {
         let entries = particles.saturating_mul(span.saturating_mul(span).min(tiles * tiles));
         let near = particles.saturating_mul(size_of::<[f64; 4]>() as u64 + 4);
         near.saturating_add(entries.saturating_mul(4))
-            .saturating_add((2 * tiles * tiles + side + 2) * 4)
+            .saturating_add((3 * tiles * tiles + side + 2) * 4)
     }
 
     /// Bytes held, all taken when the cache is made: the paper's "cache memory".
@@ -217,6 +240,7 @@ impl LookupCache {
                 + self.start.capacity()
                 + self.entries.capacity()
                 + self.fill.capacity()
+                + self.cursor.capacity()
                 + self.kept.capacity())
                 * size_of::<u32>()
     }
