@@ -261,7 +261,10 @@ fn at_half_cells_the_lookup_cache_stays_within_five_times_the_render_memory() {
         let mean = |f: fn(&marching_slices::marching::BlockStats) -> usize| {
             report.blocks.iter().map(f).sum::<usize>() / report.blocks.len()
         };
-        let (cache, render) = (report.max(|b| b.cache_bytes), report.max(|b| b.render_bytes));
+        let (cache, render) = (
+            report.max(|b| b.cache_bytes),
+            report.max(|b| b.render_bytes),
+        );
         let (cache_mean, render_mean) = (mean(|b| b.cache_bytes), mean(|b| b.render_bytes));
         assert!(
             cache <= 5 * render && cache_mean <= 5 * render_mean,

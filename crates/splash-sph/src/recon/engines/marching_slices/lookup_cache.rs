@@ -161,7 +161,10 @@ impl LookupCache {
         let at = c.as_dvec3();
         let excess = |p: u32| {
             let q = near[(p - self.first) as usize];
-            ((at.x - q[0]).powi(2) + (at.y - q[1]).powi(2) + (at.z - q[2]).powi(2) - q[3], q)
+            (
+                (at.x - q[0]).powi(2) + (at.y - q[1]).powi(2) + (at.z - q[2]).powi(2) - q[3],
+                q,
+            )
         };
         // Branch-free: each particle is written, and the next overwrites it unless it is kept.
         self.kept.resize(list.len(), 0);
@@ -177,7 +180,11 @@ impl LookupCache {
             n = 0;
             for &p in list {
                 let (e, q) = excess(p);
-                let kept = if e.abs() > tolerance { e < 0.0 } else { within_reach(q, c) };
+                let kept = if e.abs() > tolerance {
+                    e < 0.0
+                } else {
+                    within_reach(q, c)
+                };
                 self.kept[n] = p;
                 n += usize::from(kept);
             }
@@ -318,7 +325,12 @@ mod tests {
         };
         let cubes = 20;
         let mut ps: Vec<(DVec3, f64)> = (0..300)
-            .map(|_| (DVec3::new(next(), next(), next()) * 16.0 + 2.0, 2.0 + next() * 1.3))
+            .map(|_| {
+                (
+                    DVec3::new(next(), next(), next()) * 16.0 + 2.0,
+                    2.0 + next() * 1.3,
+                )
+            })
             .collect();
         // Some particles exactly at reach of corners.
         ps.extend((0..5).map(|k| (DVec3::new(10.0, 10.0, 4.0 + 3.0 * f64::from(k)), 3.0)));
