@@ -10,7 +10,7 @@
 
 use glam::{DVec3, IVec3};
 
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::recon::budget;
 
 /// Columns per side of a tile: the per-column lists of the paper take π reach² entries per
@@ -103,7 +103,14 @@ impl LookupCache {
             particles = particles.max(b - a);
             entries = entries.max(entries_before[slab(b)] - entries_before[slab(a)]);
         }
-        let entries = usize::try_from(entries).unwrap_or(usize::MAX);
+        if entries > u64::from(u32::MAX) {
+            return Err(Error::limit(format!(
+                "a block of the slices engine would hold {entries} particle entries, more than \
+                 {}; use a larger cell or smaller blocks (--block)",
+                u32::MAX
+            )));
+        }
+        let entries = entries as usize;
         let what = || format!("the lookup cache's {entries} particle entries");
         budget::try_reserve(&mut cache.entries, entries, what)?;
         budget::try_reserve(&mut cache.near, particles as usize, what)?;
