@@ -11,6 +11,7 @@ use glam::{IVec3, Vec3};
 use rayon::prelude::*;
 use rustc_hash::FxHashSet;
 
+use super::lookup_cache::LookupCache;
 use crate::error::Result;
 use crate::neighbours::handler_array::HandlerArray;
 use crate::neighbours::neighbourhood;
@@ -34,10 +35,9 @@ impl Block {
 
     /// An upper estimate of the heap its marching holds at its peak, with `channels`
     /// per-particle channels, a reach of `reach` cubes and the mesh aside: the lookup cache
-    /// (its column arrays, and an entry per particle and column within reach, at most the
-    /// disk of the reach: particles of the margin have fewer), the block's copies of its
-    /// particles, four slice caches (the paper's two, with their neighbours; 3 at most on the
-    /// fixtures), and the missed seeds' bits and brick layer.
+    /// (as if its window held all the particles), the block's copies of its particles and the
+    /// seeds' walks from them, four slice caches (the paper's two, with their neighbours; 3 at
+    /// most on the fixtures), and the missed seeds' bits and brick layer.
     pub fn planned_bytes(&self, channels: usize, reach: f32) -> u64 {
         block_bytes(
             self.particles.len() as u64,
@@ -53,16 +53,14 @@ impl Block {
 pub fn block_bytes(particles: u64, cubes: i32, channels: usize, reach: f32) -> u64 {
     let side = (cubes.max(0) + 1) as u64;
     let columns = side * side;
-    let disk = (std::f64::consts::PI * f64::from(reach).powi(2)).ceil() as u64;
-    let entries = particles
-        .saturating_mul(disk.min(columns))
-        .saturating_mul(8);
-    let copies = particles.saturating_mul(12 + 24 + 4 + 4 * channels as u64);
+    let cache = LookupCache::planned_bytes(particles, cubes, f64::from(reach));
+    // Positions and channels, the block's list, and the seeds' walks (48 a particle).
+    let copies = particles.saturating_mul(12 + 4 * channels as u64 + 4 + 48);
     let slices = 4 * columns * 4 + 3 * columns * 4;
     // The visited bits, and the missed seeds' layer of bricks: its marks, vertices (12),
     // values as sampled (4) and as planes (4), on 9 planes at most.
     let seeds = side.pow(3) / 8 + 9 * columns * (12 + 4 + 4);
-    entries
+    cache
         .saturating_add(copies)
         .saturating_add(slices)
         .saturating_add(seeds)

@@ -127,17 +127,12 @@ pub fn march<F: ScalarField + ?Sized>(
         .iter()
         .map(|c| block.particles.iter().map(|&h| c[h as usize]).collect())
         .collect();
-    // In cube units of the block.
-    let cell = f64::from(set.cell);
-    let local: Vec<DVec3> = positions
-        .iter()
-        .map(|p| p.as_dvec3() / cell - origin.as_dvec3())
-        .collect();
     let support = set.field.support();
-    let cache = {
-        let particle_reach = reach(&channels, support, set.field.reach_channel());
-        LookupCache::build(&local, n, |i| f64::from(particle_reach(i)) / cell)?
-    };
+    let cache = LookupCache::new(
+        positions.len(),
+        n,
+        in_cubes(&positions, &channels, set, origin),
+    )?;
     let mut m = Marcher {
         set,
         block,
@@ -170,8 +165,8 @@ pub fn march<F: ScalarField + ?Sized>(
             .map(|c| c.capacity() * size_of::<f32>())
             .sum::<usize>();
     m.account();
-    let reach_slabs = (f64::from(support) / cell).ceil() as i32;
-    m.seed(&local, reach_slabs);
+    let reach_slabs = (f64::from(support) / f64::from(set.cell)).ceil() as i32;
+    m.seed(reach_slabs);
     m.run();
     // Pushed after the first marching is done, so that its mesh is unchanged and the missed
     // components' triangles follow.
@@ -192,50 +187,71 @@ impl<F: ScalarField + ?Sized> Marcher<'_, F> {
     /// Particles above the block start their walk at its top slice: a bubble in the top margin
     /// that dips into the block's cubes is found only from the fluid above it. Particles
     /// beside or below the block start none.
-    fn seed(&mut self, local: &[DVec3], reach_slabs: i32) {
+    ///
+    /// The walks go down together, slice by slice, so that the lookup cache's window follows
+    /// them; the seeds are then pushed in the order of the walks by column.
+    fn seed(&mut self, reach_slabs: i32) {
         let top = self.n - 1;
-        let mut starts: Vec<(IVec3, usize)> = local
-            .iter()
-            .enumerate()
-            .map(|(i, q)| (q.round().as_ivec3(), i))
+        let mut starts: Vec<(IVec3, usize)> = (0..self.positions.len())
+            .map(|i| (self.local(i).round().as_ivec3(), i))
             .filter(|(c, _)| c.x >= 1 && c.y >= 1 && c.z >= 1 && c.x <= top && c.y <= top)
             .map(|(c, i)| (c.with_z(c.z.min(top)), i))
             .collect();
         starts.sort_unstable_by_key(|(c, _)| (c.y, c.x, c.z));
-        let mut below: Option<(IVec3, bool)> = None;
-        for (c, i) in starts {
-            let same_column = below.filter(|(b, _)| b.x == c.x && b.y == c.y);
-            if same_column.is_some_and(|(b, _)| b.z == c.z) {
-                continue;
-            }
-            let start_inside = self.value(c) < 0.0;
-            below = Some((c, start_inside));
-            if !start_inside {
-                if local[i].z < f64::from(top) {
-                    let own = local[i]
-                        .floor()
-                        .as_ivec3()
-                        .clamp(IVec3::ZERO, IVec3::splat(top));
-                    self.push(own);
+        // A walk from the corner of the walk before it would repeat it.
+        starts.dedup_by_key(|s| s.0);
+        // The walk below walk k, in the same column, begins at this corner.
+        let below = |k: usize| {
+            let c = starts[k].0;
+            (k > 0 && starts[k - 1].0.truncate() == c.truncate()).then(|| starts[k - 1].0)
+        };
+        let mut by_height: Vec<u32> = (0..starts.len() as u32).collect();
+        by_height.sort_by_key(|&k| std::cmp::Reverse(starts[k as usize].0.z));
+        let mut inside = vec![false; starts.len()];
+        let mut seeds: Vec<Option<IVec3>> = vec![None; starts.len()];
+        let (mut walks, mut begun) = (Vec::new(), Vec::new());
+        let mut next = by_height.iter().peekable();
+        for z in (0..=top).rev() {
+            // The walks beginning here, then the steps down to here of those begun above, which
+            // end here if the walk below begins here.
+            while let Some(&k) = next.next_if(|&&k| starts[k as usize].0.z == z) {
+                let (c, i) = starts[k as usize];
+                inside[k as usize] = self.value(c) < 0.0;
+                if inside[k as usize] {
+                    begun.push(k);
+                    continue;
                 }
-                continue;
+                let q = self.local(i);
+                if q.z < f64::from(top) {
+                    let own = q.floor().as_ivec3().clamp(IVec3::ZERO, IVec3::splat(top));
+                    seeds[k as usize] = Some(own);
+                }
             }
-            let floor = (c.z - reach_slabs - 1).max(0);
-            for z in (floor..c.z).rev() {
-                if let Some((b, inside)) = same_column
+            walks.retain(|&k| {
+                let k = k as usize;
+                let c = starts[k].0;
+                if z < (c.z - reach_slabs - 1).max(0) {
+                    return false;
+                }
+                if let Some(b) = below(k)
                     && z == b.z
                 {
                     // The walk below starts here: it goes on from here, or this is its top.
-                    if !inside {
-                        self.push(IVec3::new(c.x, c.y, z));
+                    if !inside[k - 1] {
+                        seeds[k] = Some(c.with_z(z));
                     }
-                    break;
+                    return false;
                 }
-                if self.value(IVec3::new(c.x, c.y, z)) >= 0.0 {
-                    self.push(IVec3::new(c.x, c.y, z));
-                    break;
+                if self.value(c.with_z(z)) >= 0.0 {
+                    seeds[k] = Some(c.with_z(z));
+                    return false;
                 }
-            }
+                true
+            });
+            walks.append(&mut begun);
+        }
+        for seed in seeds.into_iter().flatten() {
+            self.push(seed);
         }
     }
 
@@ -423,9 +439,15 @@ impl<F: ScalarField + ?Sized> Marcher<'_, F> {
 
     fn gather(&mut self, c: IVec3) {
         let anchor = vertex_position(self.origin + c, self.set.cell);
-        let candidates = self.cache.lookup(c);
+        let particle = in_cubes(&self.positions, &self.channels, self.set, self.origin);
+        let candidates = self.cache.lookup(c, particle);
         self.near
             .pick(anchor, candidates, &self.positions, &self.channels);
+    }
+
+    /// Particle i in cube units of the block.
+    fn local(&self, i: usize) -> DVec3 {
+        in_cubes(&self.positions, &self.channels, self.set, self.origin)(i).0
     }
 
     fn entry(&self, c: IVec3) -> usize {
@@ -481,6 +503,22 @@ impl<F: ScalarField + ?Sized> Marcher<'_, F> {
             flight.now.fetch_sub(self.counted - now, Ordering::Relaxed);
         }
         self.counted = now;
+    }
+}
+
+/// Particle i of the block in cube units of the block (whose corner (0, 0, 0) is global corner
+/// `origin`), with its reach in cubes.
+fn in_cubes<'a, F: ScalarField + ?Sized>(
+    positions: &'a [Vec3],
+    channels: &'a [Vec<f32>],
+    set: &Setting<'a, F>,
+    origin: IVec3,
+) -> impl Fn(usize) -> (DVec3, f64) + 'a {
+    let particle_reach = reach(channels, set.field.support(), set.field.reach_channel());
+    let (cell, origin) = (f64::from(set.cell), origin.as_dvec3());
+    move |i| {
+        let p = positions[i].as_dvec3() / cell - origin;
+        (p, f64::from(particle_reach(i)) / cell)
     }
 }
 

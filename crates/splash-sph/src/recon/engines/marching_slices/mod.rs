@@ -68,7 +68,7 @@ pub fn reconstruct(
     let (reach, channels) = (field.support() / cell, samples.channels.len());
     let size = params.block as i32;
     // The fullest block, guessed before the blocks are built: a cell far smaller than the
-    // reach gives blocks of millions of lookup entries per particle.
+    // reach gives blocks of thousands of lookup entries per particle.
     let fullest = blocks::fullest_block_guess(samples, field.support(), cell, size);
     let cubes = size + 2 * blocks::margin(field.support(), cell);
     let block = blocks::block_bytes(fullest, cubes, channels, reach);
