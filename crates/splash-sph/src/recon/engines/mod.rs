@@ -7,3 +7,4 @@ pub(crate) mod marching_slices;
 pub(crate) mod narrow_band;
 pub(crate) mod prepared;
 pub(crate) mod scatter;
+pub(crate) mod surface_following;

@@ -12,6 +12,7 @@ use serde::Serialize;
 use super::blocks::Block;
 use super::lookup_cache::LookupCache;
 use super::missed_seeds::MissedSeeds;
+use super::seeds::particle_seeds;
 use super::slice_cache::{Corner, DONE_ABOVE, DONE_BELOW, NO_VERTEX, SliceCache};
 use crate::error::Result;
 use crate::field::ScalarField;
@@ -183,59 +184,10 @@ pub fn march<F: ScalarField + ?Sized>(
 }
 
 impl<F: ScalarField + ?Sized> Marcher<'_, F> {
-    /// Seeds (Sec. 4): from each particle's nearest corner, down in −z until the field is
-    /// outside; the cube above that corner goes on its slab's todo list. A particle's walk
-    /// ends where the walk of the particle below it in the same column began, or a reach
-    /// below it (the paper's R_c: a particle found nothing there, one below it will). Where
-    /// the nearest corner is already outside, the particle's own cube is the seed.
-    ///
-    /// Particles above the block start their walk at its top slice: a bubble in the top margin
-    /// that dips into the block's cubes is found only from the fluid above it. Particles
-    /// beside or below the block start none.
+    /// Seeds (Sec. 4, `seeds.rs`), on the block's todo lists.
     fn seed(&mut self, local: &[DVec3], reach_slabs: i32) {
-        let top = self.n - 1;
-        let mut starts: Vec<(IVec3, usize)> = local
-            .iter()
-            .enumerate()
-            .map(|(i, q)| (q.round().as_ivec3(), i))
-            .filter(|(c, _)| c.x >= 1 && c.y >= 1 && c.z >= 1 && c.x <= top && c.y <= top)
-            .map(|(c, i)| (c.with_z(c.z.min(top)), i))
-            .collect();
-        starts.sort_unstable_by_key(|(c, _)| (c.y, c.x, c.z));
-        let mut below: Option<(IVec3, bool)> = None;
-        for (c, i) in starts {
-            let same_column = below.filter(|(b, _)| b.x == c.x && b.y == c.y);
-            if same_column.is_some_and(|(b, _)| b.z == c.z) {
-                continue;
-            }
-            let start_inside = self.value(c) < 0.0;
-            below = Some((c, start_inside));
-            if !start_inside {
-                if local[i].z < f64::from(top) {
-                    let own = local[i]
-                        .floor()
-                        .as_ivec3()
-                        .clamp(IVec3::ZERO, IVec3::splat(top));
-                    self.push(own);
-                }
-                continue;
-            }
-            let floor = (c.z - reach_slabs - 1).max(0);
-            for z in (floor..c.z).rev() {
-                if let Some((b, inside)) = same_column
-                    && z == b.z
-                {
-                    // The walk below starts here: it goes on from here, or this is its top.
-                    if !inside {
-                        self.push(IVec3::new(c.x, c.y, z));
-                    }
-                    break;
-                }
-                if self.value(IVec3::new(c.x, c.y, z)) >= 0.0 {
-                    self.push(IVec3::new(c.x, c.y, z));
-                    break;
-                }
-            }
+        for cube in particle_seeds(local, reach_slabs, Some(self.n - 1), |c| self.value(c)) {
+            self.push(cube);
         }
     }
 
