@@ -8,7 +8,7 @@ use glam::{DVec3, IVec3, Vec3};
 use super::follow::{Bounds, Corners, Follower};
 use super::particle_grid::{ArrayCells, ParticleGrid};
 use super::sampler::Sampler;
-use super::{Held, Setting};
+use super::{Figures, Held, Setting};
 use crate::error::Result;
 use crate::field::ScalarField;
 use crate::neighbours::neighbourhood::reach;
@@ -16,17 +16,6 @@ use crate::recon::engines::marching_slices::blocks::Block;
 use crate::recon::engines::marching_slices::marching::BlockMesh;
 use crate::recon::engines::marching_slices::missed_seeds::MissedSeeds;
 use crate::recon::engines::marching_slices::seeds::particle_seeds;
-
-/// One block's figures.
-#[derive(Debug, Clone, Copy, Default)]
-pub struct BlockFigures {
-    pub cubes_visited: usize,
-    pub corners: usize,
-    /// Corner arrays and todo stack.
-    pub render_bytes: usize,
-    /// Voxel grid, particle copies and list.
-    pub cache_bytes: usize,
-}
 
 /// A block's corners, x fastest: values, whether computed, the vertices on their three edges
 /// (1 + the vertex, 0 for none), gradients (with `normals = "grid"`), and a bit per cube done.
@@ -111,7 +100,7 @@ pub fn march<F: ScalarField + ?Sized>(
     set: &Setting<F>,
     block: &Block,
     held: &Held,
-) -> Result<(BlockMesh, BlockFigures)> {
+) -> Result<(BlockMesh, Figures)> {
     let n = block.size + 2 * block.margin;
     let origin = block.lo - block.margin;
     let handlers = set.handlers;
@@ -200,7 +189,7 @@ pub fn march<F: ScalarField + ?Sized>(
     }
     f.run();
     held.sub(counted);
-    let figures = BlockFigures {
+    let figures = Figures {
         cubes_visited: f.cubes_visited,
         corners: f.corners.sampler.corners,
         render_bytes: f.corners.heap_bytes() + f.todo_bytes,

@@ -7,11 +7,11 @@ use std::collections::hash_map::Entry as Slot;
 use glam::{DVec3, IVec3, Vec3};
 use rustc_hash::FxHashMap;
 
-use super::Setting;
 use super::follow::{Corners, Follower};
 use super::hash_bytes;
 use super::particle_grid::{HashedCells, ParticleGrid};
 use super::sampler::Sampler;
+use super::{Figures, Setting};
 use crate::error::Result;
 use crate::field::ScalarField;
 use crate::neighbours::neighbourhood::reach;
@@ -77,17 +77,6 @@ impl<F: ScalarField + ?Sized> Corners for HashedCorners<'_, F> {
     fn heap_bytes(&self) -> usize {
         hash_bytes(&self.map) + hash_bytes(&self.gradients)
     }
-}
-
-/// The figures of the run.
-#[derive(Debug, Clone, Copy, Default)]
-pub struct Figures {
-    pub cubes_visited: usize,
-    pub corners: usize,
-    /// Corner map and todo stack, at the end (they only grow).
-    pub render_bytes: usize,
-    /// Hashed voxel grid and the particles' copies.
-    pub cache_bytes: usize,
 }
 
 /// Follows the surface of all particles in one pass, from the slices engine's seeds: those

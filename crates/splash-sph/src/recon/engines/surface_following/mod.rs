@@ -48,6 +48,18 @@ pub struct Setting<'a, F: ScalarField + ?Sized> {
     pub corner_gradients: bool,
 }
 
+/// The figures of a block, or of approach 3's one unbounded run.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Figures {
+    pub cubes_visited: usize,
+    /// Corners whose field was sampled.
+    pub corners: usize,
+    /// Peak bytes of the corner caches and the todo stack: the paper's "render memory".
+    pub render_bytes: usize,
+    /// Bytes of the particle grid and the particles' copies and list: its "cache memory".
+    pub cache_bytes: usize,
+}
+
 /// Bytes held by the blocks being marched now, and their peak.
 #[derive(Default)]
 pub struct Held {
@@ -150,32 +162,23 @@ pub fn reconstruct(
         corner_gradients,
     };
     let in_flight = Held::default();
-    let (meshes, figures) = stages.run(Stage::ScalarField, || -> Result<_> {
-        Ok(match baseline {
-            Baseline::BlockedCubes => {
-                let marched: Vec<_> = blocks
-                    .par_iter()
-                    .map(|b| blocked::march(&set, b, &in_flight))
-                    .collect::<Result<_>>()?;
-                let (meshes, figures): (Vec<_>, Vec<_>) = marched.into_iter().unzip();
-                let figures: Vec<_> = figures
-                    .iter()
-                    .map(|f| (f.cubes_visited, f.corners, f.render_bytes, f.cache_bytes))
-                    .collect();
-                (meshes, figures)
-            }
+    let (meshes, figures): (Vec<_>, Vec<Figures>) = stages.run(Stage::ScalarField, || {
+        Ok::<_, crate::Error>(match baseline {
+            Baseline::BlockedCubes => blocks
+                .par_iter()
+                .map(|b| blocked::march(&set, b, &in_flight))
+                .collect::<Result<Vec<_>>>()?
+                .into_iter()
+                .unzip(),
             Baseline::HashedCubes => {
                 let (mesh, f) = hashed::march(&set, &blocks)?;
                 in_flight.add(f.render_bytes + f.cache_bytes);
-                (
-                    vec![mesh],
-                    vec![(f.cubes_visited, f.corners, f.render_bytes, f.cache_bytes)],
-                )
+                (vec![mesh], vec![f])
             }
         })
     })?;
     drop(blocks);
-    let surface_cells = figures.iter().map(|f| f.0).sum();
+    let surface_cells = figures.iter().map(|f| f.cubes_visited).sum();
     let welded = triangles_and_normals(
         &mut stages,
         params,
@@ -186,9 +189,8 @@ pub fn reconstruct(
     let mut s = stages.stats;
     let mesh = welded.mesh;
     let count = figures.len().max(1);
-    let max =
-        |k: fn(&(usize, usize, usize, usize)) -> usize| figures.iter().map(k).max().unwrap_or(0);
-    let sum = |k: fn(&(usize, usize, usize, usize)) -> usize| figures.iter().map(k).sum::<usize>();
+    let max = |k: fn(&Figures) -> usize| figures.iter().map(k).max().unwrap_or(0);
+    let sum = |k: fn(&Figures) -> usize| figures.iter().map(k).sum::<usize>();
     s.slices = SlicesFigures {
         blocks: if baseline == Baseline::BlockedCubes {
             figures.len()
@@ -196,14 +198,14 @@ pub fn reconstruct(
             0
         },
         peak_slices: 0,
-        render_bytes_max: max(|f| f.2),
-        render_bytes_mean: sum(|f| f.2) / count,
-        cache_bytes_max: max(|f| f.3),
-        cache_bytes_mean: sum(|f| f.3) / count,
+        render_bytes_max: max(|f| f.render_bytes),
+        render_bytes_mean: sum(|f| f.render_bytes) / count,
+        cache_bytes_max: max(|f| f.cache_bytes),
+        cache_bytes_mean: sum(|f| f.cache_bytes) / count,
         in_flight_peak: in_flight.peak.load(Ordering::Relaxed),
     };
     s.bricks = welded.brick_vertices.len();
-    s.surface_vertices = sum(|f| f.1);
+    s.surface_vertices = sum(|f| f.corners);
     s.surface_cells = welded.surface_cells;
     s.triangles = mesh.triangles.len();
     s.vertices = mesh.vertices.len();
