@@ -142,9 +142,10 @@ pub fn reconstruct(
                 rayon::current_num_threads() as u64,
             )
         }
-        // Two corners per mesh vertex, each about 48 bytes in the map.
+        // The corner map: 168-178 bytes per mesh vertex on the fixture (metaball, r/2 and
+        // 0.375r), as its table doubles.
         Baseline::HashedCubes => {
-            mul(n as u64, PER_BLOCK_PARTICLE).saturating_add(mul(vertices, 96))
+            mul(n as u64, PER_BLOCK_PARTICLE).saturating_add(mul(vertices, 192))
         }
     };
     stages.stats.planned_bytes = budget::check(
@@ -183,7 +184,20 @@ pub fn reconstruct(
         &mut stages,
         params,
         field,
-        || weld::weld(meshes, surface_cells, |_| Ok(())),
+        || {
+            let held = held.saturating_add(
+                meshes
+                    .iter()
+                    .map(|m| m.heap_bytes() as u64)
+                    .fold(0, u64::saturating_add),
+            );
+            weld::weld(meshes, surface_cells, |mesh| {
+                budget::check(params, held.saturating_add(mesh), || {
+                    "the welded mesh".into()
+                })
+                .map(drop)
+            })
+        },
         || Ok(samples),
     )?;
     let mut s = stages.stats;
