@@ -37,7 +37,7 @@ pub struct BenchSlicesArgs {
     #[arg(long)]
     cell: Vec<String>,
 
-    /// Worker threads of every run (approach 3 runs on one whatever this is).
+    /// Worker threads of every run (approach 3 marches on one whatever this is).
     #[arg(long, default_value_t = 1)]
     threads: usize,
 
