@@ -20,8 +20,8 @@ frame is reconstructed at every --cell by the scatter (serial), the full gather 
 band (at every --threads count), each run in its own thread pool. Runs whose full grid would
 need more than --max-memory are not attempted and read NA in the tables, with the reason.
 
-`splash bench iso FRAME` and `splash bench preview FRAME` print the Marching Correctors' and the
-Fitted BVH's tables instead (see their --help).
+`splash bench iso FRAME`, `splash bench preview FRAME` and `splash bench slices FRAME` print the
+Marching Correctors', the Fitted BVH's and Marching Slices' tables instead (see their --help).
 
 Example:
   splash bench preview fixtures/frame_0040.ply --spacing 0.014 --threads 2
@@ -89,12 +89,16 @@ enum BenchTable {
     /// Fitted BVH's ablations (Gourmel et al. 2010, Tables 3-5 in shape): each part switched
     /// off, and the plain BVH, on a 640x360 render of one frame.
     Preview(crate::bench_preview::BenchPreviewArgs),
+    /// Marching Slices' Fig. 7 (Rosenberg & Birdwell 2008): the slices engine against
+    /// surface-following Marching Cubes in blocks and with hash maps, time and memory.
+    Slices(crate::bench_slices::BenchSlicesArgs),
 }
 
 pub fn bench(args: BenchArgs) -> Result<ExitCode> {
     match args.table {
         Some(BenchTable::Iso(iso)) => return crate::bench_iso::run(iso),
         Some(BenchTable::Preview(preview)) => return crate::bench_preview::run(preview),
+        Some(BenchTable::Slices(slices)) => return crate::bench_slices::run(slices),
         None => {}
     }
     let mut config = match &args.config {

@@ -11,6 +11,7 @@ mod bench;
 mod bench_cli;
 mod bench_iso;
 mod bench_preview;
+mod bench_slices;
 mod farm;
 mod log;
 mod memory;

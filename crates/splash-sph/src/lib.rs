@@ -59,7 +59,7 @@ pub use io::{Attribute, InputFormat, MeshFormat, Particles, UpAxis, read_particl
 pub use length::Length;
 pub use mesh::TriMesh;
 pub use overrides::Overrides;
-pub use recon::Reconstruction;
+pub use recon::{Baseline, Reconstruction};
 pub use reconstructor::Reconstructor;
 pub use report::{Clock, CorrectionFigures, FrameStats, Observer, Stage, StageFigures};
 pub use spacing::estimate_spacing;

@@ -12,7 +12,7 @@ use crate::io::Attribute;
 use crate::mesh::TriMesh;
 use crate::mesh::post::postprocess;
 use crate::recon::engines::full_grid::{self, Grid};
-use crate::recon::{self, Reconstruction};
+use crate::recon::{self, Baseline, Reconstruction};
 use crate::report::{Observer, Stage, Stages};
 use crate::worker_pool::worker_pool;
 
@@ -50,6 +50,14 @@ impl Reconstructor {
             config,
             pool,
         })
+    }
+
+    /// This reconstructor, running `baseline` instead of its engine: the surface-following
+    /// Marching Cubes that Rosenberg & Birdwell 2008 compare Marching Slices with (Fig. 7),
+    /// which give the slices engine's mesh with other data structures (`splash bench slices`).
+    pub fn with_baseline(mut self, baseline: Baseline) -> Reconstructor {
+        self.params.baseline = Some(baseline);
+        self
     }
 
     /// The configuration, as validated.

@@ -18,6 +18,7 @@ use crate::error::{Error, Result};
 use crate::field::{FieldConfig, ScalarField, Scattering};
 use crate::io::{MeshFormat, UpAxis};
 use crate::length::{Length, positive};
+use crate::recon::Baseline;
 
 /// Everything that decides a run: the mesh of a frame, the engine and its resources, and how
 /// the mesh is written. `splash recon` fills it from these defaults, the `--config` file and
@@ -483,6 +484,9 @@ pub(crate) struct Params {
     /// The field's support radius in world units (the field's own, kept for the gathers).
     pub support: f32,
     pub engine: Engine,
+    /// A baseline of Fig. 7 of Rosenberg & Birdwell 2008 instead of the engine
+    /// (`splash bench slices`).
+    pub baseline: Option<Baseline>,
     /// Heap bytes a full-grid engine may plan to use.
     pub max_memory: u64,
 }
@@ -533,6 +537,7 @@ impl Params {
             correct: config.correct,
             block: config.slices.block,
             engine: config.engine,
+            baseline: None,
             max_memory: config.max_memory.map_or_else(default_limit, |b| b.0),
         }
     }

@@ -16,9 +16,10 @@ use crate::error::Result;
 use crate::mesh::TriMesh;
 use crate::report::{FrameStats, Observer, Stages};
 use engines::full_grid::{self, Grid};
-use engines::{marching_slices, narrow_band, scatter};
+use engines::{marching_slices, narrow_band, scatter, surface_following};
 
 pub use engines::prepared::Reconstruction;
+pub use engines::surface_following::Baseline;
 
 /// Reconstructs the surface of `particles` with `params.engine`, in the current rayon pool.
 pub(crate) fn reconstruct(
@@ -46,6 +47,9 @@ pub(crate) fn reconstruct(
     let grid = Grid::around(particles, params.cell, params.support);
     if let Ok(g) = &grid {
         stages.stats.grid = g.resolution();
+    }
+    if let Some(baseline) = params.baseline {
+        return surface_following::reconstruct(particles, params, baseline, stages);
     }
     match params.engine {
         Engine::NarrowBand => narrow_band::gather(particles, params, stages),

@@ -15,6 +15,7 @@ mod marching_cubes;
 mod post;
 mod reconstruction;
 mod slices;
+mod surface_following;
 
 /// The helpers the integration tests and the command line's tests share.
 #[allow(dead_code)]

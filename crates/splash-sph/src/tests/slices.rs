@@ -138,7 +138,7 @@ fn slices_give_the_narrow_band_mesh_for_every_block_size_and_thread_count() {
 }
 
 /// Triangles in a canonical order, each rotated to start at its lowest vertex.
-fn sorted(triangles: &[[u32; 3]]) -> Vec<[u32; 3]> {
+pub(super) fn sorted(triangles: &[[u32; 3]]) -> Vec<[u32; 3]> {
     let mut out: Vec<[u32; 3]> = triangles
         .iter()
         .map(|t| {

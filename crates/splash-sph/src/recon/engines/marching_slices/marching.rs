@@ -12,6 +12,7 @@ use serde::Serialize;
 use super::blocks::Block;
 use super::lookup_cache::LookupCache;
 use super::missed_seeds::MissedSeeds;
+use super::seeds::particle_seeds;
 use super::slice_cache::{Corner, DONE_ABOVE, DONE_BELOW, NO_VERTEX, SliceCache};
 use crate::error::Result;
 use crate::field::ScalarField;
@@ -178,80 +179,14 @@ pub fn march<F: ScalarField + ?Sized>(
 }
 
 impl<F: ScalarField + ?Sized> Marcher<'_, F> {
-    /// Seeds (Sec. 4): from each particle's nearest corner, down in −z until the field is
-    /// outside; the cube above that corner goes on its slab's todo list. A particle's walk
-    /// ends where the walk of the particle below it in the same column began, or a reach
-    /// below it (the paper's R_c: a particle found nothing there, one below it will). Where
-    /// the nearest corner is already outside, the particle's own cube is the seed.
-    ///
-    /// Particles above the block start their walk at its top slice: a bubble in the top margin
-    /// that dips into the block's cubes is found only from the fluid above it. Particles
-    /// beside or below the block start none.
-    ///
-    /// The walks go down together, slice by slice, so that the lookup cache's window follows
-    /// them; the seeds are then pushed in the order of the walks by column.
+    /// Seeds (Sec. 4, `seeds.rs`), on the block's todo lists.
     fn seed(&mut self, reach_slabs: i32) {
-        let top = self.n - 1;
-        let mut starts: Vec<(IVec3, usize)> = (0..self.positions.len())
-            .map(|i| (self.local(i).round().as_ivec3(), i))
-            .filter(|(c, _)| c.x >= 1 && c.y >= 1 && c.z >= 1 && c.x <= top && c.y <= top)
-            .map(|(c, i)| (c.with_z(c.z.min(top)), i))
-            .collect();
-        starts.sort_unstable_by_key(|(c, _)| (c.y, c.x, c.z));
-        // A walk from the corner of the walk before it would repeat it.
-        starts.dedup_by_key(|s| s.0);
-        // The walk below walk k, in the same column, begins at this corner.
-        let below = |k: usize| {
-            let c = starts[k].0;
-            (k > 0 && starts[k - 1].0.truncate() == c.truncate()).then(|| starts[k - 1].0)
-        };
-        let mut by_height: Vec<u32> = (0..starts.len() as u32).collect();
-        by_height.sort_by_key(|&k| std::cmp::Reverse(starts[k as usize].0.z));
-        let mut inside = vec![false; starts.len()];
-        let mut seeds: Vec<Option<IVec3>> = vec![None; starts.len()];
-        let (mut walks, mut begun) = (Vec::new(), Vec::new());
-        let mut next = by_height.iter().peekable();
-        for z in (0..=top).rev() {
-            // The walks beginning here, then the steps down to here of those begun above, which
-            // end here if the walk below begins here.
-            while let Some(&k) = next.next_if(|&&k| starts[k as usize].0.z == z) {
-                let (c, i) = starts[k as usize];
-                inside[k as usize] = self.value(c) < 0.0;
-                if inside[k as usize] {
-                    begun.push(k);
-                    continue;
-                }
-                let q = self.local(i);
-                if q.z < f64::from(top) {
-                    let own = q.floor().as_ivec3().clamp(IVec3::ZERO, IVec3::splat(top));
-                    seeds[k as usize] = Some(own);
-                }
-            }
-            walks.retain(|&k| {
-                let k = k as usize;
-                let c = starts[k].0;
-                if z < (c.z - reach_slabs - 1).max(0) {
-                    return false;
-                }
-                if let Some(b) = below(k)
-                    && z == b.z
-                {
-                    // The walk below starts here: it goes on from here, or this is its top.
-                    if !inside[k - 1] {
-                        seeds[k] = Some(c.with_z(z));
-                    }
-                    return false;
-                }
-                if self.value(c.with_z(z)) >= 0.0 {
-                    seeds[k] = Some(c.with_z(z));
-                    return false;
-                }
-                true
-            });
-            walks.append(&mut begun);
-        }
-        for seed in seeds.into_iter().flatten() {
-            self.push(seed);
+        // The positions apart, as the walks ask the field (and so the cache) for corners.
+        let local: Vec<DVec3> = (0..self.positions.len()).map(|i| self.local(i)).collect();
+        let top = Some(self.n - 1);
+        let seeds = particle_seeds(local.len(), |i| local[i], reach_slabs, top, |c| self.value(c));
+        for cube in seeds {
+            self.push(cube);
         }
     }
 

@@ -1,14 +1,15 @@
 //! The block-parallel Marching Slices engine of Rosenberg & Birdwell 2008: block subdivision
 //! (Sec. 3, `blocks.rs`), Marching Slices within each block (Sec. 4, `marching.rs`, with
 //! `slice_cache.rs`), the 2D-projection 1D-lookup particle cache (Sec. 6, `lookup_cache.rs`),
-//! seeds for what the paper's seeding misses (`missed_seeds.rs`), and the blocks' meshes
-//! welded into one (`weld.rs`). Blocks run in parallel; each holds its
+//! the seeds (`seeds.rs`) and seeds for what they miss (`missed_seeds.rs`), and the blocks'
+//! meshes welded into one (`weld.rs`). Blocks run in parallel; each holds its
 //! lookup cache and slice caches only while it runs, so working memory is bounded per block.
 
 pub mod blocks;
 pub mod lookup_cache;
 pub mod marching;
 pub mod missed_seeds;
+pub mod seeds;
 pub mod slice_cache;
 pub mod weld;
 
