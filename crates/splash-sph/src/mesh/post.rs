@@ -47,8 +47,8 @@ pub struct PostConfig {
     pub max_offset: f32,
     /// Bisect the edges whose two triangles meet at more than this angle, in degrees, after the
     /// volume rounds ([`refine_bends`]; default 0: never). 16 takes cbd-large f23 from 2.57° to
-    /// 1.91° (with 15 relaxation steps) for 25 % more triangles, at about 1.35× the `raw` run's
-    /// CPU time on 2 threads (default 1.15×) and 95 MiB peak (default 93, `raw` 83; the CLI).
+    /// 1.91° (with 15 relaxation steps) for 25 % more triangles, at about 1.5× the `raw` run's
+    /// wall time on 2 threads (default 1.2×) and 95 MiB peak (default 93, `raw` 81; the CLI).
     pub refine_angle: f32,
     /// Tangential relaxation steps after the volume rounds (default 10: slivers on cbd-large
     /// f23 1.29 % → 0.39 %).
