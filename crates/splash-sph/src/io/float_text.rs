@@ -229,12 +229,12 @@ fn digits9(v: u64) -> (u128, usize) {
 #[inline]
 fn digits8(v: u64) -> u64 {
     // Two 4-digit lanes of 32 bits: the first four digits in the low lane.
-    let y = v / 10_000 | (v % 10_000) << 32;
+    let y = (v / 10_000) | ((v % 10_000) << 32);
     // Two-digit lanes of 16 bits: ⌊y/100⌋ as y·10486 >> 20, exact below 10^4.
-    let high = (y * 10_486 >> 20) & 0x0000_007f_0000_007f;
+    let high = ((y * 10_486) >> 20) & 0x0000_007f_0000_007f;
     let y = high | (y - high * 100) << 16;
     // One-digit lanes of 8 bits: ⌊y/10⌋ as y·103 >> 10, exact below 100.
-    let high = (y * 103 >> 10) & 0x000f_000f_000f_000f;
+    let high = ((y * 103) >> 10) & 0x000f_000f_000f_000f;
     high | (y - high * 10) << 8
 }
 

@@ -277,6 +277,21 @@ impl HandlerArray {
         (a.max(self.origin), b.min(self.last))
     }
 
+    /// The positions and channels of the particles `handlers`, in that order (a block's own
+    /// copy, in the engines that work block by block).
+    pub fn gather(&self, handlers: &[u32]) -> (Vec<Vec3>, Vec<Vec<f32>>) {
+        let positions = handlers
+            .iter()
+            .map(|&h| self.positions[h as usize])
+            .collect();
+        let channels = self
+            .channels
+            .iter()
+            .map(|c| handlers.iter().map(|&h| c[h as usize]).collect())
+            .collect();
+        (positions, channels)
+    }
+
     pub fn heap_bytes(&self) -> usize {
         self.positions.capacity() * size_of::<Vec3>()
             + self

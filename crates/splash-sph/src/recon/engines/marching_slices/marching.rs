@@ -118,16 +118,7 @@ pub fn march<F: ScalarField + ?Sized>(
     let n = block.size + 2 * block.margin;
     let origin = block.lo - block.margin;
     let handlers = set.handlers;
-    let positions: Vec<Vec3> = block
-        .particles
-        .iter()
-        .map(|&h| handlers.positions[h as usize])
-        .collect();
-    let channels: Vec<Vec<f32>> = handlers
-        .channels
-        .iter()
-        .map(|c| block.particles.iter().map(|&h| c[h as usize]).collect())
-        .collect();
+    let (positions, channels) = handlers.gather(&block.particles);
     let support = set.field.support();
     let cache = LookupCache::new(
         positions.len(),

@@ -21,7 +21,7 @@ use rayon::prelude::*;
 use serde::Serialize;
 
 use super::prepared::Reconstruction;
-use super::prepared::{prepare, triangles_and_normals};
+use super::prepared::prepare;
 use crate::bytes::human;
 use crate::config::{Normals, Params};
 use crate::recon::budget::{self, mul};
@@ -149,25 +149,15 @@ pub fn reconstruct(
     let blocks_bytes: usize = blocks.iter().map(|b| b.heap_bytes()).sum();
     drop(blocks);
     let surface_cells = stats.iter().map(|b| b.cubes_visited).sum();
-    let welded = triangles_and_normals(
+    let welded = weld::weld_and_finish(
         &mut stages,
         params,
         field,
-        || {
-            let held = held.saturating_add(
-                meshes
-                    .iter()
-                    .map(|m| m.heap_bytes() as u64)
-                    .fold(0, u64::saturating_add),
-            );
-            weld::weld(meshes, surface_cells, |mesh| {
-                budget::check(params, held.saturating_add(mesh), || {
-                    "the welded mesh of the blocks".into()
-                })
-                .map(drop)
-            })
-        },
-        || Ok(samples),
+        samples,
+        held,
+        meshes,
+        surface_cells,
+        "the welded mesh of the blocks",
     )?;
     let report = SlicesReport {
         in_flight_peak: in_flight.peak.load(Ordering::Relaxed),

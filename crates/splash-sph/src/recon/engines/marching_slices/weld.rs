@@ -9,8 +9,13 @@ use std::ops::Range;
 use glam::IVec3;
 use rayon::prelude::*;
 
+use super::super::prepared::triangles_and_normals;
 use super::marching::BlockMesh;
+use crate::config::Params;
 use crate::error::{Error, Result};
+use crate::field::ScalarField;
+use crate::neighbours::handler_array::HandlerArray;
+use crate::report::Stages;
 use crate::mesh::TriMesh;
 use crate::recon::bricks::band::{BRICK, brick_of, local_index};
 use crate::recon::budget;
@@ -24,6 +29,40 @@ fn key((corner, axis): (IVec3, u8)) -> EdgeKey {
     let b = brick_of(corner);
     let local = local_index(corner - b * BRICK) as u32;
     (b.z, b.y, b.x, local * 3 + u32::from(axis))
+}
+
+/// The blocks' meshes welded as in [`weld`] (checked against the memory limit with `held`
+/// bytes besides them and the blocks' meshes, naming `what`), then their triangles and
+/// normals made as every engine's, from `samples`: the last stages of the slices engine and
+/// of the surface-following baselines.
+#[allow(clippy::too_many_arguments)]
+pub(in crate::recon::engines) fn weld_and_finish(
+    stages: &mut Stages<'_>,
+    params: &Params,
+    field: &dyn ScalarField,
+    samples: &HandlerArray,
+    held: u64,
+    meshes: Vec<BlockMesh>,
+    surface_cells: usize,
+    what: &str,
+) -> Result<Triangulation> {
+    triangles_and_normals(
+        stages,
+        params,
+        field,
+        || {
+            let held = held.saturating_add(
+                meshes
+                    .iter()
+                    .map(|m| m.heap_bytes() as u64)
+                    .fold(0, u64::saturating_add),
+            );
+            weld(meshes, surface_cells, |mesh| {
+                budget::check(params, held.saturating_add(mesh), || what.into()).map(drop)
+            })
+        },
+        || Ok(samples),
+    )
 }
 
 /// The blocks' meshes as one, with the `surface_cells` the blocks visited.

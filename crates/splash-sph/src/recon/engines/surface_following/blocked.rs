@@ -104,16 +104,7 @@ pub fn march<F: ScalarField + ?Sized>(
     let n = block.size + 2 * block.margin;
     let origin = block.lo - block.margin;
     let handlers = set.handlers;
-    let positions: Vec<Vec3> = block
-        .particles
-        .iter()
-        .map(|&h| handlers.positions[h as usize])
-        .collect();
-    let channels: Vec<Vec<f32>> = handlers
-        .channels
-        .iter()
-        .map(|c| block.particles.iter().map(|&h| c[h as usize]).collect())
-        .collect();
+    let (positions, channels) = handlers.gather(&block.particles);
     // In cube units of the block, as the slices engine's lookup cache takes them.
     let cell = f64::from(set.cell);
     let local: Vec<DVec3> = positions

@@ -92,15 +92,7 @@ pub fn march<F: ScalarField + ?Sized>(
     let mut order: Vec<u32> = (0..handlers.positions.len() as u32).collect();
     let z = |i: &u32| handlers.positions[*i as usize].z;
     order.sort_unstable_by(|a, b| z(a).total_cmp(&z(b)).then(a.cmp(b)));
-    let positions: Vec<Vec3> = order
-        .iter()
-        .map(|&h| handlers.positions[h as usize])
-        .collect();
-    let channels: Vec<Vec<f32>> = handlers
-        .channels
-        .iter()
-        .map(|c| order.iter().map(|&h| c[h as usize]).collect())
-        .collect();
+    let (positions, channels) = handlers.gather(&order);
     drop(order);
     let cell = f64::from(set.cell);
     let global: Vec<DVec3> = positions.iter().map(|p| p.as_dvec3() / cell).collect();

@@ -18,7 +18,7 @@ use rayon::prelude::*;
 use rustc_hash::FxHashMap;
 
 use super::marching_slices::{blocks, weld};
-use super::prepared::{Reconstruction, prepare, triangles_and_normals};
+use super::prepared::{Reconstruction, prepare};
 use crate::config::{Normals, Params};
 use crate::error::Result;
 use crate::field::ScalarField;
@@ -180,25 +180,15 @@ pub fn reconstruct(
     })?;
     drop(blocks);
     let surface_cells = figures.iter().map(|f| f.cubes_visited).sum();
-    let welded = triangles_and_normals(
+    let welded = weld::weld_and_finish(
         &mut stages,
         params,
         field,
-        || {
-            let held = held.saturating_add(
-                meshes
-                    .iter()
-                    .map(|m| m.heap_bytes() as u64)
-                    .fold(0, u64::saturating_add),
-            );
-            weld::weld(meshes, surface_cells, |mesh| {
-                budget::check(params, held.saturating_add(mesh), || {
-                    "the welded mesh".into()
-                })
-                .map(drop)
-            })
-        },
-        || Ok(samples),
+        samples,
+        held,
+        meshes,
+        surface_cells,
+        "the welded mesh",
     )?;
     let mut s = stages.stats;
     let mesh = welded.mesh;
