@@ -37,6 +37,23 @@ pub const fn corner_offset(c: usize) -> [usize; 3] {
     [c & 1, (c >> 1) & 1, (c >> 2) & 1]
 }
 
+/// The steps to the neighbouring cubes across the faces of a cube that the surface crosses
+/// (a face with corners both inside and outside `values`), in the order −x, +x, −y, +y, −z,
+/// +z: where surface following goes next.
+pub fn crossed_faces(values: &[f32; 8]) -> impl Iterator<Item = IVec3> + '_ {
+    (0..3).flat_map(move |axis| {
+        [false, true].into_iter().filter_map(move |high| {
+            let face = (0..8).filter(|&c| (corner_offset(c)[axis] == 1) == high);
+            let (mut inside, mut outside) = (false, false);
+            for c in face {
+                inside |= values[c] < 0.0;
+                outside |= values[c] >= 0.0;
+            }
+            (inside && outside).then(|| IVec3::AXES[axis] * if high { 1 } else { -1 })
+        })
+    })
+}
+
 /// The two corners of edge `e`, the lower one first.
 pub const fn edge_corners(e: usize) -> (usize, usize) {
     let axis = e / 4;

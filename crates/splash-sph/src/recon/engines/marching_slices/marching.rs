@@ -17,7 +17,7 @@ use super::slice_cache::{Corner, DONE_ABOVE, DONE_BELOW, NO_VERTEX, SliceCache};
 use crate::error::Result;
 use crate::field::ScalarField;
 use crate::mesh::marching_cubes::{
-    case_index, cases, corner_offset, crossing_normal, edge_axis, edge_corners, edge_crossing,
+    case_index, cases, crossed_faces, crossing_normal, edge_axis, edge_corners, edge_crossing,
 };
 use crate::neighbours::handler_array::HandlerArray;
 use crate::neighbours::neighbourhood::{Neighbourhood, reach};
@@ -175,7 +175,13 @@ impl<F: ScalarField + ?Sized> Marcher<'_, F> {
         // The positions apart, as the walks ask the field (and so the cache) for corners.
         let local: Vec<DVec3> = (0..self.positions.len()).map(|i| self.local(i)).collect();
         let top = Some(self.n - 1);
-        let seeds = particle_seeds(local.len(), |i| local[i], reach_slabs, top, |c| self.value(c));
+        let seeds = particle_seeds(
+            local.len(),
+            |i| local[i],
+            reach_slabs,
+            top,
+            |c| self.value(c),
+        );
         for cube in seeds {
             self.push(cube);
         }
@@ -263,18 +269,10 @@ impl<F: ScalarField + ?Sized> Marcher<'_, F> {
             self.polygonise(cube, &ids, &values);
         }
         // Neighbours across faces the surface crosses (cubesToDo).
-        for axis in 0..3 {
-            for high in [false, true] {
-                let face = (0..8).filter(|&c| (corner_offset(c)[axis] == 1) == high);
-                let (mut inside, mut outside) = (false, false);
-                for c in face {
-                    inside |= values[c] < 0.0;
-                    outside |= values[c] >= 0.0;
-                }
-                let next = cube + IVec3::AXES[axis] * if high { 1 } else { -1 };
-                if inside && outside && within(next, self.n) && !self.done(next, cube) {
-                    self.push(next);
-                }
+        for step in crossed_faces(&values) {
+            let next = cube + step;
+            if within(next, self.n) && !self.done(next, cube) {
+                self.push(next);
             }
         }
     }

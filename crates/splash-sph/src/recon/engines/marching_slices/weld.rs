@@ -14,12 +14,12 @@ use super::marching::BlockMesh;
 use crate::config::Params;
 use crate::error::{Error, Result};
 use crate::field::ScalarField;
-use crate::neighbours::handler_array::HandlerArray;
-use crate::report::Stages;
 use crate::mesh::TriMesh;
+use crate::neighbours::handler_array::HandlerArray;
 use crate::recon::bricks::band::{BRICK, brick_of, local_index};
 use crate::recon::budget;
 use crate::recon::stages::triangulation::Triangulation;
+use crate::report::Stages;
 
 /// Sort key of an edge: its brick in (z, y, x) order, then its lower corner in the brick,
 /// then its axis.

@@ -155,7 +155,13 @@ pub fn march<F: ScalarField + ?Sized>(
     let cache_bytes = f.corners.sampler.heap_bytes() + block.heap_bytes();
     let counted = held.add(f.corners.heap_bytes() + cache_bytes);
     let reach_slabs = (f64::from(support) / cell).ceil() as i32;
-    for cube in particle_seeds(local.len(), |i| local[i], reach_slabs, Some(n - 1), |c| f.corners.value(c)) {
+    for cube in particle_seeds(
+        local.len(),
+        |i| local[i],
+        reach_slabs,
+        Some(n - 1),
+        |c| f.corners.value(c),
+    ) {
         f.push(cube);
     }
     drop(local);

@@ -6,7 +6,7 @@
 use glam::{IVec3, Vec3};
 
 use crate::mesh::marching_cubes::{
-    case_index, cases, corner_offset, crossing_normal, edge_axis, edge_corners, edge_crossing,
+    case_index, cases, crossed_faces, crossing_normal, edge_axis, edge_corners, edge_crossing,
 };
 use crate::recon::bricks::halo::offset;
 use crate::recon::engines::marching_slices::marching::BlockMesh;
@@ -110,18 +110,10 @@ impl<C: Corners> Follower<C> {
             }
         }
         // Neighbours across faces the surface crosses.
-        for axis in 0..3 {
-            for high in [false, true] {
-                let face = (0..8).filter(|&c| (corner_offset(c)[axis] == 1) == high);
-                let (mut inside, mut outside) = (false, false);
-                for c in face {
-                    inside |= values[c] < 0.0;
-                    outside |= values[c] >= 0.0;
-                }
-                let next = cube + IVec3::AXES[axis] * if high { 1 } else { -1 };
-                if inside && outside && self.within(next) && !self.corners.done(next) {
-                    self.todo.push(next);
-                }
+        for step in crossed_faces(&values) {
+            let next = cube + step;
+            if self.within(next) && !self.corners.done(next) {
+                self.todo.push(next);
             }
         }
     }

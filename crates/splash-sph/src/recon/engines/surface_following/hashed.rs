@@ -118,7 +118,13 @@ pub fn march<F: ScalarField + ?Sized>(
     };
     let mut f = Follower::new(corners, IVec3::ZERO, set.cell, set.corner_gradients, None);
     let reach_slabs = (f64::from(support) / cell).ceil() as i32;
-    for cube in particle_seeds(global.len(), |i| global[i], reach_slabs, None, |c| f.corners.value(c)) {
+    for cube in particle_seeds(
+        global.len(),
+        |i| global[i],
+        reach_slabs,
+        None,
+        |c| f.corners.value(c),
+    ) {
         f.push(cube);
     }
     drop(global);
