@@ -50,8 +50,8 @@ pub mod report;
 
 pub use bytes::Bytes;
 pub use config::{
-    ATTRIBUTES, BandConfig, Config, Engine, Normals, OutputConfig, SlicesConfig, SurfaceParticles,
-    parse_aabb,
+    ATTRIBUTES, BandConfig, Baseline, Config, Engine, Normals, OutputConfig, SlicesConfig,
+    SurfaceParticles, parse_aabb,
 };
 pub use error::{Error, Result};
 pub use glam::Vec3;
@@ -59,7 +59,7 @@ pub use io::{Attribute, InputFormat, MeshFormat, Particles, UpAxis, read_particl
 pub use length::Length;
 pub use mesh::TriMesh;
 pub use overrides::Overrides;
-pub use recon::{Baseline, Reconstruction};
+pub use recon::Reconstruction;
 pub use reconstructor::Reconstructor;
 pub use report::{Clock, CorrectionFigures, FrameStats, Observer, Stage, StageFigures};
 pub use spacing::estimate_spacing;

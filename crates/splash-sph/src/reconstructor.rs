@@ -6,13 +6,14 @@ use std::sync::Arc;
 use glam::Vec3;
 
 use crate::attributes;
+use crate::config::Baseline;
 use crate::config::{Config, Normals, Params};
 use crate::error::{Error, Result, figure};
 use crate::io::Attribute;
 use crate::mesh::TriMesh;
 use crate::mesh::post::postprocess;
 use crate::recon::engines::full_grid::{self, Grid};
-use crate::recon::{self, Baseline, Reconstruction};
+use crate::recon::{self, Reconstruction};
 use crate::report::{Observer, Stage, Stages};
 use crate::worker_pool::worker_pool;
 

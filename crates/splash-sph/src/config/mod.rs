@@ -18,7 +18,6 @@ use crate::error::{Error, Result};
 use crate::field::{FieldConfig, ScalarField, Scattering};
 use crate::io::{MeshFormat, UpAxis};
 use crate::length::{Length, positive};
-use crate::recon::Baseline;
 
 /// Everything that decides a run: the mesh of a frame, the engine and its resources, and how
 /// the mesh is written. `splash recon` fills it from these defaults, the `--config` file and
@@ -68,6 +67,17 @@ pub struct Config {
     /// What happens to the mesh after the engine (smoothing, volume); `post.raw` keeps the
     /// field's exact isosurface.
     pub post: crate::mesh::post::PostConfig,
+}
+
+/// A baseline of Fig. 7 of Rosenberg & Birdwell 2008 (approach 1 is the slices engine).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Baseline {
+    /// Approach 2: surface-following Marching Cubes in blocks, each with its corners in 3D
+    /// arrays and its particles in a voxel grid of cells R_c.
+    BlockedCubes,
+    /// Approach 3: surface-following Marching Cubes with hash maps for the corners and the
+    /// particles' voxel grid, unbounded.
+    HashedCubes,
 }
 
 /// Which grid vertices get a field value, and in what order.

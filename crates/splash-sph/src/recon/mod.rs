@@ -19,7 +19,6 @@ use engines::full_grid::{self, Grid};
 use engines::{marching_slices, narrow_band, scatter, surface_following};
 
 pub use engines::prepared::Reconstruction;
-pub use engines::surface_following::Baseline;
 
 /// Reconstructs the surface of `particles` with `params.engine`, in the current rayon pool.
 pub(crate) fn reconstruct(

@@ -4,8 +4,9 @@
 
 use super::common::{field_params, fixture, shared_data};
 use super::slices::sorted;
+use crate::config::Baseline;
 use crate::config::{Normals, Params};
-use crate::recon::{Baseline, Reconstruction};
+use crate::recon::Reconstruction;
 use crate::{Engine, Vec3};
 
 fn run(ps: &[Vec3], p: &Params, baseline: Option<Baseline>, threads: usize) -> Reconstruction {

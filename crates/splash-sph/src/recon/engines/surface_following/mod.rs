@@ -19,23 +19,12 @@ use rustc_hash::FxHashMap;
 
 use super::marching_slices::{blocks, weld};
 use super::prepared::{Reconstruction, prepare};
-use crate::config::{Normals, Params};
+use crate::config::{Baseline, Normals, Params};
 use crate::error::Result;
 use crate::field::ScalarField;
 use crate::neighbours::handler_array::HandlerArray;
 use crate::recon::budget::{self, mul};
 use crate::report::{SlicesFigures, Stage, Stages};
-
-/// A baseline of Fig. 7 of Rosenberg & Birdwell 2008 (approach 1 is the slices engine).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Baseline {
-    /// Approach 2: surface-following Marching Cubes in blocks, each with its corners in 3D
-    /// arrays and its particles in a voxel grid of cells R_c.
-    BlockedCubes,
-    /// Approach 3: surface-following Marching Cubes with hash maps for the corners and the
-    /// particles' voxel grid, unbounded.
-    HashedCubes,
-}
 
 /// What the marching needs.
 pub struct Setting<'a, F: ScalarField + ?Sized> {
