@@ -12,9 +12,13 @@ use rayon::prelude::*;
 use rustc_hash::FxHashSet;
 
 use super::lookup_cache::LookupCache;
+use crate::config::Params;
 use crate::error::Result;
+use crate::field::ScalarField;
 use crate::neighbours::handler_array::HandlerArray;
 use crate::neighbours::neighbourhood;
+use crate::recon::budget::{self, mul};
+use crate::report::{Stage, Stages};
 
 pub struct Block {
     /// Global index of the block's first cube (cube k spans corners k to k + 1).
@@ -89,6 +93,40 @@ pub fn fullest_block_guess(handlers: &HandlerArray, reach: f32, cell: f32, size:
         })
         .max()
         .unwrap_or(0)
+}
+
+/// [`subdivide`] of `samples` into blocks of `params.block` cubes a side, in the band stage,
+/// the key sets and particle lists (about 24 bytes a pair) checked against the memory limit
+/// with `held` bytes besides them: the blocks of the slices engine and of the
+/// surface-following baselines.
+pub fn subdivide_within_limit(
+    stages: &mut Stages<'_>,
+    params: &Params,
+    field: &dyn ScalarField,
+    samples: &HandlerArray,
+    held: u64,
+) -> Result<Vec<Block>> {
+    let n = samples.positions.len();
+    stages.run(Stage::Band, || {
+        subdivide(
+            samples,
+            field.support(),
+            field.reach_channel(),
+            params.cell,
+            params.block as i32,
+            |pairs| {
+                let need = held.saturating_add(mul(pairs, 24));
+                budget::check(params, need, || {
+                    format!(
+                        "the blocks of {n} particles ({pairs} pairs of a block of {}³ cubes and \
+                         a particle reaching it)",
+                        params.block
+                    )
+                })
+                .map(drop)
+            },
+        )
+    })
 }
 
 /// The blocks whose cubes some particle reaches, in (z, y, x) order, with their particles. `reach`

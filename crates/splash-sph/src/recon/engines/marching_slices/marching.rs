@@ -45,6 +45,20 @@ pub struct InFlight {
     pub peak: AtomicUsize,
 }
 
+impl InFlight {
+    /// Counts `bytes` more in flight, raising the peak; returns `bytes`.
+    pub fn add(&self, bytes: usize) -> usize {
+        let now = self.now.fetch_add(bytes, Ordering::Relaxed) + bytes;
+        self.peak.fetch_max(now, Ordering::Relaxed);
+        bytes
+    }
+
+    /// Counts `bytes` fewer in flight.
+    pub fn sub(&self, bytes: usize) {
+        self.now.fetch_sub(bytes, Ordering::Relaxed);
+    }
+}
+
 /// A block's part of the mesh: triangles of its own cubes, and the vertices they use, some on
 /// faces shared with other blocks.
 #[derive(Default)]
@@ -165,7 +179,7 @@ pub fn march<F: ScalarField + ?Sized>(
     m.seed_missed()?;
     m.run();
     m.account();
-    set.in_flight.now.fetch_sub(m.counted, Ordering::Relaxed);
+    set.in_flight.sub(m.counted);
     Ok((m.mesh, m.stats))
 }
 
@@ -418,13 +432,10 @@ impl<F: ScalarField + ?Sized> Marcher<'_, F> {
         let render = slices + todo + self.visited_bits.capacity() * size_of::<u64>();
         self.stats.render_bytes = self.stats.render_bytes.max(render);
         let now = render + self.stats.cache_bytes;
-        let flight = &self.set.in_flight;
         if now >= self.counted {
-            let total =
-                flight.now.fetch_add(now - self.counted, Ordering::Relaxed) + now - self.counted;
-            flight.peak.fetch_max(total, Ordering::Relaxed);
+            self.set.in_flight.add(now - self.counted);
         } else {
-            flight.now.fetch_sub(self.counted - now, Ordering::Relaxed);
+            self.set.in_flight.sub(self.counted - now);
         }
         self.counted = now;
     }

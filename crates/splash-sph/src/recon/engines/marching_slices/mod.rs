@@ -80,27 +80,7 @@ pub fn reconstruct(
             reach.ceil()
         )
     })?;
-    let blocks = stages.run(Stage::Band, || {
-        blocks::subdivide(
-            samples,
-            field.support(),
-            field.reach_channel(),
-            cell,
-            params.block as i32,
-            |pairs| {
-                // Key sets and the blocks' particle lists: about 24 bytes a pair.
-                let need = held.saturating_add(mul(pairs, 24));
-                budget::check(params, need, || {
-                    format!(
-                        "the blocks of {n} particles ({pairs} pairs of a block of {}³ cubes and \
-                         a particle reaching it)",
-                        params.block
-                    )
-                })
-                .map(drop)
-            },
-        )
-    })?;
+    let blocks = blocks::subdivide_within_limit(&mut stages, params, field, samples, held)?;
     // The blocks in flight at once (the largest, one per thread), their particle lists, and
     // the mesh: the blocks' parts, then the welded mesh and its sort.
     let mut per_block: Vec<u64> = blocks

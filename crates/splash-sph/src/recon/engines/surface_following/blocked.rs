@@ -5,15 +5,16 @@
 
 use glam::{DVec3, IVec3, Vec3};
 
+use super::Figures;
 use super::follow::{Bounds, Corners, Follower};
 use super::particle_grid::{ArrayCells, ParticleGrid};
 use super::sampler::Sampler;
-use super::{Figures, Held, Setting};
 use crate::error::Result;
 use crate::field::ScalarField;
 use crate::neighbours::neighbourhood::reach;
 use crate::recon::engines::marching_slices::blocks::Block;
 use crate::recon::engines::marching_slices::marching::BlockMesh;
+use crate::recon::engines::marching_slices::marching::Setting;
 use crate::recon::engines::marching_slices::missed_seeds::MissedSeeds;
 use crate::recon::engines::marching_slices::seeds::particle_seeds;
 
@@ -99,7 +100,6 @@ pub fn array_bytes(cubes: i32, corner_gradients: bool) -> u64 {
 pub fn march<F: ScalarField + ?Sized>(
     set: &Setting<F>,
     block: &Block,
-    held: &Held,
 ) -> Result<(BlockMesh, Figures)> {
     let n = block.size + 2 * block.margin;
     let origin = block.lo - block.margin;
@@ -153,7 +153,7 @@ pub fn march<F: ScalarField + ?Sized>(
         Some(bounds),
     );
     let cache_bytes = f.corners.sampler.heap_bytes() + block.heap_bytes();
-    let counted = held.add(f.corners.heap_bytes() + cache_bytes);
+    let counted = set.in_flight.add(f.corners.heap_bytes() + cache_bytes);
     let reach_slabs = (f64::from(support) / cell).ceil() as i32;
     for cube in particle_seeds(
         local.len(),
@@ -185,7 +185,7 @@ pub fn march<F: ScalarField + ?Sized>(
         }
     }
     f.run();
-    held.sub(counted);
+    set.in_flight.sub(counted);
     let figures = Figures {
         cubes_visited: f.cubes_visited,
         corners: f.corners.sampler.corners,

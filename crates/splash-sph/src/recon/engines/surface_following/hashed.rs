@@ -7,16 +7,17 @@ use std::collections::hash_map::Entry as Slot;
 use glam::{DVec3, IVec3, Vec3};
 use rustc_hash::FxHashMap;
 
+use super::Figures;
 use super::follow::{Corners, Follower};
 use super::hash_bytes;
 use super::particle_grid::{HashedCells, ParticleGrid};
 use super::sampler::Sampler;
-use super::{Figures, Setting};
 use crate::error::Result;
 use crate::field::ScalarField;
 use crate::neighbours::neighbourhood::reach;
 use crate::recon::engines::marching_slices::blocks::Block;
 use crate::recon::engines::marching_slices::marching::BlockMesh;
+use crate::recon::engines::marching_slices::marching::Setting;
 use crate::recon::engines::marching_slices::missed_seeds::MissedSeeds;
 use crate::recon::engines::marching_slices::seeds::particle_seeds;
 

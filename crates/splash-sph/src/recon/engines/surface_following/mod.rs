@@ -11,31 +11,19 @@ pub mod hashed;
 pub mod particle_grid;
 pub mod sampler;
 
-use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::atomic::Ordering;
 
 use glam::Vec3;
 use rayon::prelude::*;
 use rustc_hash::FxHashMap;
 
+use super::marching_slices::marching::{InFlight, Setting};
 use super::marching_slices::{blocks, weld};
 use super::prepared::{Reconstruction, prepare};
 use crate::config::{Baseline, Normals, Params};
 use crate::error::Result;
-use crate::field::ScalarField;
-use crate::neighbours::handler_array::HandlerArray;
 use crate::recon::budget::{self, mul};
 use crate::report::{SlicesFigures, Stage, Stages};
-
-/// What the marching needs.
-pub struct Setting<'a, F: ScalarField + ?Sized> {
-    pub handlers: &'a HandlerArray,
-    pub field: &'a F,
-    pub cell: f32,
-    /// The particle spacing r, for the missed seeds.
-    pub spacing: f32,
-    /// Cache the field's gradient at corners, for `normals = "grid"`.
-    pub corner_gradients: bool,
-}
 
 /// The figures of a block, or of approach 3's one unbounded run.
 #[derive(Debug, Clone, Copy, Default)]
@@ -47,25 +35,6 @@ pub struct Figures {
     pub render_bytes: usize,
     /// Bytes of the particle grid and the particles' copies and list: its "cache memory".
     pub cache_bytes: usize,
-}
-
-/// Bytes held by the blocks being marched now, and their peak.
-#[derive(Default)]
-pub struct Held {
-    now: AtomicUsize,
-    peak: AtomicUsize,
-}
-
-impl Held {
-    fn add(&self, bytes: usize) -> usize {
-        let now = self.now.fetch_add(bytes, Ordering::Relaxed) + bytes;
-        self.peak.fetch_max(now, Ordering::Relaxed);
-        bytes
-    }
-
-    fn sub(&self, bytes: usize) {
-        self.now.fetch_sub(bytes, Ordering::Relaxed);
-    }
 }
 
 /// Heap bytes of a hash map as hashbrown lays it out: a power of two of buckets at most 7/8
@@ -100,22 +69,7 @@ pub fn reconstruct(
     let (field, samples) = prepared.sampling();
     let held = prepared.heap_bytes() as u64;
     let (cell, n) = (params.cell, particles.len());
-    let blocks = stages.run(Stage::Band, || {
-        blocks::subdivide(
-            samples,
-            field.support(),
-            field.reach_channel(),
-            cell,
-            params.block as i32,
-            |pairs| {
-                let need = held.saturating_add(mul(pairs, 24));
-                budget::check(params, need, || {
-                    format!("the blocks of {n} particles ({pairs} block-particle pairs)")
-                })
-                .map(drop)
-            },
-        )
-    })?;
+    let blocks = blocks::subdivide_within_limit(&mut stages, params, field, samples, held)?;
     let lists: u64 = blocks.iter().map(|b| b.heap_bytes() as u64).sum();
     let corner_gradients = params.normals == Normals::Grid;
     // The working memory: per block in flight (2), or the corners of the whole surface (3),
@@ -144,19 +98,21 @@ pub fn reconstruct(
             .saturating_add(budget::mesh_bytes(vertices)),
         || format!("the {baseline:?} baseline's corner caches and particle grids"),
     )?;
+    let in_flight = InFlight::default();
     let set = Setting {
         handlers: samples,
         field,
         cell,
         spacing: params.spacing,
         corner_gradients,
+        check_visits: false,
+        in_flight: &in_flight,
     };
-    let in_flight = Held::default();
     let (meshes, figures): (Vec<_>, Vec<Figures>) = stages.run(Stage::ScalarField, || {
         Ok::<_, crate::Error>(match baseline {
             Baseline::BlockedCubes => blocks
                 .par_iter()
-                .map(|b| blocked::march(&set, b, &in_flight))
+                .map(|b| blocked::march(&set, b))
                 .collect::<Result<Vec<_>>>()?
                 .into_iter()
                 .unzip(),
