@@ -6,11 +6,9 @@ use rayon::prelude::*;
 
 /// For vertex `v`, `corners[offsets[v]..offsets[v + 1]]` are its corners `3 f + k` (vertex
 /// `v` is corner `k` of triangle `f`), in increasing order (so whatever reads them sums in the
-/// same order on any thread count). [`VertexFaces::neighbours`] reads the vertex that follows
+/// same order on any thread count). [`Neighbours`] keeps, beside them, the vertex that follows
 /// `v` in each triangle: on a closed oriented manifold every edge from `v` is walked away from
-/// `v` by exactly one triangle, so these are `v`'s neighbours, each once. (Looked up in the
-/// triangles rather than stored beside the corners: a third less memory for the rows, which
-/// are post-processing's largest array.)
+/// `v` by exactly one triangle, so these are `v`'s neighbours, each once.
 #[derive(Debug, Clone, Default)]
 pub struct VertexFaces {
     /// `vertices + 1` row starts.
@@ -45,29 +43,10 @@ impl VertexFaces {
         &self.corners[self.offsets[v] as usize..self.offsets[v + 1] as usize]
     }
 
-    /// Whether no triangle uses `v`.
-    pub fn is_empty(&self, v: usize) -> bool {
-        self.offsets[v] == self.offsets[v + 1]
-    }
-
     /// The triangles around `v`, in increasing order.
     #[inline]
     pub fn of(&self, v: usize) -> impl ExactSizeIterator<Item = usize> + '_ {
         self.row(v).iter().map(|&c| c as usize / 3)
-    }
-
-    /// The vertex after `v` in each of its triangles (`triangles` those of the rows), in row
-    /// order: its neighbours (see the type's docs).
-    #[inline]
-    pub fn neighbours<'a>(
-        &'a self,
-        triangles: &'a [[u32; 3]],
-        v: usize,
-    ) -> impl ExactSizeIterator<Item = u32> + 'a {
-        let indices = triangles.as_flattened();
-        self.row(v)
-            .iter()
-            .map(move |&c| indices[next_corner(c) as usize])
     }
 }
 
