@@ -124,8 +124,14 @@ pub(crate) fn vertex_rows(
     for v in 0..vertices {
         offsets[v + 1] += offsets[v];
     }
-    faces.clear();
-    faces.resize(offsets[vertices] as usize, 0);
+    let len = offsets[vertices] as usize;
+    if faces.capacity() < len {
+        // Zeroed pages for a new array, rather than a fill before the placing writes them.
+        *faces = vec![0; len];
+    } else {
+        faces.clear();
+        faces.resize(len, 0);
+    }
     // Fill from the front of each row, using `offsets[v]` as the cursor, then shift back.
     for (i, t) in triangles.iter().enumerate() {
         if !keep(t) {

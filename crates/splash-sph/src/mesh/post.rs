@@ -287,21 +287,43 @@ fn smooth_and_restore(
         triangles,
     } = mesh;
     let mut rings = Neighbours::new(VertexFaces::new(vertices.len(), triangles), triangles);
-    let mut components = Components::new(&rings);
-    let raw_volumes = components.volumes_and_areas(vertices, triangles);
     let (lambda, mu) = (config.lambda, config.mu);
     let mut scratch = vec![Vec3::ZERO; vertices.len()];
-    taubin(
-        vertices,
-        &mut scratch,
-        &rings,
-        config.smoothing_iterations,
-        lambda,
-        mu,
+    // The component labels and the raw volumes, walks on one thread, read the raw vertices
+    // while the first smoothing runs on a copy in the rest of the pool.
+    let ((mut components, raw_volumes), smoothed) = rayon::join(
+        || {
+            let components = Components::new(&rings);
+            let volumes = components.volumes_and_areas(vertices, triangles);
+            (components, volumes)
+        },
+        || {
+            let mut smoothed = vertices.clone();
+            taubin(
+                &mut smoothed,
+                &mut scratch,
+                &rings,
+                config.smoothing_iterations,
+                lambda,
+                mu,
+            );
+            smoothed
+        },
     );
-    normals.resize(vertices.len(), Vec3::ZERO);
+    *vertices = smoothed;
+    if normals.len() != vertices.len() {
+        // Zeroed pages rather than a fill on one thread: every normal is written next.
+        *normals = vec![Vec3::ZERO; vertices.len()];
+    }
     let mut measures = Measures::default();
-    normals_and_measures(vertices, triangles, rings.faces(), normals, &mut measures);
+    normals_and_measures(
+        vertices,
+        triangles,
+        rings.faces(),
+        &components,
+        normals,
+        &mut measures,
+    );
 
     let targets: Vec<f64> = match volumes {
         _ if config.volume_rounds + config.volume_steps == 0 => Vec::new(),
@@ -327,7 +349,14 @@ fn smooth_and_restore(
     let max_step = config.max_offset * spacing;
     for _ in 0..config.volume_rounds {
         taubin(vertices, &mut scratch, &rings, 1, lambda, mu);
-        normals_and_measures(vertices, triangles, rings.faces(), normals, &mut measures);
+        normals_and_measures(
+            vertices,
+            triangles,
+            rings.faces(),
+            &components,
+            normals,
+            &mut measures,
+        );
         restore(
             vertices,
             normals,
@@ -372,7 +401,14 @@ fn smooth_and_restore(
     );
     drop(scratch);
     let rings = rings.into_faces();
-    normals_and_measures(vertices, triangles, &rings, normals, &mut measures);
+    normals_and_measures(
+        vertices,
+        triangles,
+        &rings,
+        &components,
+        normals,
+        &mut measures,
+    );
     restore(
         vertices,
         normals,
@@ -385,7 +421,14 @@ fn smooth_and_restore(
         max_step,
     );
     if wants_normals && config.volume_steps > 0 {
-        normals_and_measures(vertices, triangles, &rings, normals, &mut measures);
+        normals_and_measures(
+            vertices,
+            triangles,
+            &rings,
+            &components,
+            normals,
+            &mut measures,
+        );
     }
     if !wants_normals {
         *normals = Vec::new();

@@ -30,36 +30,39 @@ fn twins(triangles: &[[u32; 3]], rings: VertexFaces) -> Vec<[u32; 3]> {
         |c: u32| c - c % 3 + (c + 1) % 3,
         |c: u32| c - c % 3 + (c + 2) % 3,
     );
-    // Every corner lies in exactly one row, which alone writes it.
-    let found: Vec<AtomicU32> = (0..indices.len()).map(|_| AtomicU32::new(NONE)).collect();
-    (0..rings.offsets.len() - 1)
-        .into_par_iter()
-        .with_min_len(CHUNK)
-        .for_each(|v| {
-            let row = rings.row(v);
-            for &c in row {
-                // The edge v → u out of corner c meets u → v, ending at a corner of this row.
-                let u = indices[next(c) as usize];
-                let mut twin = NONE;
-                for &d in row {
-                    if indices[prev(d) as usize] == u {
-                        if twin != NONE {
-                            twin = NONE;
-                            break;
+    // Every corner lies in exactly one row, which alone writes it, through an atomic view of
+    // the result: no second array to copy, and no fill (zeroed pages come from the system
+    // untouched; the rows' tasks fault them in).
+    const _: () = assert!(align_of::<AtomicU32>() == align_of::<u32>());
+    let mut twin = vec![[0u32; 3]; triangles.len()];
+    {
+        let flat: &mut [u32] = twin.as_flattened_mut();
+        // SAFETY: AtomicU32 has the size and bit validity of u32 and, as asserted, its
+        // alignment; `flat` is borrowed exclusively, so only `found` reaches the memory.
+        let found = unsafe { &*(flat as *mut [u32] as *const [AtomicU32]) };
+        (0..rings.offsets.len() - 1)
+            .into_par_iter()
+            .with_min_len(CHUNK)
+            .for_each(|v| {
+                let row = rings.row(v);
+                for &c in row {
+                    // The edge v → u out of corner c meets u → v, ending at a corner of this row.
+                    let u = indices[next(c) as usize];
+                    let mut twin = NONE;
+                    for &d in row {
+                        if indices[prev(d) as usize] == u {
+                            if twin != NONE {
+                                twin = NONE;
+                                break;
+                            }
+                            twin = prev(d);
                         }
-                        twin = prev(d);
                     }
+                    found[c as usize].store(twin, Ordering::Relaxed);
                 }
-                found[c as usize].store(twin, Ordering::Relaxed);
-            }
-        });
+            });
+    }
     drop(rings);
-    let mut twin: Vec<[u32; 3]> = found
-        .par_chunks(3)
-        .with_min_len(CHUNK)
-        .map(|c| std::array::from_fn(|k| c[k].load(Ordering::Relaxed)))
-        .collect();
-    drop(found);
     let asymmetric: Vec<u32> = (0..3 * triangles.len() as u32)
         .into_par_iter()
         .with_min_len(3 * CHUNK)
@@ -114,10 +117,15 @@ fn bisect(
     let twin = twins(triangles, rings);
     let ids =
         |f: usize| -> [u32; 3] { std::array::from_fn(|k| edge_id((3 * f + k) as u32, twin[f][k])) };
-    let face_normal = |f: usize| {
-        let [a, b, c] = triangles[f].map(|i| vertices[i as usize]);
-        (b - a).cross(c - a).normalize_or_zero()
-    };
+    // Unit face normals, each made once rather than once per edge that reads it.
+    let unit: Vec<Vec3> = triangles
+        .par_iter()
+        .with_min_len(CHUNK)
+        .map(|t| {
+            let [a, b, c] = t.map(|i| vertices[i as usize]);
+            (b - a).cross(c - a).normalize_or_zero()
+        })
+        .collect();
     let cos_max = angle.cos();
     // Split flags by edge id (the owning corner); each triangle writes only its own corners.
     let mut split = vec![false; 3 * triangles.len()];
@@ -127,14 +135,14 @@ fn bisect(
         .zip(&twin)
         .enumerate()
         .for_each(|(f, (flags, tw))| {
-            let n = face_normal(f);
             for k in 0..3 {
                 let c = (3 * f + k) as u32;
                 if edge_id(c, tw[k]) == c {
-                    flags[k] = n.dot(face_normal((tw[k] / 3) as usize)) < cos_max;
+                    flags[k] = unit[f].dot(unit[(tw[k] / 3) as usize]) < cos_max;
                 }
             }
         });
+    drop(unit);
     // Rivara's closure: a triangle with a bisected edge has its longest edge bisected too. The
     // split edges only grow, to the same smallest closed set in any order of work.
     let longest = |f: usize| longest_edge(vertices, &triangles[f], &ids(f));
@@ -239,7 +247,8 @@ fn bisect(
     // The refined mesh's twins from the old ones the same way: a piece's edge on half `h` of
     // its parent's edge `k` meets the other half (or the whole edge) of the twin triangle's
     // edge.
-    let mut refined = vec![[NONE; 3]; total];
+    // Every slot is written below: zeroed pages, not a fill on one thread.
+    let mut refined = vec![[0u32; 3]; total];
     runs(&mut refined, &start)
         .into_par_iter()
         .for_each(|(first, out)| {
@@ -540,6 +549,12 @@ fn should_flip(vertices: &[Vec3], triangles: &[[u32; 3]], c: u32, other: u32) ->
     let (g, j) = ((other / 3) as usize, (other % 3) as usize);
     let [a, b, cv] = rotate(triangles[f], k).map(|i| vertices[i as usize]);
     let d = vertices[triangles[g][(j + 2) % 3] as usize];
+    // Two opposite angles γ at c' and δ at d sum to more than π only if one is obtuse: most
+    // edges are rejected here, before any cross product.
+    let (ca, cb, da, db) = (a - cv, b - cv, a - d, b - d);
+    if ca.dot(cb) >= 0.0 && da.dot(db) >= 0.0 {
+        return false;
+    }
     let (n1, n2) = ((b - a).cross(cv - a), (a - b).cross(d - b));
     let dot = n1.dot(n2);
     if dot <= 0.0
@@ -547,9 +562,8 @@ fn should_flip(vertices: &[Vec3], triangles: &[[u32; 3]], c: u32, other: u32) ->
     {
         return false;
     }
-    // The opposite angles γ at c' and δ at d sum to more than π iff sin(γ + δ) < 0, that is
-    // cos γ sin δ + sin γ cos δ < 0, with each sine and cosine times its two edge lengths.
-    let (ca, cb, da, db) = (a - cv, b - cv, a - d, b - d);
+    // They sum to more than π iff sin(γ + δ) < 0, that is cos γ sin δ + sin γ cos δ < 0,
+    // with each sine and cosine times its two edge lengths.
     if ca.dot(cb) * da.cross(db).length() + da.dot(db) * ca.cross(cb).length() >= 0.0 {
         return false;
     }
@@ -673,7 +687,7 @@ mod tests {
         for degrees in [10.0, 20.0, 30.0, 45.0] {
             let mut mesh = torus(12, 8, 1.0, 0.3, 0.0);
             for (i, p) in mesh.vertices.iter_mut().enumerate() {
-                let h = |k: u32| ((i as u32 * 2654435761 ^ k).wrapping_mul(40503) % 1000) as f32;
+                let h = |k: u32| (((i as u32 * 2654435761) ^ k).wrapping_mul(40503) % 1000) as f32;
                 *p += 0.00004 * Vec3::new(h(1), h(2), h(3));
             }
             let before = mesh.triangles.len();

@@ -78,6 +78,8 @@ pub fn vertex_normals(
 /// `iterations` umbrella steps with the normal part of each move taken out: vertices slide
 /// along the surface toward the centre of their ring, which evens out stretched and squeezed
 /// triangles without moving the surface (to first order). `normals` are unit vertex normals.
+/// The steps go back and forth between `vertices` and `scratch` (Jacobi updates, as
+/// [`taubin`]); an odd count copies the last step back.
 pub fn relax_tangentially(
     vertices: &mut [Vec3],
     scratch: &mut [Vec3],
@@ -86,18 +88,27 @@ pub fn relax_tangentially(
     iterations: u32,
     factor: f32,
 ) {
-    for _ in 0..iterations {
-        let from: &[Vec3] = vertices;
-        scratch
-            .par_chunks_mut(CHUNK)
-            .enumerate()
-            .for_each(|(c, out)| {
-                for (k, slot) in out.iter_mut().enumerate() {
-                    let v = c * CHUNK + k;
-                    let (step, n) = (umbrella(from, rings, v), normals[v]);
-                    *slot = from[v] + factor * (step - step.dot(n) * n);
-                }
-            });
-        vertices.copy_from_slice(scratch);
+    debug_assert_eq!(vertices.len(), scratch.len());
+    for _ in 0..iterations / 2 {
+        relax_step(vertices, scratch, normals, rings, factor);
+        relax_step(scratch, vertices, normals, rings, factor);
     }
+    if iterations % 2 == 1 {
+        relax_step(vertices, scratch, normals, rings, factor);
+        vertices
+            .par_chunks_mut(CHUNK)
+            .zip(scratch.par_chunks(CHUNK))
+            .for_each(|(to, from)| to.copy_from_slice(from));
+    }
+}
+
+/// One step of [`relax_tangentially`] from `from` into `to`.
+fn relax_step(from: &[Vec3], to: &mut [Vec3], normals: &[Vec3], rings: &Neighbours, factor: f32) {
+    to.par_chunks_mut(CHUNK).enumerate().for_each(|(c, out)| {
+        for (k, slot) in out.iter_mut().enumerate() {
+            let v = c * CHUNK + k;
+            let (step, n) = (umbrella(from, rings, v), normals[v]);
+            *slot = from[v] + factor * (step - step.dot(n) * n);
+        }
+    });
 }
