@@ -288,7 +288,11 @@ fn smooth_and_restore(
     } = mesh;
     let mut rings = Neighbours::new(VertexFaces::new(vertices.len(), triangles), triangles);
     let (lambda, mu) = (config.lambda, config.mu);
-    let mut scratch = vec![Vec3::ZERO; vertices.len()];
+    // One buffer is the smoothing's scratch (a vertex each) and the measures' triangle normals
+    // (a triangle each), in turn.
+    let mut measures = Measures::default();
+    measures.scratch(triangles.len().max(vertices.len()));
+    let scratch = measures.scratch(vertices.len());
     // The component labels and the raw volumes, walks on one thread, read the raw vertices
     // while the first smoothing runs on a copy in the rest of the pool.
     let ((mut components, raw_volumes), smoothed) = rayon::join(
@@ -301,7 +305,7 @@ fn smooth_and_restore(
             let mut smoothed = vertices.clone();
             taubin(
                 &mut smoothed,
-                &mut scratch,
+                scratch,
                 &rings,
                 config.smoothing_iterations,
                 lambda,
@@ -315,7 +319,6 @@ fn smooth_and_restore(
         // Zeroed pages rather than a fill on one thread: every normal is written next.
         *normals = vec![Vec3::ZERO; vertices.len()];
     }
-    let mut measures = Measures::default();
     normals_and_measures(
         vertices,
         triangles,
@@ -348,7 +351,8 @@ fn smooth_and_restore(
     };
     let max_step = config.max_offset * spacing;
     for _ in 0..config.volume_rounds {
-        taubin(vertices, &mut scratch, &rings, 1, lambda, mu);
+        let scratch = measures.scratch(vertices.len());
+        taubin(vertices, scratch, &rings, 1, lambda, mu);
         normals_and_measures(
             vertices,
             triangles,
@@ -369,12 +373,11 @@ fn smooth_and_restore(
             max_step,
         );
     }
-    // The normals for the refinement and the relaxation; the measures are made anew after
-    // them, at the refined size, once the neighbours and the scratch are freed.
-    measures = Measures::default();
+    // The normals for the refinement and the relaxation.
     vertex_normals(vertices, triangles, rings.faces(), normals);
     if config.refine_angle > 0.0 {
-        drop(std::mem::take(&mut scratch));
+        // Made anew at the refined size; the refinement's own arrays take their place.
+        measures = Measures::default();
         let parents = refine_bends(
             vertices,
             normals,
@@ -389,17 +392,16 @@ fn smooth_and_restore(
             components.of_vertex.push(components.of_vertex[p as usize]);
         }
         debug_assert_eq!(components.of_vertex.len(), vertices.len());
-        scratch = vec![Vec3::ZERO; vertices.len()];
     }
+    let scratch = measures.scratch(vertices.len());
     relax_tangentially(
         vertices,
-        &mut scratch,
+        scratch,
         normals,
         &rings,
         config.relax_iterations,
         0.5,
     );
-    drop(scratch);
     let rings = rings.into_faces();
     normals_and_measures(
         vertices,

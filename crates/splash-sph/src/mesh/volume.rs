@@ -91,8 +91,23 @@ pub struct Measures {
     /// shares of the volume and the area.
     runs: Vec<Vec<(u32, [f64; 2])>>,
     /// Per triangle, its twice-area normal: each made once and read by its three corners
-    /// (a buffer kept between the calls).
+    /// (a buffer kept between the calls, lent out as scratch between them).
     crosses: Vec<Vec3>,
+}
+
+impl Measures {
+    /// The buffer of the triangles' normals as `len` entries of scratch (grown if shorter),
+    /// for work between two [`normals_and_measures`], so that smoothing and the measures
+    /// share one array.
+    pub fn scratch(&mut self, len: usize) -> &mut [Vec3] {
+        if self.crosses.is_empty() {
+            // Zeroed pages rather than a fill on one thread.
+            self.crosses = vec![Vec3::ZERO; len];
+        } else if self.crosses.len() < len {
+            self.crosses.resize(len, Vec3::ZERO);
+        }
+        &mut self.crosses[..len]
+    }
 }
 
 /// Unit area-weighted vertex normals into `normals` and each component's [`Measures`]: the
@@ -106,11 +121,7 @@ pub fn normals_and_measures(
     measures: &mut Measures,
 ) {
     let origin = vertices.first().copied().unwrap_or_default();
-    let Measures { runs, crosses } = measures;
-    if crosses.len() != triangles.len() {
-        // Zeroed pages rather than a fill on one thread: every entry is written next.
-        *crosses = vec![Vec3::ZERO; triangles.len()];
-    }
+    let crosses = measures.scratch(triangles.len());
     crosses
         .par_chunks_mut(CHUNK)
         .zip(triangles.par_chunks(CHUNK))
@@ -120,7 +131,8 @@ pub fn normals_and_measures(
                 *n = (b - a).cross(d - a);
             }
         });
-    let crosses = &*crosses;
+    let Measures { runs, crosses } = measures;
+    let crosses = &crosses[..triangles.len()];
     runs.resize(normals.len().div_ceil(CHUNK), Vec::new());
     normals
         .par_chunks_mut(CHUNK)
