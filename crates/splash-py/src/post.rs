@@ -44,10 +44,10 @@ use crate::settings::{self, Overrides};
 ///
 /// The post-processing settings (``[post]`` of the config; None keeps the config's, the
 /// defaults by default): ``raw=True`` skips smoothing and volume restoration;
-/// ``smoothing_iterations`` (10), ``lambda_`` (0.6) and ``mu`` (−0.64): Taubin's λ|μ pairs;
-/// ``volume_rounds`` (9), ``max_offset`` (0.25 r per step), ``refine_angle`` (0: off; in
-/// degrees, bisects the edges where the surface bends more), ``relax_iterations`` (10),
-/// ``volume_steps`` (3); ``mesh_aabb``, ``min_component`` and ``decimate`` as in
+/// ``smoothing_iterations`` (6), ``lambda_`` (0.6) and ``mu`` (−0.64): Taubin's λ|μ pairs;
+/// ``volume_rounds`` (8), ``max_offset`` (0.25 r per step), ``refine_angle`` (16; 0: off; in
+/// degrees, bisects the edges where the surface bends more), ``relax_iterations`` (12),
+/// ``volume_steps`` (1); ``mesh_aabb``, ``min_component`` and ``decimate`` as in
 /// ``reconstruct``. ``config``: a TOML file's path or a dict, as ``reconstruct`` takes it.
 /// ``threads``: worker threads, all cores by default; the result does not depend on it.
 ///

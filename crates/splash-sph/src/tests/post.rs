@@ -55,14 +55,16 @@ fn volume_error(mesh: &TriMesh, particles: usize) -> f64 {
     signed_volume(mesh) / (particles as f64 * f64::from(R).powi(3)) - 1.0
 }
 
-/// Closed, manifold, outward, with the raw mesh's components and Euler characteristic.
+/// Closed, manifold, outward, with the raw mesh's components and Euler characteristic, and its
+/// triangles or more (the refinement only bisects).
 fn assert_topology_kept(raw: &TriMesh, post: &TriMesh) {
     let (a, b) = (topology(raw), topology(post));
     assert!(b.is_closed_manifold(), "{b:?}");
     assert_eq!(
-        (a.components, a.euler_characteristic, a.triangles),
-        (b.components, b.euler_characteristic, b.triangles)
+        (a.components, a.euler_characteristic),
+        (b.components, b.euler_characteristic)
     );
+    assert!(b.triangles >= a.triangles, "{a:?} {b:?}");
     assert!(normal_agreement(post) > 0.999, "{}", normal_agreement(post));
 }
 
