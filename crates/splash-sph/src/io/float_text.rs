@@ -11,38 +11,50 @@ use std::fmt::Write as _;
 use std::hint::select_unpredictable;
 use std::mem::MaybeUninit;
 
-/// Appends `values` as [`push_f32`] prints them, `separator` between them: composed in one
-/// reservation of spare capacity and appended at once, unless one of them is outside
-/// [`schubfach`]'s range.
+/// Appends `prefix`, `values` as [`push_f32`] prints them with `separator` between them,
+/// and `end`: a row composed in one reservation of spare capacity and appended at once,
+/// unless one of the values is outside [`schubfach`]'s range.
 #[inline]
-pub(crate) fn push_f32s<const S: usize>(out: &mut Vec<u8>, values: [f32; 3], separator: &[u8; S]) {
+pub(crate) fn push_f32_row<const P: usize, const S: usize, const E: usize>(
+    out: &mut Vec<u8>,
+    prefix: &[u8; P],
+    values: [f32; 3],
+    separator: &[u8; S],
+    end: &[u8; E],
+) {
     let mut spare = Spare::of(out);
-    let mut at = 0;
+    let mut at = spare.put(0, prefix);
     for (k, x) in values.into_iter().enumerate() {
         if k > 0 {
-            for (j, &b) in separator.iter().enumerate() {
-                spare.put1(at + j, b);
-            }
-            at += S;
+            at = spare.put(at, separator);
         }
         match schubfach(&mut spare, at, x) {
             Some(end) => at = end,
-            None => return push_f32s_slowly(out, values, separator),
+            None => return push_f32_row_slowly(out, prefix, values, separator, end),
         }
     }
+    at = spare.put(at, end);
     spare.commit(at);
 }
 
-/// [`push_f32s`] one value at a time, for the rare rows with a value outside [`schubfach`]'s
-/// range.
+/// [`push_f32_row`] one value at a time, for the rare rows with a value outside
+/// [`schubfach`]'s range.
 #[cold]
-fn push_f32s_slowly<const S: usize>(out: &mut Vec<u8>, values: [f32; 3], separator: &[u8; S]) {
+fn push_f32_row_slowly(
+    out: &mut Vec<u8>,
+    prefix: &[u8],
+    values: [f32; 3],
+    separator: &[u8],
+    end: &[u8],
+) {
+    out.extend_from_slice(prefix);
     for (k, x) in values.into_iter().enumerate() {
         if k > 0 {
             out.extend_from_slice(separator);
         }
         push_f32(out, x);
     }
+    out.extend_from_slice(end);
 }
 
 /// Appends `x` as `format!("{x}")` would: by [`schubfach`] where it applies (all but a few
@@ -161,112 +173,72 @@ fn positional(out: &mut Vec<u8>, mantissa: &[u8], exponent: &[u8]) {
     }
 }
 
-/// Appends `values` in decimal, `separator` between them.
-pub(crate) fn push_ints<const S: usize>(out: &mut Vec<u8>, values: [u32; 3], separator: &[u8; S]) {
-    for (k, i) in values.into_iter().enumerate() {
+/// Appends `prefix`, `values` in decimal with `separator` between them, each as `a` or,
+/// given an `infix`, as `a{infix}a` (an OBJ face corner `a//a`, whose vertex and normal
+/// indices are one), and `end`: a row composed in one reservation of spare capacity.
+#[inline]
+pub(crate) fn push_int_row<const P: usize, const S: usize, const E: usize>(
+    out: &mut Vec<u8>,
+    prefix: &[u8; P],
+    values: [u64; 3],
+    separator: &[u8; S],
+    infix: Option<&[u8; 2]>,
+    end: &[u8; E],
+) {
+    if values.iter().any(|&v| v >= 100_000_000) {
+        return push_int_row_slowly(out, prefix, values, separator, infix, end);
+    }
+    let mut spare = Spare::of(out);
+    let mut at = spare.put(0, prefix);
+    for (k, v) in values.into_iter().enumerate() {
+        if k > 0 {
+            at = spare.put(at, separator);
+        }
+        let (text, n, _) = digits8_text(v);
+        spare.put8(at, text);
+        at += n;
+        if let Some(infix) = infix {
+            at = spare.put(at, infix);
+            spare.put8(at, text);
+            at += n;
+        }
+    }
+    at = spare.put(at, end);
+    spare.commit(at);
+}
+
+/// [`push_int_row`] by `itoa`, for indices of 9 digits or more (meshes of 10^8 vertices).
+#[cold]
+fn push_int_row_slowly(
+    out: &mut Vec<u8>,
+    prefix: &[u8],
+    values: [u64; 3],
+    separator: &[u8],
+    infix: Option<&[u8; 2]>,
+    end: &[u8],
+) {
+    out.extend_from_slice(prefix);
+    for (k, v) in values.into_iter().enumerate() {
         if k > 0 {
             out.extend_from_slice(separator);
         }
-        push_int(out, i);
-    }
-}
-
-/// Appends `i` in decimal.
-#[inline]
-pub(crate) fn push_int(out: &mut Vec<u8>, i: impl Into<u64>) {
-    let i = i.into();
-    if i < 100_000_000 {
-        let (text, n, _) = digits8_text(i);
-        let mut spare = Spare::of(out);
-        spare.put8(0, text);
-        spare.commit(n);
-        return;
-    }
-    if i >= DIGITS_LIMIT {
-        out.extend_from_slice(itoa::Buffer::new().format(i).as_bytes());
-        return;
-    }
-    let (text, n) = decimal(i);
-    let mut spare = Spare::of(out);
-    spare.put16(0, text);
-    spare.commit(n);
-}
-
-/// Appends `[prefix]a[infix]a` for `a` = `i` in decimal: an OBJ face corner `a//a`, whose
-/// vertex and normal indices are one.
-#[inline]
-pub(crate) fn push_int_twice(out: &mut Vec<u8>, prefix: u8, i: u64, infix: [u8; 2]) {
-    if i < 100_000_000 {
-        let (text, n, _) = digits8_text(i);
-        let mut spare = Spare::of(out);
-        spare.put1(0, prefix);
-        spare.put8(1, text);
-        spare.put1(1 + n, infix[0]);
-        spare.put1(2 + n, infix[1]);
-        spare.put8(3 + n, text);
-        spare.commit(3 + 2 * n);
-        return;
-    }
-    if i >= DIGITS_LIMIT {
         let mut text = itoa::Buffer::new();
-        let text = text.format(i).as_bytes();
-        out.push(prefix);
+        let text = text.format(v).as_bytes();
         out.extend_from_slice(text);
-        out.extend_from_slice(&infix);
-        out.extend_from_slice(text);
-        return;
+        if let Some(infix) = infix {
+            out.extend_from_slice(infix);
+            out.extend_from_slice(text);
+        }
     }
-    let (text, n) = decimal(i);
-    let mut spare = Spare::of(out);
-    spare.put1(0, prefix);
-    spare.put16(1, text);
-    spare.put1(1 + n, infix[0]);
-    spare.put1(2 + n, infix[1]);
-    spare.put16(3 + n, text);
-    spare.commit(3 + 2 * n);
+    out.extend_from_slice(end);
 }
-
-/// [`digits`] of `v`, by [`digits9`] where it can (a mesh's indices all, or none).
-#[inline]
-fn decimal(v: u64) -> (u128, usize) {
-    if v < 1_000_000_000 {
-        digits9(v)
-    } else {
-        digits(v)
-    }
-}
-
-/// [`digits`] takes numbers below this.
-const DIGITS_LIMIT: u64 = 10_u64.pow(16);
 
 /// Sixteen `'0'`s, as the bytes of a little-endian `u128`.
 const ZEROS: u128 = u128::from_le_bytes([b'0'; 16]);
 
-/// The decimal digits of `v` < 10^16 as the bytes of a little-endian `u128` (the first digit
-/// in the lowest byte), followed by `'0'`s, and their count. Computed in registers, by
-/// splitting 8-digit halves into 4, 2 and 1 digit lanes: digits stored byte by byte and read
-/// back as one word would stall on the store-to-load forwarding.
-#[inline]
-fn digits(v: u64) -> (u128, usize) {
-    debug_assert!(v < DIGITS_LIMIT);
-    let (high, low) = (v / 100_000_000, v % 100_000_000);
-    let raw = u128::from(digits8(high)) | u128::from(digits8(low)) << 64;
-    // Leading zero digits are the zero bytes at the low end.
-    let leading = ((raw.trailing_zeros() / 8) as usize).min(15);
-    ((raw >> (8 * leading)) | ZEROS, 16 - leading)
-}
-
-/// [`digits`] of `v` < 10^9, with one 8-digit conversion instead of two.
-#[inline]
-fn digits9(v: u64) -> (u128, usize) {
-    debug_assert!(v < 1_000_000_000);
-    let raw = u128::from(v / 100_000_000) | u128::from(digits8(v % 100_000_000)) << 8;
-    let leading = ((raw.trailing_zeros() / 8) as usize).min(8);
-    ((raw >> (8 * leading)) | ZEROS, 9 - leading)
-}
-
-/// [`digits9`] of `v` ≥ 1, and how many of the digits are trailing zeros: the zero bytes at
-/// the high end of the digits.
+/// The decimal digits of `v` from 1 to 10^9 − 1 as the bytes of a little-endian `u128` (the
+/// first digit in the lowest byte), followed by `'0'`s; their count; and how many of them are
+/// trailing zeros.
 #[inline]
 fn digits9_trailing(v: u64) -> (u128, usize, usize) {
     debug_assert!((1..1_000_000_000).contains(&v));
@@ -293,7 +265,9 @@ fn digits8_text(v: u64) -> (u64, usize, usize) {
 }
 
 /// The 8 decimal digits of `v` < 10^8, leading zeros included, as byte values 0–9 of a
-/// little-endian `u64`, the first digit in the lowest byte.
+/// little-endian `u64`, the first digit in the lowest byte. Computed in registers, by
+/// splitting into 4, 2 and 1 digit lanes: digits stored byte by byte and read back as one
+/// word would stall on the store-to-load forwarding.
 #[inline]
 fn digits8(v: u64) -> u64 {
     // Two 4-digit lanes of 32 bits: the first four digits in the low lane.
@@ -332,6 +306,13 @@ impl<'a> Spare<'a> {
     #[inline]
     fn put1(&mut self, at: usize, byte: u8) {
         self.bytes()[at].write(byte);
+    }
+
+    /// Writes `bytes` at `at`; returns where they end.
+    #[inline]
+    fn put<const N: usize>(&mut self, at: usize, bytes: &[u8; N]) -> usize {
+        self.bytes()[at..at + N].copy_from_slice(&bytes.map(MaybeUninit::new));
+        at + N
     }
 
     #[inline]
@@ -389,7 +370,7 @@ const POW10: [u64; 20] = {
 /// in the interval if there is one, else the nearer of the two integers around x. Here the
 /// scaling is exact: 10^−k ≤ 10^19 and c < 2^24 fit 128 bits, and a value's fraction below
 /// the units survives as a sticky low bit (round to odd), which keeps every comparison exact.
-#[inline]
+#[inline(always)]
 fn schubfach(spare: &mut Spare<'_>, at: usize, x: f32) -> Option<usize> {
     let bits = x.to_bits();
     let biased = (bits >> 23) & 0xff;
@@ -594,7 +575,7 @@ mod tests {
         }
     }
 
-    /// Rows of three as `push_f32s` writes them against `format!`: 3 million pseudo-random bit
+    /// Rows of three as `push_f32_row` writes them against `format!`: 3 million pseudo-random bit
     /// patterns (every exponent, both signs, subnormals, NaNs), so that a row mixes the fast
     /// path with the fallbacks; decimal grids as a mesh's coordinates are (i·0.007, i·10^−j);
     /// and the powers of ten from 10^−12 to 10^8 with their neighbours.
@@ -624,9 +605,8 @@ mod tests {
         let (mut ours, mut expected) = (Vec::new(), String::new());
         for row in values.chunks_exact(3) {
             let [x, y, z] = [row[0], row[1], row[2]];
-            push_f32s(&mut ours, [x, y, z], b", ");
-            ours.push(b'\n');
-            expected += &format!("{x}, {y}, {z}\n");
+            push_f32_row(&mut ours, b"<", [x, y, z], b", ", b">\n");
+            expected += &format!("<{x}, {y}, {z}>\n");
         }
         let ours = String::from_utf8(ours).unwrap();
         for (a, b) in ours.lines().zip(expected.lines()) {
@@ -635,23 +615,22 @@ mod tests {
         assert_eq!(ours.len(), expected.len());
     }
 
-    /// Every width from 1 to 20 digits, the edges of each, alone and twice (`a//a`).
+    /// Every width from 1 to 20 digits and the edges of each, in rows of three that mix the
+    /// widths (and so the fast and slow paths), alone (`a,b,c`) and twice (`a//a`).
     #[test]
     fn integers_print_in_decimal() {
-        let mut values = vec![0u64, u64::MAX];
+        let mut values = vec![0u64, u64::MAX, 4_294_967_295];
         for k in 1..20 {
             let p = 10u64.pow(k);
             values.extend([p - 1, p, p + 7]);
         }
         let (mut ours, mut expected) = (Vec::new(), String::new());
-        for i in values {
-            push_int(&mut ours, i);
-            push_int_twice(&mut ours, b' ', i, *b"//");
-            ours.push(b'\n');
-            expected += &format!("{i} {i}//{i}\n");
+        for w in values.windows(3) {
+            let [a, b, c] = [w[0], w[1], w[2]];
+            push_int_row(&mut ours, b"f ", [a, b, c], b" ", Some(b"//"), b"\n");
+            push_int_row(&mut ours, b"<", [c, a, b], b",", None, b">\n");
+            expected += &format!("f {a}//{a} {b}//{b} {c}//{c}\n<{c},{a},{b}>\n");
         }
-        push_int(&mut ours, 4_294_967_295u32);
-        expected += "4294967295";
         assert_eq!(String::from_utf8(ours).unwrap(), expected);
     }
 }
