@@ -254,7 +254,7 @@ const ZEROS8: u64 = u64::from_le_bytes([b'0'; 8]);
 /// The decimal digits of `v` < 10^8 as the bytes of a little-endian `u64` (the first digit in
 /// the lowest byte), followed by `'0'`s; their count; and how many of them are trailing zeros
 /// (for `v` ≥ 1).
-#[inline]
+#[inline(always)]
 fn digits8_text(v: u64) -> (u64, usize, usize) {
     debug_assert!(v < 100_000_000);
     let raw = digits8(v);
@@ -433,7 +433,7 @@ fn schubfach(spare: &mut Spare<'_>, at: usize, x: f32) -> Option<usize> {
 /// 4c·10^k and the rounding interval's bounds 4c ± 2 times 10^k, divided by 2^shift and
 /// rounded to odd: `(vb, vbl, vbr)`. In 64 bits where 10^k = 5^k·2^k makes them fit (|x| ≥
 /// 2^−30, all coordinates but the tiniest), else in 128.
-#[inline]
+#[inline(always)]
 fn scaled(c: u64, shift: u32, k: i32) -> (u64, u64, u64) {
     if k >= -15 {
         // 4c·5^−k < 2^26·5^15 < 2^61; shift + k from 0 to 53.
@@ -464,7 +464,7 @@ fn scaled(c: u64, shift: u32, k: i32) -> (u64, u64, u64) {
 
 /// Writes d·10^e positionally at `at`, d's `n` ≤ 8 digits in `text` ([`digits8_text`]), d
 /// without trailing zeros unless e = 0; returns the end.
-#[inline]
+#[inline(always)]
 fn place8(spare: &mut Spare<'_>, at: usize, text: u64, n: usize, e: i32) -> usize {
     // Digits before the decimal point.
     let before = n as i32 + e;
