@@ -1,11 +1,13 @@
 //! Numbers as text for the text mesh formats: an `f32` byte for byte as Rust's `{}` prints it
 //! (the shortest decimal that reads back as the same `f32`, never in exponent form), by
-//! Schubfach (Giulietti 2020, exact in 128-bit integers over the range meshes use) or else from
-//! Żmij's shortest digits (Zverovich 2025), at a fraction of `fmt`'s cost; integers likewise.
+//! Schubfach (Giulietti 2020, exact in 64- or 128-bit integers over the range meshes use) or
+//! else from Żmij's shortest digits (Zverovich 2025), at a fraction of `fmt`'s cost; integers
+//! likewise.
 //!
 //! Each number is composed in registers and stored with fixed-size stores into reserved spare
-//! capacity (the bytes past the number's end are overwritten by the next one): copies of a
-//! variable length are calls to `memmove`, which cost as much as the digits.
+//! capacity (the bytes past the number's end are overwritten by the next one), a row of three
+//! at a time: copies of a variable length are calls to `memmove`, which cost as much as the
+//! digits, and each reservation is a capacity check and a length update.
 
 use std::fmt::Write as _;
 use std::hint::select_unpredictable;
