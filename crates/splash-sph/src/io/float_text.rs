@@ -1,27 +1,62 @@
 //! Numbers as text for the text mesh formats: an `f32` byte for byte as Rust's `{}` prints it
 //! (the shortest decimal that reads back as the same `f32`, never in exponent form), by
-//! Schubfach (Giulietti 2020, exact in 128-bit integers over the range meshes use) or else from
-//! Żmij's shortest digits (Zverovich 2025), at a fraction of `fmt`'s cost; integers likewise.
+//! Schubfach (Giulietti 2020, exact in 64- or 128-bit integers over the range meshes use) or
+//! else from Żmij's shortest digits (Zverovich 2025), at a fraction of `fmt`'s cost; integers
+//! likewise.
 //!
 //! Each number is composed in registers and stored with fixed-size stores into reserved spare
-//! capacity (the bytes past the number's end are overwritten by the next one): copies of a
-//! variable length are calls to `memmove`, which cost as much as the digits.
+//! capacity (the bytes past the number's end are overwritten by the next one), a row of three
+//! at a time: copies of a variable length are calls to `memmove`, which cost as much as the
+//! digits, and each reservation is a capacity check and a length update.
 
 use std::fmt::Write as _;
+use std::hint::select_unpredictable;
 use std::mem::MaybeUninit;
 
-/// Appends `values` as [`push_f32`] prints them, `separator` between them.
-pub(crate) fn push_f32s<const S: usize>(
+/// Appends `prefix`, `values` as [`push_f32`] prints them with `separator` between them,
+/// and `end`: a row composed in one reservation of spare capacity and appended at once,
+/// unless one of the values is outside [`schubfach`]'s range.
+#[inline]
+pub(crate) fn push_f32_row<const P: usize, const S: usize, const E: usize>(
     out: &mut Vec<u8>,
-    values: impl IntoIterator<Item = f32>,
+    prefix: &[u8; P],
+    values: [f32; 3],
     separator: &[u8; S],
+    end: &[u8; E],
 ) {
+    let mut spare = Spare::of(out);
+    let mut at = spare.put(0, prefix);
+    for (k, x) in values.into_iter().enumerate() {
+        if k > 0 {
+            at = spare.put(at, separator);
+        }
+        match schubfach(&mut spare, at, x) {
+            Some(end) => at = end,
+            None => return push_f32_row_slowly(out, prefix, values, separator, end),
+        }
+    }
+    at = spare.put(at, end);
+    spare.commit(at);
+}
+
+/// [`push_f32_row`] one value at a time, for the rare rows with a value outside
+/// [`schubfach`]'s range.
+#[cold]
+fn push_f32_row_slowly(
+    out: &mut Vec<u8>,
+    prefix: &[u8],
+    values: [f32; 3],
+    separator: &[u8],
+    end: &[u8],
+) {
+    out.extend_from_slice(prefix);
     for (k, x) in values.into_iter().enumerate() {
         if k > 0 {
             out.extend_from_slice(separator);
         }
         push_f32(out, x);
     }
+    out.extend_from_slice(end);
 }
 
 /// Appends `x` as `format!("{x}")` would: by [`schubfach`] where it applies (all but a few
@@ -33,7 +68,9 @@ pub(crate) fn push_f32s<const S: usize>(
 /// shortest (at most 10 digits), which only the few floats of [`tie_possible`] have; those are
 /// printed by `fmt` itself.
 pub(crate) fn push_f32(out: &mut Vec<u8>, x: f32) {
-    if schubfach(out, x) {
+    let mut spare = Spare::of(out);
+    if let Some(len) = schubfach(&mut spare, 0, x) {
+        spare.commit(len);
         return;
     }
     if tie_possible(x) {
@@ -138,94 +175,101 @@ fn positional(out: &mut Vec<u8>, mantissa: &[u8], exponent: &[u8]) {
     }
 }
 
-/// Appends `values` in decimal, `separator` between them.
-pub(crate) fn push_ints<const S: usize>(out: &mut Vec<u8>, values: [u32; 3], separator: &[u8; S]) {
-    for (k, i) in values.into_iter().enumerate() {
+/// Appends `prefix`, `values` in decimal with `separator` between them, each as `a` or,
+/// given an `infix`, as `a{infix}a` (an OBJ face corner `a//a`, whose vertex and normal
+/// indices are one), and `end`: a row composed in one reservation of spare capacity.
+#[inline]
+pub(crate) fn push_int_row<const P: usize, const S: usize, const E: usize>(
+    out: &mut Vec<u8>,
+    prefix: &[u8; P],
+    values: [u64; 3],
+    separator: &[u8; S],
+    infix: Option<&[u8; 2]>,
+    end: &[u8; E],
+) {
+    if values.iter().any(|&v| v >= 100_000_000) {
+        return push_int_row_slowly(out, prefix, values, separator, infix, end);
+    }
+    let mut spare = Spare::of(out);
+    let mut at = spare.put(0, prefix);
+    for (k, v) in values.into_iter().enumerate() {
+        if k > 0 {
+            at = spare.put(at, separator);
+        }
+        let (text, n, _) = digits8_text(v);
+        spare.put8(at, text);
+        at += n;
+        if let Some(infix) = infix {
+            at = spare.put(at, infix);
+            spare.put8(at, text);
+            at += n;
+        }
+    }
+    at = spare.put(at, end);
+    spare.commit(at);
+}
+
+/// [`push_int_row`] by `itoa`, for indices of 9 digits or more (meshes of 10^8 vertices).
+#[cold]
+fn push_int_row_slowly(
+    out: &mut Vec<u8>,
+    prefix: &[u8],
+    values: [u64; 3],
+    separator: &[u8],
+    infix: Option<&[u8; 2]>,
+    end: &[u8],
+) {
+    out.extend_from_slice(prefix);
+    for (k, v) in values.into_iter().enumerate() {
         if k > 0 {
             out.extend_from_slice(separator);
         }
-        push_int(out, i);
-    }
-}
-
-/// Appends `i` in decimal.
-#[inline]
-pub(crate) fn push_int(out: &mut Vec<u8>, i: impl Into<u64>) {
-    let i = i.into();
-    if i >= DIGITS_LIMIT {
-        out.extend_from_slice(itoa::Buffer::new().format(i).as_bytes());
-        return;
-    }
-    let (text, n) = decimal(i);
-    let mut spare = Spare::of(out);
-    spare.put16(0, text);
-    spare.commit(n);
-}
-
-/// Appends `[prefix]a[infix]a` for `a` = `i` in decimal: an OBJ face corner `a//a`, whose
-/// vertex and normal indices are one.
-#[inline]
-pub(crate) fn push_int_twice(out: &mut Vec<u8>, prefix: u8, i: u64, infix: [u8; 2]) {
-    if i >= DIGITS_LIMIT {
         let mut text = itoa::Buffer::new();
-        let text = text.format(i).as_bytes();
-        out.push(prefix);
+        let text = text.format(v).as_bytes();
         out.extend_from_slice(text);
-        out.extend_from_slice(&infix);
-        out.extend_from_slice(text);
-        return;
+        if let Some(infix) = infix {
+            out.extend_from_slice(infix);
+            out.extend_from_slice(text);
+        }
     }
-    let (text, n) = decimal(i);
-    let mut spare = Spare::of(out);
-    spare.put1(0, prefix);
-    spare.put16(1, text);
-    spare.put1(1 + n, infix[0]);
-    spare.put1(2 + n, infix[1]);
-    spare.put16(3 + n, text);
-    spare.commit(3 + 2 * n);
+    out.extend_from_slice(end);
 }
-
-/// [`digits`] of `v`, by [`digits9`] where it can (a mesh's indices all, or none).
-#[inline]
-fn decimal(v: u64) -> (u128, usize) {
-    if v < 1_000_000_000 {
-        digits9(v)
-    } else {
-        digits(v)
-    }
-}
-
-/// [`digits`] takes numbers below this.
-const DIGITS_LIMIT: u64 = 10_u64.pow(16);
 
 /// Sixteen `'0'`s, as the bytes of a little-endian `u128`.
 const ZEROS: u128 = u128::from_le_bytes([b'0'; 16]);
 
-/// The decimal digits of `v` < 10^16 as the bytes of a little-endian `u128` (the first digit
-/// in the lowest byte), followed by `'0'`s, and their count. Computed in registers, by
-/// splitting 8-digit halves into 4, 2 and 1 digit lanes: digits stored byte by byte and read
-/// back as one word would stall on the store-to-load forwarding.
+/// The decimal digits of `v` from 1 to 10^9 − 1 as the bytes of a little-endian `u128` (the
+/// first digit in the lowest byte), followed by `'0'`s; their count; and how many of them are
+/// trailing zeros.
 #[inline]
-fn digits(v: u64) -> (u128, usize) {
-    debug_assert!(v < DIGITS_LIMIT);
-    let (high, low) = (v / 100_000_000, v % 100_000_000);
-    let raw = u128::from(digits8(high)) | u128::from(digits8(low)) << 64;
-    // Leading zero digits are the zero bytes at the low end.
-    let leading = ((raw.trailing_zeros() / 8) as usize).min(15);
-    ((raw >> (8 * leading)) | ZEROS, 16 - leading)
+fn digits9_trailing(v: u64) -> (u128, usize, usize) {
+    debug_assert!((1..1_000_000_000).contains(&v));
+    let raw = u128::from(v / 100_000_000) | u128::from(digits8(v % 100_000_000)) << 8;
+    let leading = (raw.trailing_zeros() / 8) as usize;
+    let trailing = ((raw << 56).leading_zeros() / 8) as usize;
+    ((raw >> (8 * leading)) | ZEROS, 9 - leading, trailing)
 }
 
-/// [`digits`] of `v` < 10^9, with one 8-digit conversion instead of two.
-#[inline]
-fn digits9(v: u64) -> (u128, usize) {
-    debug_assert!(v < 1_000_000_000);
-    let raw = u128::from(v / 100_000_000) | u128::from(digits8(v % 100_000_000)) << 8;
-    let leading = ((raw.trailing_zeros() / 8) as usize).min(8);
-    ((raw >> (8 * leading)) | ZEROS, 9 - leading)
+/// Eight `'0'`s, as the bytes of a little-endian `u64`.
+const ZEROS8: u64 = u64::from_le_bytes([b'0'; 8]);
+
+/// The decimal digits of `v` < 10^8 as the bytes of a little-endian `u64` (the first digit in
+/// the lowest byte), followed by `'0'`s; their count; and how many of them are trailing zeros
+/// (for `v` ≥ 1).
+#[inline(always)]
+fn digits8_text(v: u64) -> (u64, usize, usize) {
+    debug_assert!(v < 100_000_000);
+    let raw = digits8(v);
+    // Leading zero digits are the zero bytes at the low end, trailing ones at the high end.
+    let leading = ((raw.trailing_zeros() / 8) as usize).min(7);
+    let trailing = (raw.leading_zeros() / 8) as usize;
+    ((raw >> (8 * leading)) | ZEROS8, 8 - leading, trailing)
 }
 
 /// The 8 decimal digits of `v` < 10^8, leading zeros included, as byte values 0–9 of a
-/// little-endian `u64`, the first digit in the lowest byte.
+/// little-endian `u64`, the first digit in the lowest byte. Computed in registers, by
+/// splitting into 4, 2 and 1 digit lanes: digits stored byte by byte and read back as one
+/// word would stall on the store-to-load forwarding.
 #[inline]
 fn digits8(v: u64) -> u64 {
     // Two 4-digit lanes of 32 bits: the first four digits in the low lane.
@@ -238,7 +282,10 @@ fn digits8(v: u64) -> u64 {
     high | (y - high * 10) << 8
 }
 
-/// The 64 bytes of spare capacity reserved at the end of a `Vec`, written by fixed-size stores
+/// Bytes a [`Spare`] reserves: a row of three numbers, its separators and stores' overhang.
+const SPARE: usize = 128;
+
+/// The [`SPARE`] bytes of spare capacity reserved at the end of a `Vec`, written by fixed-size stores
 /// (a store past the number's end is harmless: the next number overwrites it) and committed.
 struct Spare<'a> {
     out: &'a mut Vec<u8>,
@@ -247,20 +294,33 @@ struct Spare<'a> {
 impl<'a> Spare<'a> {
     #[inline]
     fn of(out: &'a mut Vec<u8>) -> Self {
-        out.reserve(64);
+        out.reserve(SPARE);
         Self { out }
     }
 
     #[inline]
-    fn bytes(&mut self) -> &mut [MaybeUninit<u8>; 64] {
-        (&mut self.out.spare_capacity_mut()[..64])
+    fn bytes(&mut self) -> &mut [MaybeUninit<u8>; SPARE] {
+        (&mut self.out.spare_capacity_mut()[..SPARE])
             .try_into()
-            .expect("64 bytes reserved")
+            .expect("SPARE bytes reserved")
     }
 
     #[inline]
     fn put1(&mut self, at: usize, byte: u8) {
         self.bytes()[at].write(byte);
+    }
+
+    /// Writes `bytes` at `at`; returns where they end.
+    #[inline]
+    fn put<const N: usize>(&mut self, at: usize, bytes: &[u8; N]) -> usize {
+        self.bytes()[at..at + N].copy_from_slice(&bytes.map(MaybeUninit::new));
+        at + N
+    }
+
+    #[inline]
+    fn put8(&mut self, at: usize, word: u64) {
+        let bytes = word.to_le_bytes().map(MaybeUninit::new);
+        self.bytes()[at..at + 8].copy_from_slice(&bytes);
     }
 
     #[inline]
@@ -272,11 +332,22 @@ impl<'a> Spare<'a> {
     /// Appends the first `len` bytes written.
     #[inline]
     fn commit(self, len: usize) {
-        assert!(len <= 64);
+        assert!(len <= SPARE);
         // SAFETY: the caller wrote the first `len` bytes of the spare capacity.
         unsafe { self.out.set_len(self.out.len() + len) };
     }
 }
+
+/// Powers of five up to 5^15.
+const POW5: [u64; 16] = {
+    let mut p = [1u64; 16];
+    let mut k = 1;
+    while k < 16 {
+        p[k] = p[k - 1] * 5;
+        k += 1;
+    }
+    p
+};
 
 /// Powers of ten up to 10^19, the largest below 2^64.
 const POW10: [u64; 20] = {
@@ -289,10 +360,11 @@ const POW10: [u64; 20] = {
     p
 };
 
-/// Appends `x` as `{}` prints it and returns true, if `x` is a normal float of 2^-40 ≤ |x| <
-/// 2^24 whose significand is not a power of two (those have an uneven rounding interval) and
-/// whose two nearest shortest candidates are not equally near (where `fmt` and Schubfach
-/// round differently); else appends nothing and returns false.
+/// Writes `x` as `{}` prints it at `at` in `spare` and returns where it ends, if `x` is a
+/// normal float of 2^-40 ≤ |x| < 2^24 whose significand is not a power of two (those have an
+/// uneven rounding interval) and whose two nearest shortest candidates are not equally near
+/// (where `fmt` and Schubfach round differently); else returns `None`, `spare` unchanged.
+/// At most 24 bytes, with stores reaching 31 bytes past `at`.
 ///
 /// Schubfach (Giulietti 2020, "The Schubfach way to render doubles", sections 8–9): with
 /// x = c·2^q, k = ⌊q·log10 2⌋ and the rounding interval's bounds and x scaled by 4·10^−k (so
@@ -300,38 +372,27 @@ const POW10: [u64; 20] = {
 /// in the interval if there is one, else the nearer of the two integers around x. Here the
 /// scaling is exact: 10^−k ≤ 10^19 and c < 2^24 fit 128 bits, and a value's fraction below
 /// the units survives as a sticky low bit (round to odd), which keeps every comparison exact.
-#[inline]
-fn schubfach(out: &mut Vec<u8>, x: f32) -> bool {
+#[inline(always)]
+fn schubfach(spare: &mut Spare<'_>, at: usize, x: f32) -> Option<usize> {
     let bits = x.to_bits();
     let biased = (bits >> 23) & 0xff;
     let fraction = bits & 0x7f_ffff;
     // |x| = c·2^−shift.
     let shift = 150 - biased as i32;
     if fraction == 0 || !(1..=63).contains(&shift) {
-        return false;
+        return None;
     }
     let c = u64::from(fraction | 1 << 23);
     let shift = shift as u32;
-    let (mut d, mut e);
-    if shift <= 23 && c & ((1 << shift) - 1) == 0 {
+    // |x| = d·10^e, d < 2^24·10 < 10^9 (s below is under c·10).
+    let whole = shift <= 23 && c & ((1 << shift) - 1) == 0;
+    let (d, e) = if whole {
         // A whole number, printed whole.
-        (d, e) = (c >> shift, 0);
+        (c >> shift, 0)
     } else {
         // k = ⌊−shift·log10 2⌋, from −19 to −1.
         let k = ((-i64::from(shift) * 661_971_961_083) >> 41) as i32;
-        let scale = u128::from(POW10[(-k) as usize]);
-        // ⌊v / 2^shift⌋ with a sticky low bit; shift < 64.
-        let round_to_odd = |v: u128| {
-            let (high, low) = ((v >> 64) as u64, v as u64);
-            let floor = high << (64 - shift) | low >> shift;
-            floor | u64::from(low & ((1 << shift) - 1) != 0)
-        };
-        let v = u128::from(c << 2) * scale;
-        let (vb, vbl, vbr) = (
-            round_to_odd(v),
-            round_to_odd(v - 2 * scale),
-            round_to_odd(v + 2 * scale),
-        );
+        let (vb, vbl, vbr) = scaled(c, shift, k);
         // Bounds are in the interval for an even c, out for an odd one.
         let open = c & 1;
         let s = vb >> 2;
@@ -343,31 +404,99 @@ fn schubfach(out: &mut Vec<u8>, x: f32) -> bool {
         let uin = vbl + open <= s << 2;
         let win = (t << 2) + open <= vbr;
         let midpoint = (s << 2) + 2;
-        if upin == wpin && uin == win && vb == midpoint {
+        // One branch, rarely taken (`&`, not `&&`).
+        if (upin == wpin) & (uin == win) & (vb == midpoint) {
             // A tie: `fmt` rounds up, Schubfach to even; left to `fmt`.
-            return false;
+            return None;
         }
-        // Selected without branches, which the digits would make unpredictable.
-        let longer = s + u64::from(if uin != win { win } else { vb > midpoint });
-        // The shorter candidate ends in a zero: dropped here, so that the loop below rarely
-        // turns.
-        let shorter = if upin { sp10 / 10 } else { tp10 / 10 };
-        d = if upin != wpin { shorter } else { longer };
-        e = k + i32::from(upin != wpin);
-        while d % 10 == 0 {
-            d /= 10;
-            e += 1;
-        }
+        // Selected without branches: which applies varies from one coordinate to the next
+        // (grid-aligned or interpolated), and a mispredicted branch costs as much as the
+        // digits. The trailing zeros are dropped from the digits below.
+        let longer = s + u64::from(select_unpredictable(uin != win, win, vb > midpoint));
+        let shorter = select_unpredictable(upin, sp10, tp10);
+        (select_unpredictable(upin != wpin, shorter, longer), k)
+    };
+    // The sign, overwritten by the first digit of a positive x.
+    spare.put1(at, b'-');
+    let at = at + (bits >> 31) as usize;
+    // Whole numbers keep their zeros (e stays 0); the others lose theirs.
+    let keep = |trailing| if whole { 0 } else { trailing };
+    Some(if d < 100_000_000 {
+        let (text, n, trailing) = digits8_text(d);
+        let trailing = keep(trailing);
+        place8(spare, at, text, n - trailing, e + trailing as i32)
+    } else {
+        let (text, n, trailing) = digits9_trailing(d);
+        let trailing = keep(trailing);
+        place16(spare, at, text, n - trailing, e + trailing as i32)
+    })
+}
+
+/// 4c·10^k and the rounding interval's bounds 4c ± 2 times 10^k, divided by 2^shift and
+/// rounded to odd: `(vb, vbl, vbr)`. In 64 bits where 10^k = 5^k·2^k makes them fit (|x| ≥
+/// 2^−30, all coordinates but the tiniest), else in 128.
+#[inline(always)]
+fn scaled(c: u64, shift: u32, k: i32) -> (u64, u64, u64) {
+    if k >= -15 {
+        // 4c·5^−k < 2^26·5^15 < 2^61; shift + k from 0 to 53.
+        let scale = POW5[(-k) as usize];
+        let shift = (shift as i32 + k) as u32;
+        let round_to_odd = |v: u64| v >> shift | u64::from(v & ((1 << shift) - 1) != 0);
+        let v = (c << 2) * scale;
+        return (
+            round_to_odd(v),
+            round_to_odd(v - 2 * scale),
+            round_to_odd(v + 2 * scale),
+        );
     }
-    // |x| = d·10^e, d without trailing zeros but for whole numbers; d < 2^24·10 < 10^9.
-    let (text, n) = digits9(d);
-    let at = (bits >> 31) as usize;
-    let mut spare = Spare::of(out);
-    spare.put1(0, b'-');
+    let scale = u128::from(POW10[(-k) as usize]);
+    // ⌊v / 2^shift⌋ with a sticky low bit; shift < 64.
+    let round_to_odd = |v: u128| {
+        let (high, low) = ((v >> 64) as u64, v as u64);
+        let floor = high << (64 - shift) | low >> shift;
+        floor | u64::from(low & ((1 << shift) - 1) != 0)
+    };
+    let v = u128::from(c << 2) * scale;
+    (
+        round_to_odd(v),
+        round_to_odd(v - 2 * scale),
+        round_to_odd(v + 2 * scale),
+    )
+}
+
+/// Writes d·10^e positionally at `at`, d's `n` ≤ 8 digits in `text` ([`digits8_text`]), d
+/// without trailing zeros unless e = 0; returns the end.
+#[inline(always)]
+fn place8(spare: &mut Spare<'_>, at: usize, text: u64, n: usize, e: i32) -> usize {
     // Digits before the decimal point.
     let before = n as i32 + e;
-    let len = if e >= 0 {
-        // Whole: the digits, then e zeros; x < 2^24 has at most 8 digits.
+    if e >= 0 {
+        // Whole: the digits, then e zeros (the text's '0's past its digits); x < 2^24 has at
+        // most 8 digits.
+        spare.put8(at, text);
+        at + before as usize
+    } else if before > 0 {
+        // dd.dd: the digits, the point over the first digit after it, the rest after it.
+        let b = before as usize;
+        spare.put8(at, text);
+        spare.put1(at + b, b'.');
+        spare.put8(at + b + 1, text >> (8 * b));
+        at + n + 1
+    } else {
+        // 0.000ddd: at most 12 zeros after the point for x ≥ 2^−40.
+        let zeros = (-before) as usize;
+        spare.put8(at, ZEROS8 & !(0xff << 8) | u64::from(b'.') << 8);
+        spare.put8(at + 8, ZEROS8);
+        spare.put8(at + 2 + zeros, text);
+        at + 2 + zeros + n
+    }
+}
+
+/// [`place8`] for d of 9 digits, in `text` as [`digits9_trailing`] gives them.
+#[inline]
+fn place16(spare: &mut Spare<'_>, at: usize, text: u128, n: usize, e: i32) -> usize {
+    let before = n as i32 + e;
+    if e >= 0 {
         spare.put16(at, text);
         at + before as usize
     } else if before > 0 {
@@ -376,14 +505,11 @@ fn schubfach(out: &mut Vec<u8>, x: f32) -> bool {
         spare.put16(at, point);
         at + n + 1
     } else {
-        // 0.000ddd: at most 12 zeros after the point for x ≥ 2^−40.
         let zeros = (-before) as usize;
         spare.put16(at, ZEROS & !(0xff << 8) | u128::from(b'.') << 8);
         spare.put16(at + 2 + zeros, text);
         at + 2 + zeros + n
-    };
-    spare.commit(len);
-    true
+    }
 }
 
 #[cfg(test)]
@@ -451,23 +577,62 @@ mod tests {
         }
     }
 
-    /// Every width from 1 to 20 digits, the edges of each, alone and twice (`a//a`).
+    /// Rows of three as `push_f32_row` writes them against `format!`: 3 million pseudo-random bit
+    /// patterns (every exponent, both signs, subnormals, NaNs), so that a row mixes the fast
+    /// path with the fallbacks; decimal grids as a mesh's coordinates are (i·0.007, i·10^−j);
+    /// and the powers of ten from 10^−12 to 10^8 with their neighbours.
+    #[test]
+    fn rows_print_as_fmt_prints() {
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut random = || {
+            // xorshift64*
+            state ^= state >> 12;
+            state ^= state << 25;
+            state ^= state >> 27;
+            (state.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 32) as u32
+        };
+        let mut values: Vec<f32> = (0..3_000_000).map(|_| f32::from_bits(random())).collect();
+        for i in -20_000..20_000 {
+            values.push(i as f32 * 0.007);
+            for j in 1..12 {
+                values.push(i as f32 / 10f32.powi(j));
+            }
+        }
+        for j in -12..=8 {
+            let p = 10f32.powi(j);
+            for bits in p.to_bits() - 3..=p.to_bits() + 3 {
+                values.extend([f32::from_bits(bits), -f32::from_bits(bits)]);
+            }
+        }
+        let (mut ours, mut expected) = (Vec::new(), String::new());
+        for row in values.chunks_exact(3) {
+            let [x, y, z] = [row[0], row[1], row[2]];
+            push_f32_row(&mut ours, b"<", [x, y, z], b", ", b">\n");
+            expected += &format!("<{x}, {y}, {z}>\n");
+        }
+        let ours = String::from_utf8(ours).unwrap();
+        for (a, b) in ours.lines().zip(expected.lines()) {
+            assert_eq!(a, b);
+        }
+        assert_eq!(ours.len(), expected.len());
+    }
+
+    /// Every width from 1 to 20 digits and the edges of each, in rows of three that mix the
+    /// widths (and so the fast and slow paths), alone (`a,b,c`) and twice (`a//a`).
     #[test]
     fn integers_print_in_decimal() {
-        let mut values = vec![0u64, u64::MAX];
+        let mut values = vec![0u64, u64::MAX, 4_294_967_295];
         for k in 1..20 {
             let p = 10u64.pow(k);
             values.extend([p - 1, p, p + 7]);
         }
         let (mut ours, mut expected) = (Vec::new(), String::new());
-        for i in values {
-            push_int(&mut ours, i);
-            push_int_twice(&mut ours, b' ', i, *b"//");
-            ours.push(b'\n');
-            expected += &format!("{i} {i}//{i}\n");
+        for w in values.windows(3) {
+            let [a, b, c] = [w[0], w[1], w[2]];
+            push_int_row(&mut ours, b"f ", [a, b, c], b" ", Some(b"//"), b"\n");
+            push_int_row(&mut ours, b"<", [c, a, b], b",", None, b">\n");
+            expected += &format!("f {a}//{a} {b}//{b} {c}//{c}\n<{c},{a},{b}>\n");
         }
-        push_int(&mut ours, 4_294_967_295u32);
-        expected += "4294967295";
         assert_eq!(String::from_utf8(ours).unwrap(), expected);
     }
 }

@@ -4,7 +4,7 @@ use std::io::{self, Write};
 
 use glam::Vec3;
 
-use super::float_text::{push_f32s, push_int, push_int_twice};
+use super::float_text::{push_f32_row, push_int_row};
 use super::text_records::write_records;
 use crate::mesh::TriMesh;
 
@@ -20,19 +20,10 @@ pub(super) fn write(mesh: &TriMesh, out: &mut impl Write) -> io::Result<()> {
     )?;
     vectors(out, b"v ", &mesh.vertices)?;
     vectors(out, b"vn ", &mesh.normals)?;
-    let with_normals = !mesh.normals.is_empty();
+    let infix = (!mesh.normals.is_empty()).then_some(b"//");
     write_records(out, mesh.triangles.len(), |i, line| {
-        line.push(b'f');
-        for corner in mesh.triangles[i] {
-            let index = u64::from(corner) + 1;
-            if with_normals {
-                push_int_twice(line, b' ', index, *b"//");
-            } else {
-                line.push(b' ');
-                push_int(line, index);
-            }
-        }
-        line.push(b'\n');
+        let corners = mesh.triangles[i].map(|corner| u64::from(corner) + 1);
+        push_int_row(line, b"f ", corners, b" ", infix, b"\n");
     })
 }
 
@@ -43,8 +34,6 @@ fn vectors<const K: usize>(
     vectors: &[Vec3],
 ) -> io::Result<()> {
     write_records(out, vectors.len(), |i, line| {
-        line.extend_from_slice(key);
-        push_f32s(line, vectors[i].to_array(), b" ");
-        line.push(b'\n');
+        push_f32_row(line, key, vectors[i].to_array(), b" ", b"\n");
     })
 }

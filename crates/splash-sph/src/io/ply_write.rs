@@ -11,7 +11,7 @@ use ply_rs_bw::ply::{
 };
 use ply_rs_bw::writer::Writer;
 
-use super::float_text::{push_f32, push_f32s, push_int};
+use super::float_text::{push_f32, push_f32_row, push_int_row};
 use super::text_records::write_records;
 use super::vertex_attributes::{AttributeValues, VertexAttributes};
 use crate::mesh::TriMesh;
@@ -171,10 +171,9 @@ fn write_ascii(
     out: &mut impl Write,
 ) -> io::Result<()> {
     write_records(out, mesh.vertices.len(), |i, line| {
-        push_f32s(line, mesh.vertices[i].to_array(), b" ");
+        push_f32_row(line, b"", mesh.vertices[i].to_array(), b" ", b"");
         if let Some(n) = mesh.normals.get(i) {
-            line.push(b' ');
-            push_f32s(line, n.to_array(), b" ");
+            push_f32_row(line, b" ", n.to_array(), b" ", b"");
         }
         for (_, values) in arrays {
             let (row, width) = match values {
@@ -189,11 +188,7 @@ fn write_ascii(
         line.push(b'\n');
     })?;
     write_records(out, mesh.triangles.len(), |i, line| {
-        line.push(b'3');
-        for corner in mesh.triangles[i] {
-            line.push(b' ');
-            push_int(line, corner);
-        }
-        line.push(b'\n');
+        let corners = mesh.triangles[i].map(u64::from);
+        push_int_row(line, b"3 ", corners, b" ", None, b"\n");
     })
 }

@@ -11,7 +11,7 @@ use std::io::{self, Write};
 
 use glam::Vec3;
 
-use super::float_text::{push_f32s, push_ints};
+use super::float_text::{push_f32_row, push_int_row};
 use super::text_records::write_records;
 use crate::mesh::TriMesh;
 
@@ -38,9 +38,8 @@ pub(super) fn write(mesh: &TriMesh, out: &mut impl Write) -> io::Result<()> {
     writeln!(out, "  face_indices {{\n    {},", mesh.triangles.len())?;
     let triangles = &mesh.triangles;
     write_records(out, triangles.len(), |i, line| {
-        line.extend_from_slice(b"    <");
-        push_ints(line, triangles[i], b",");
-        line.push(b'>');
+        let corners = triangles[i].map(u64::from);
+        push_int_row(line, b"    <", corners, b",", None, b">");
         end(line, i, triangles.len());
     })?;
     writeln!(out, "  }}")?;
@@ -55,9 +54,7 @@ pub(super) fn write(mesh: &TriMesh, out: &mut impl Write) -> io::Result<()> {
 /// `f32`, never in exponent form.
 fn vectors(out: &mut impl Write, vectors: &[Vec3]) -> io::Result<()> {
     write_records(out, vectors.len(), |i, line| {
-        line.extend_from_slice(b"    <");
-        push_f32s(line, vectors[i].to_array(), b",");
-        line.push(b'>');
+        push_f32_row(line, b"    <", vectors[i].to_array(), b",", b">");
         end(line, i, vectors.len());
     })?;
     writeln!(out, "  }}")

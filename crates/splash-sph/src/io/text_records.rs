@@ -23,16 +23,26 @@ pub(super) fn write_records(
     count: usize,
     record: impl Fn(usize, &mut Vec<u8>) + Sync,
 ) -> io::Result<()> {
-    let chunks = count.div_ceil(RECORDS_PER_CHUNK);
-    let wave = (CHUNKS_PER_THREAD * rayon::current_num_threads()).clamp(1, chunks.max(1));
+    let wave = (CHUNKS_PER_THREAD * rayon::current_num_threads()).max(1);
+    // Whole waves of chunks of one size, so that no thread idles through a last wave of
+    // fewer chunks than threads.
+    let chunks = count.div_ceil(RECORDS_PER_CHUNK).div_ceil(wave) * wave;
+    let per_chunk = count.div_ceil(chunks.max(1)).max(1);
+    let chunks = count.div_ceil(per_chunk);
+    let wave = wave.clamp(1, chunks.max(1));
     // Formats the chunks from `first` into `buffers`, one each.
     let format = |first: usize, buffers: &mut [Vec<u8>]| {
         buffers.par_iter_mut().enumerate().for_each(|(k, buffer)| {
             buffer.clear();
-            let start = (first + k) * RECORDS_PER_CHUNK;
-            for i in start..count.min(start + RECORDS_PER_CHUNK) {
+            let start = (first + k) * per_chunk;
+            let mut records = start..count.min(start + per_chunk);
+            if let Some(i) = records.next() {
                 record(i, buffer);
+                // Room for the chunk at the first record's length and a quarter more: growing
+                // from empty would copy the chunk about once more.
+                buffer.reserve(buffer.len() * records.len() / 4 * 5);
             }
+            records.for_each(|i| record(i, buffer));
         });
     };
     let (mut ready, mut next) = (vec![Vec::new(); wave], vec![Vec::new(); wave]);

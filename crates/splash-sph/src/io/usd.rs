@@ -18,7 +18,7 @@ use glam::Vec3;
 
 use super::UpAxis;
 use super::failure::invalid_input;
-use super::float_text::{push_f32, push_f32s, push_ints};
+use super::float_text::{push_f32, push_f32_row, push_int_row};
 use super::text_records::write_records;
 use super::vertex_attributes::{AttributeValues, VertexAttributes};
 use crate::mesh::TriMesh;
@@ -228,7 +228,9 @@ fn values(out: &mut impl Write, values: &Values) -> io::Result<()> {
         }
         Values::Vectors(v) => array(out, v.len(), |i, line| push_tuple(line, v[i])),
         Values::Scalars(s) => array(out, s.len(), |i, line| push_f32(line, s[i])),
-        Values::Indices(t) => array(out, t.len(), |i, line| push_ints(line, t[i], b", ")),
+        Values::Indices(t) => array(out, t.len(), |i, line| {
+            push_int_row(line, b"", t[i].map(u64::from), b", ", None, b"")
+        }),
         Values::Counts(n) => {
             out.write_all(b"[")?;
             write_records(out, n, |i, line| {
@@ -261,9 +263,7 @@ fn array(
 
 /// `(x, y, z)`, each the shortest text that reads back as the same `f32`.
 fn push_tuple(line: &mut Vec<u8>, v: Vec3) {
-    line.push(b'(');
-    push_f32s(line, v.to_array(), b", ");
-    line.push(b')');
+    push_f32_row(line, b"(", v.to_array(), b", ", b")");
 }
 
 /// The attribute declarations at the top of a frame layer splash wrote (each line of them, the
