@@ -83,7 +83,7 @@ const CHUNK: usize = 4096;
 /// normals of the triangles around each vertex v: Σ_v (p_v − o)·N_v = 18 V for any origin o
 /// (each triangle's three corners give 3·6 times its signed tetrahedron), and Σ_v |N_v| / 6 ≤
 /// the area, equal where the surface is flat (enough for the size of a volume step). Summed
-/// per component over runs of [`CHUNK`] vertices, not kept per vertex (16 bytes a vertex less
+/// per component over runs of 4096 vertices, not kept per vertex (16 bytes a vertex less
 /// at the post-processing's peak).
 #[derive(Debug, Clone, Default)]
 pub struct Measures {
