@@ -356,13 +356,17 @@ def test_post(live, splash_sph, command, ui):
     v_raw, f_raw = shown(raw=True)
     q.raw = False
     v_def, f_def = shown()
-    check("in place" in s.status, f"raw to post-processed: the mesh updated in place ({s.status})")
-    check(
-        (len(v_raw), len(f_raw)) == (len(v_def), len(f_def)),
-        f"raw and post-processed: the same counts ({len(v_raw)} vertices, {len(f_raw)} faces)",
-    )
-    moved = np.linalg.norm(v_raw - v_def, axis=1)
+    # The default bisects the edges where the surface bends: new vertices after the raw ones.
+    check(len(f_def) > len(f_raw), f"post-processed: refined ({len(f_raw)} -> {len(f_def)} faces)")
+    moved = np.linalg.norm(v_raw - v_def[: len(v_raw)], axis=1)
     check(moved.max() > 0.05 * SPACING, f"post-processing moves the vertices ({moved.max():.2g})")
+    # Dropping the parts under 0 r³ keeps them all: new settings, the same counts, so the mesh
+    # is updated in place.
+    q.use_min_component, q.min_component = True, 0.0
+    _, f_kept = shown(min_component=0.0)
+    check("in place" in s.status, f"the same counts: the mesh updated in place ({s.status})")
+    check(np.array_equal(f_kept, f_def), "min_component 0 r³: every part kept")
+    q.use_min_component = False
 
     q.use_decimate, q.decimate = True, 0.1
     _, f_dec = shown(decimate="0.1r")
