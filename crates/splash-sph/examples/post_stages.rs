@@ -71,13 +71,25 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         &mut normals,
         &mut measures,
     );
-    let default = PostConfig::default();
-    let refined = PostConfig {
-        refine_angle: refine,
-        ..PostConfig::default()
-    };
+    let posts = [
+        ("post, default".to_string(), PostConfig::default()),
+        (
+            format!("post, refine_angle {refine}"),
+            PostConfig {
+                refine_angle: refine,
+                ..PostConfig::default()
+            },
+        ),
+        (
+            "post, refine_angle 0".to_string(),
+            PostConfig {
+                refine_angle: 0.0,
+                ..PostConfig::default()
+            },
+        ),
+    ];
     type Stage<'a> = (&'a str, Box<dyn Fn() -> (f64, f64) + Sync + 'a>);
-    let stages: Vec<Stage> = vec![
+    let mut stages: Vec<Stage> = vec![
         (
             "vertex rows",
             Box::new(|| best(runs, || (), |_| drop(VertexFaces::new(v, &raw.triangles)))),
@@ -190,27 +202,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
                 )
             }),
         ),
-        (
-            "post, default",
-            Box::new(|| {
-                best(
-                    runs,
-                    || raw.clone(),
-                    |m| postprocess(m, &particles, spacing, cell, &default, true).unwrap(),
-                )
-            }),
-        ),
-        (
-            "post, refined",
-            Box::new(|| {
-                best(
-                    runs,
-                    || raw.clone(),
-                    |m| postprocess(m, &particles, spacing, cell, &refined, true).unwrap(),
-                )
-            }),
-        ),
     ];
+    for (name, config) in &posts {
+        stages.push((
+            name,
+            Box::new(|| {
+                best(
+                    runs,
+                    || raw.clone(),
+                    |m| postprocess(m, &particles, spacing, cell, config, true).unwrap(),
+                )
+            }),
+        ));
+    }
     let pools: Vec<_> = [1, 2]
         .map(|n| {
             rayon::ThreadPoolBuilder::new()

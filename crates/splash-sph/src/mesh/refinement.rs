@@ -218,30 +218,24 @@ fn bisect(
     // Each triangle's pieces at `start[f]..start[f + 1]` of a new array, in parallel over runs
     // of triangles. (Both arrays are held for a moment; the peak comes later, in the
     // relaxation of the refined mesh.)
-    let old = triangles.len();
-    let total = start[old] as usize;
+    let total = start[triangles.len()] as usize;
     let mut pieces = vec![[0u32; 3]; total];
-    runs(&mut pieces, &start)
-        .into_par_iter()
-        .for_each(|(first, out)| {
-            let mut out = out.iter_mut();
-            for f in first..(first + CHUNK).min(old) {
-                let t = triangles[f];
-                let e = ids(f);
-                let mids: [u32; 3] = std::array::from_fn(|k| {
-                    if codes[f] >> k & 1 == 1 {
-                        midpoint(e[k])
-                    } else {
-                        NONE
-                    }
-                });
-                let ends = [t[0], t[1], t[2], mids[0], mids[1], mids[2]];
-                let layout = &layouts[codes[f] as usize];
-                for (slots, piece) in layout.pieces[..layout.count].iter().zip(out.by_ref()) {
-                    *piece = slots.map(|s| ends[s as usize]);
-                }
+    fill_pieces(&mut pieces, &start, |f, out| {
+        let t = triangles[f];
+        let e = ids(f);
+        let mids: [u32; 3] = std::array::from_fn(|k| {
+            if codes[f] >> k & 1 == 1 {
+                midpoint(e[k])
+            } else {
+                NONE
             }
         });
+        let ends = [t[0], t[1], t[2], mids[0], mids[1], mids[2]];
+        let layout = &layouts[codes[f] as usize];
+        for (slots, piece) in layout.pieces[..layout.count].iter().zip(out) {
+            *piece = slots.map(|s| ends[s as usize]);
+        }
+    });
     *triangles = pieces;
     drop(bisected);
     // The refined mesh's twins from the old ones the same way: a piece's edge on half `h` of
@@ -249,30 +243,24 @@ fn bisect(
     // edge.
     // Every slot is written below: zeroed pages, not a fill on one thread.
     let mut refined = vec![[0u32; 3]; total];
-    runs(&mut refined, &start)
-        .into_par_iter()
-        .for_each(|(first, out)| {
-            let mut out = out.iter_mut();
-            for f in first..(first + CHUNK).min(old) {
-                let tw = twin[f];
-                let layout = &layouts[codes[f] as usize];
-                for (edges, piece) in layout.edges[..layout.count].iter().zip(out.by_ref()) {
-                    *piece = edges.map(|edge| match edge {
-                        Edge::Inner(p, i) => 3 * (start[f] + u32::from(p)) + u32::from(i),
-                        Edge::Side(k, h) => {
-                            let o = tw[k as usize];
-                            if o == NONE {
-                                return NONE;
-                            }
-                            let (g, j) = ((o / 3) as usize, (o % 3) as usize);
-                            let half = if codes[f] >> k & 1 == 1 { 1 - h } else { 0 };
-                            3 * start[g]
-                                + u32::from(layouts[codes[g] as usize].sides[j][half as usize])
-                        }
-                    });
+    fill_pieces(&mut refined, &start, |f, out| {
+        let tw = twin[f];
+        let layout = &layouts[codes[f] as usize];
+        for (edges, piece) in layout.edges[..layout.count].iter().zip(out) {
+            *piece = edges.map(|edge| match edge {
+                Edge::Inner(p, i) => 3 * (start[f] + u32::from(p)) + u32::from(i),
+                Edge::Side(k, h) => {
+                    let o = tw[k as usize];
+                    if o == NONE {
+                        return NONE;
+                    }
+                    let (g, j) = ((o / 3) as usize, (o % 3) as usize);
+                    let half = if codes[f] >> k & 1 == 1 { 1 - h } else { 0 };
+                    3 * start[g] + u32::from(layouts[codes[g] as usize].sides[j][half as usize])
                 }
-            }
-        });
+            });
+        }
+    });
     drop(twin);
     let twin = refined;
     drop((codes, start));
@@ -283,11 +271,11 @@ fn bisect(
     (parents, twin)
 }
 
-/// `out`, the refined triangles (or their twins), cut into the slots of runs of [`CHUNK`]
-/// triangles (`start` as in [`bisect`]): each run's first triangle and its pieces' slots.
-fn runs<'a, T>(mut out: &'a mut [T], start: &[u32]) -> Vec<(usize, &'a mut [T])> {
+/// Fills `out`, the refined triangles (or their twins; `start` as in [`bisect`]), in parallel
+/// over runs of [`CHUNK`] triangles: `fill(f, slots)` writes the pieces of triangle `f`.
+fn fill_pieces<T: Send>(mut out: &mut [T], start: &[u32], fill: impl Fn(usize, &mut [T]) + Sync) {
     let old = start.len() - 1;
-    (0..old)
+    let runs: Vec<(usize, &mut [T])> = (0..old)
         .step_by(CHUNK)
         .map(|first| {
             let end = (first + CHUNK).min(old);
@@ -296,7 +284,16 @@ fn runs<'a, T>(mut out: &'a mut [T], start: &[u32]) -> Vec<(usize, &'a mut [T])>
             out = rest;
             (first, run)
         })
-        .collect()
+        .collect();
+    runs.into_par_iter().for_each(|(first, run)| {
+        let base = start[first];
+        for f in first..(first + CHUNK).min(old) {
+            fill(
+                f,
+                &mut run[(start[f] - base) as usize..(start[f + 1] - base) as usize],
+            );
+        }
+    });
 }
 
 /// The index (0 for `ab`, 1 for `bc`, 2 for `ca`) of the longest splittable edge of `t`, ties
