@@ -14,6 +14,7 @@ use super::radial_kernel::RadialKernel;
 use super::scalar_field::ScalarField;
 use crate::length::Length;
 use crate::neighbours::handler_array::HandlerArray;
+use crate::neighbours::lane::Lane;
 use crate::neighbours::lane_sums::lane_sums;
 use crate::neighbours::neighbourhood::{Neighbourhood, map_particles};
 
@@ -65,8 +66,16 @@ pub struct Density {
 
 /// [`cubic_spline`] of the offset (dx, dy, dz) over the support h (`inv_h` = 1/h).
 #[inline(always)]
-fn spline(dx: f32, dy: f32, dz: f32, inv_h: f32) -> f32 {
-    cubic_spline((dx * dx + dy * dy + dz * dz).sqrt() * inv_h)
+fn spline<L: Lane>(dx: L, dy: L, dz: L, inv_h: f32) -> L {
+    cubic_spline((dx * dx + dy * dy + dz * dz).sqrt() * L::splat(inv_h))
+}
+
+/// Σ V_j W'(q_j)/q_j d_j, with q_j = |d_j|/h.
+#[inline(always)]
+fn weighted_slope<L: Lane>(dx: L, dy: L, dz: L, volume: L, inv_h: f32) -> [L; 3] {
+    let q = (dx * dx + dy * dy + dz * dz).sqrt() * L::splat(inv_h);
+    let s = volume * cubic_spline_slope_over_q(q);
+    [s * dx, s * dy, s * dz]
 }
 
 fn sigma(h: f32) -> f32 {
@@ -74,23 +83,20 @@ fn sigma(h: f32) -> f32 {
 }
 
 lane_sums! {
-    fn spline_sum(inv_h: f32) -> [1] |dx, dy, dz| {
+    vector fn spline_sum(inv_h: f32) -> [1] |dx, dy, dz| {
         [spline(dx, dy, dz, inv_h)]
     }
 }
 
 lane_sums! {
-    fn weighted_spline_sum(inv_h: f32) -> [1] |dx, dy, dz, volume| {
+    vector fn weighted_spline_sum(inv_h: f32) -> [1] |dx, dy, dz, volume| {
         [volume * spline(dx, dy, dz, inv_h)]
     }
 }
 
 lane_sums! {
-    /// Σ V_j W'(q_j)/q_j d_j, with q_j = |d_j|/h.
-    fn weighted_spline_slope_sum(inv_h: f32) -> [3] |dx, dy, dz, volume| {
-        let q = (dx * dx + dy * dy + dz * dz).sqrt() * inv_h;
-        let s = volume * cubic_spline_slope_over_q(q);
-        [s * dx, s * dy, s * dz]
+    vector fn weighted_spline_slope_sum(inv_h: f32) -> [3] |dx, dy, dz, volume| {
+        weighted_slope(dx, dy, dz, volume, inv_h)
     }
 }
 
@@ -148,6 +154,42 @@ mod tests {
                 0.0
             };
             assert!((spline(q, 0.0, 0.0, 1.0) - expected).abs() < 1e-6, "q {q}");
+        }
+    }
+
+    #[test]
+    fn lane_sums_are_the_same_on_every_path() {
+        use crate::neighbours::lane_sums::tests::on_every_path;
+        let mut next = crate::tests::common::uniform(5);
+        // Particles around the origin, one at each query point and one on the support's
+        // edge (q = 0 and q = 1), with volumes of a few magnitudes.
+        let xs = [
+            Vec3::ZERO,
+            Vec3::new(0.3, -0.2, 0.1),
+            Vec3::new(0.9, 0.9, -0.4),
+        ];
+        let mut points: Vec<Vec3> = (0..205)
+            .map(|_| crate::tests::common::uniform_point(&mut next) * 3.0 - 1.5)
+            .collect();
+        points.extend(xs);
+        points.push(xs[1] + Vec3::new(0.0, 1.0, 0.0));
+        let volumes: Vec<f32> = points.iter().map(|_| (next() * 6.0 - 3.0).exp()).collect();
+        let mut near = Neighbourhood::default();
+        let all = (0..points.len()).map(|i| (i, true));
+        near.pick(Vec3::ZERO, all, &points, &[volumes]);
+        for x in xs {
+            let sums = on_every_path(|| {
+                (
+                    spline_sum(&near, x, 1.0).map(f32::to_bits),
+                    weighted_spline_sum(&near, x, 1.0).map(f32::to_bits),
+                    weighted_spline_slope_sum(&near, x, 1.0).map(f32::to_bits),
+                )
+            });
+            for (path, s) in &sums {
+                assert_eq!(s, &sums[0].1, "{path:?} at {x}");
+            }
+            let w = f32::from_bits(sums[0].1.1[0]);
+            assert!(w > 0.0 && w.is_finite(), "{w}");
         }
     }
 

@@ -122,15 +122,50 @@ pub fn lanes_path() -> Lanes {
 
 /// Defines `fn NAME(near: &Neighbourhood, x: Vec3, PARAM: TYPE) -> [f32; N]`, returning
 /// Σ_j TERM over the particles of `near`, where TERM sees `dx, dy, dz` = x_j − x (and, when a
-/// fourth name is given, the particle's channel 0, e.g. its volume) and gives N values. The sums run in `LANES` independent lanes so that the loop vectorises, compiled
-/// once more for AVX2 and chosen at run time; every lane does the same IEEE operations in the
-/// same order on both paths, so results do not depend on the CPU or the thread count. TERM
+/// fourth name is given, the particle's channel 0, e.g. its volume) and gives N values. The
+/// sums run in `LANES` independent lanes so that the loop vectorises, compiled once more for
+/// AVX2 and AVX-512 and chosen at run time; every lane does the same IEEE operations in the
+/// same order on every path, so results do not depend on the CPU or the thread count. TERM
 /// must give 0 for the padding (beyond any kernel's support) and should not branch.
+///
+/// `vector fn` instead of `fn`: TERM is written over a [`Lane`](super::lane::Lane) type and
+/// runs on eight lanes at once in AVX2 ([`F8`](super::lane::F8)) instead of being left to
+/// the compiler's vectoriser, for terms it vectorises badly (square roots, clamps).
 ///
 /// A macro rather than a function taking a closure: a closure is compiled without the AVX2
 /// feature and would not be inlined into the AVX2 loop.
 macro_rules! lane_sums {
     ($(#[$attr:meta])* $vis:vis fn $name:ident($p:ident: $ty:ty) -> [$n:expr] |$dx:ident, $dy:ident, $dz:ident $(, $v:ident)?| $term:block) => {
+        $crate::neighbours::lane_sums::lane_sums!(@emit auto $(#[$attr])* $vis fn $name($p: $ty) -> [$n] |$dx, $dy, $dz $(, $v)?| $term);
+    };
+    ($(#[$attr:meta])* $vis:vis vector fn $name:ident($p:ident: $ty:ty) -> [$n:expr] |$dx:ident, $dy:ident, $dz:ident $(, $v:ident)?| $term:block) => {
+        $crate::neighbours::lane_sums::lane_sums!(@emit vector $(#[$attr])* $vis fn $name($p: $ty) -> [$n] |$dx, $dy, $dz $(, $v)?| $term);
+    };
+    // The AVX2 and AVX-512 paths' sums: the scalar lanes, compiled for them.
+    (@wide auto $near:ident, $x:ident, $p:ident, $n:expr, |$dx:ident, $dy:ident, $dz:ident $(, $v:ident)?| $term:block) => {
+        lanes($near, $x, $p)
+    };
+    // …or eight lanes at a time in F8.
+    (@wide vector $near:ident, $x:ident, $p:ident, $n:expr, |$dx:ident, $dy:ident, $dz:ident $(, $v:ident)?| $term:block) => {{
+        use $crate::neighbours::lane::{F8, Lane};
+        let at = [F8::splat($x.x), F8::splat($x.y), F8::splat($x.z)];
+        let mut acc = [F8::splat(0.0); $n];
+        let xyz = F8::chunks(&$near.x).zip(F8::chunks(&$near.y)).zip(F8::chunks(&$near.z));
+        // Channel 0 where the term takes it (else x again, unused).
+        let _first: &[f32] = &$near.x;
+        $( let _first: &[f32] = &$near.channels[0]; stringify!($v); )?
+        let channel = F8::chunks(_first);
+        for (((cx, cy), cz), _channel) in xyz.zip(channel) {
+            let ($dx, $dy, $dz) = (cx - at[0], cy - at[1], cz - at[2]);
+            $( let $v = _channel; )?
+            let lane: [F8; $n] = $term;
+            for (a, t) in acc.iter_mut().zip(lane) {
+                *a = *a + t;
+            }
+        }
+        acc.map(F8::to_array)
+    }};
+    (@emit $kind:ident $(#[$attr:meta])* $vis:vis fn $name:ident($p:ident: $ty:ty) -> [$n:expr] |$dx:ident, $dy:ident, $dz:ident $(, $v:ident)?| $term:block) => {
         $(#[$attr])*
         $vis fn $name(
             near: &$crate::neighbours::neighbourhood::Neighbourhood,
@@ -175,7 +210,8 @@ macro_rules! lane_sums {
                 x: glam::Vec3,
                 $p: $ty,
             ) -> [f32; $n] {
-                lane_totals(&lanes(near, x, $p))
+                let acc = $crate::neighbours::lane_sums::lane_sums!(@wide $kind near, x, $p, $n, |$dx, $dy, $dz $(, $v)?| $term);
+                lane_totals(&acc)
             }
             // With AVX-512's 32 vector registers the accumulators of many sums (SSP07's 13)
             // stay in registers instead of going through the stack every step.
@@ -186,8 +222,9 @@ macro_rules! lane_sums {
                 x: glam::Vec3,
                 $p: $ty,
             ) -> [f32; $n] {
+                let acc = $crate::neighbours::lane_sums::lane_sums!(@wide $kind near, x, $p, $n, |$dx, $dy, $dz $(, $v)?| $term);
                 // The totals transposed: with 32 registers the lane loop keeps its own.
-                $crate::neighbours::lane_sums::lane_totals_avx2(&lanes(near, x, $p))
+                $crate::neighbours::lane_sums::lane_totals_avx2(&acc)
             }
             use $crate::neighbours::lane_sums::{Lanes, lanes_path};
             match lanes_path() {
@@ -212,6 +249,26 @@ pub(crate) mod tests {
 
     // The lane path a test forces `lanes_path` to choose, if any.
     thread_local!(pub static FORCED: Cell<Option<Lanes>> = const { Cell::new(None) });
+
+    /// `f` run on every lane path this CPU has, scalar first, with `lanes_path` forced to it.
+    pub fn on_every_path<T>(mut f: impl FnMut() -> T) -> Vec<(Lanes, T)> {
+        let mut paths = vec![Lanes::Scalar];
+        #[cfg(target_arch = "x86_64")]
+        paths.extend(match lanes_path() {
+            Lanes::Avx512 => vec![Lanes::Avx2, Lanes::Avx512],
+            Lanes::Avx2 => vec![Lanes::Avx2],
+            Lanes::Scalar => vec![],
+        });
+        paths
+            .into_iter()
+            .map(|path| {
+                FORCED.set(Some(path));
+                let out = f();
+                FORCED.set(None);
+                (path, out)
+            })
+            .collect()
+    }
 
     /// Accumulators of every sign and scale, zeros of both signs, and exact cancellations.
     fn accumulators<const N: usize>(next: &mut impl FnMut() -> f32) -> [[f32; LANES]; N] {

@@ -6,5 +6,6 @@ mod box_filter;
 pub(crate) mod bucket_grid;
 mod counting_sort;
 pub(crate) mod handler_array;
+pub(crate) mod lane;
 pub(crate) mod lane_sums;
 pub(crate) mod neighbourhood;
