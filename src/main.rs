@@ -240,8 +240,9 @@ triples, nothing else), legacy VTK (.vtk), VTK XML (.vtu, .vtp), classic BGEO (.
 
 Lengths (--cell, band and support in the config) are multiples of the particle spacing r
 (2r, r, r/2, r/4, 0.5r) or plain numbers in world units. The band of surface vertices spans 2r
-around each surface particle, widened to r + cell when that is larger (3r at cell 2r), and it
-grows by itself wherever the surface leaves it, so meshes are closed at every cell size.
+around each surface particle (r for the density field), widened to r + cell when that is
+larger (3r at cell 2r), and it grows by itself wherever the surface leaves it, so meshes are
+closed at every cell size.
 
 Sequences: a frame's number is the last run of digits in its file name; frames run in
 number order. Exit status 0 only when every frame of the job has its mesh; a summary lists the

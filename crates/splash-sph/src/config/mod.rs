@@ -273,8 +273,10 @@ pub struct SurfaceParticles {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct BandConfig {
-    /// Half-width of the box around each surface particle.
-    pub half_width: Length,
+    /// Half-width of the box around each surface particle; `None`: the field's own
+    /// ([`FieldConfig::band_half_width`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub half_width: Option<Length>,
 }
 
 impl Default for Config {
@@ -312,9 +314,7 @@ impl Default for SurfaceParticles {
 
 impl Default for BandConfig {
     fn default() -> Self {
-        BandConfig {
-            half_width: Length::Spacings(2.0),
-        }
+        BandConfig { half_width: None }
     }
 }
 
@@ -351,7 +351,19 @@ impl Config {
 
     /// The configuration as TOML, every key written.
     pub fn to_toml(&self) -> String {
-        toml::to_string(self).expect("a configuration is always representable in TOML")
+        let mut shown = self.clone();
+        shown.band.half_width = Some(self.band_half_width());
+        toml::to_string(&shown).expect("a configuration is always representable in TOML")
+    }
+
+    /// `band.half_width`, or where it is not set the field's own; 2r with grid normals, which
+    /// difference the values a vertex beyond each corner of the cells the surface crosses.
+    pub fn band_half_width(&self) -> Length {
+        match (self.band.half_width, self.normals) {
+            (Some(w), _) => w,
+            (None, Normals::Grid) => Length::Spacings(2.0),
+            (None, _) => self.field.band_half_width(),
+        }
     }
 
     /// Checks the ranges that the TOML types cannot express.
@@ -379,7 +391,9 @@ impl Config {
         {
             bail_config!("surface_particles.colour_threshold must be ≥ 0");
         }
-        if self.band.half_width.value().is_nan() || self.band.half_width.value() < 0.0 {
+        if let Some(w) = self.band.half_width
+            && (w.value().is_nan() || w.value() < 0.0)
+        {
             bail_config!("band.half_width must be ≥ 0");
         }
         if !(1..=4096).contains(&self.slices.block) {
@@ -539,7 +553,7 @@ impl Params {
             colour_support: config.surface_particles.support.resolve(r),
             colour_threshold: config.surface_particles.colour_threshold,
             min_neighbours: config.surface_particles.min_neighbours,
-            band_half_width: config.band.half_width.resolve(r).max(r + cell),
+            band_half_width: config.band_half_width().resolve(r).max(r + cell),
             support: field.support(),
             field,
             field_kind: config.field.kind(),
@@ -565,6 +579,30 @@ mod tests {
             let p = Params::resolve(&c, 1.0);
             assert_eq!(p.band_half_width, band, "cell {cell}r");
         }
+    }
+
+    #[test]
+    fn the_density_field_has_its_own_band_unless_one_is_set() {
+        let mut c = Config {
+            field: FieldConfig::named("density").unwrap(),
+            ..Config::default()
+        };
+        for (cell, band) in [(0.5, 1.5), (1.0, 2.0), (2.0, 3.0)] {
+            c.cell = Length::Spacings(cell);
+            assert_eq!(
+                Params::resolve(&c, 1.0).band_half_width,
+                band,
+                "cell {cell}r"
+            );
+        }
+        c.cell = Length::Spacings(0.5);
+        c.band.half_width = Some(Length::Spacings(2.0));
+        assert_eq!(Params::resolve(&c, 1.0).band_half_width, 2.0);
+        // What `config show` prints is the band that runs.
+        c.band.half_width = None;
+        assert!(c.to_toml().contains("[band]\nhalf_width = \"r\""));
+        c.normals = Normals::Grid;
+        assert_eq!(Params::resolve(&c, 1.0).band_half_width, 2.0);
     }
 
     #[test]
@@ -602,6 +640,6 @@ mod tests {
         assert!(c.validate().is_err());
         let c: Config = toml::from_str("cell = \"r/2\"\n[band]\nhalf_width = \"3r\"").unwrap();
         assert_eq!(c.cell, Length::Spacings(0.5));
-        assert_eq!(c.band.half_width, Length::Spacings(3.0));
+        assert_eq!(c.band.half_width, Some(Length::Spacings(3.0)));
     }
 }

@@ -22,6 +22,7 @@ pub use zb05::Zb05Config;
 pub(crate) use scalar_field::{Fitted, Sampled, ScalarField, Scattering};
 
 use crate::error::Result;
+use crate::length::Length;
 use serde::{Deserialize, Serialize};
 
 /// The `[field]` table of a configuration: `kind` picks the field, the other keys are its own.
@@ -102,6 +103,20 @@ impl FieldConfig {
             FieldConfig::Blobby(_) => "blobby",
             FieldConfig::Metaball(_) => "metaball",
             FieldConfig::Anisotropic(_) => "anisotropic",
+        }
+    }
+
+    /// The narrow band's half-width where `band.half_width` is not set (and the normals are
+    /// the field's): Akinci's 2r, and r for the density field, whose surface (at 0.6 of the rest density, support 2r) lies
+    /// within half a spacing outside its outer particles. The band is never narrower than
+    /// r + cell, and its closure follows the surface wherever it leaves the band; what a
+    /// narrower band can miss is a blob lying wholly outside it: at cell r/2, a band of 1.5r
+    /// gave the same density meshes as 2r on every cbd-small frame and cbd-large f23 with
+    /// 24 % fewer vertices to sample, but dropped 8 to 56 triangles of SSP07's in 6 of 21.
+    pub fn band_half_width(&self) -> Length {
+        match self {
+            FieldConfig::Density(_) => Length::Spacings(1.0),
+            _ => Length::Spacings(2.0),
         }
     }
 
