@@ -270,7 +270,7 @@ pub struct SurfaceParticles {
 
 /// The narrow band (Sec. 4.1): grid vertices in the box of this half-width around a surface
 /// particle are surface vertices.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct BandConfig {
     /// Half-width of the box around each surface particle; `None`: the field's own
@@ -309,12 +309,6 @@ impl Default for SurfaceParticles {
             colour_threshold: 0.4,
             min_neighbours: 25,
         }
-    }
-}
-
-impl Default for BandConfig {
-    fn default() -> Self {
-        BandConfig { half_width: None }
     }
 }
 

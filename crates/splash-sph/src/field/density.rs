@@ -66,7 +66,7 @@ pub struct Density {
 
 /// [`cubic_spline`] of the offset (dx, dy, dz) over the support h (`inv_h` = 1/h).
 #[inline(always)]
-fn spline<L: Lane>(dx: L, dy: L, dz: L, inv_h: f32) -> L {
+pub(crate) fn spline<L: Lane>(dx: L, dy: L, dz: L, inv_h: f32) -> L {
     cubic_spline((dx * dx + dy * dy + dz * dz).sqrt() * L::splat(inv_h))
 }
 
@@ -103,11 +103,17 @@ lane_sums! {
 /// Each particle's volume m/ρ = 1/Σ_j W(x_i − x_j) (m = ρ₀·r³ cancels against ρ_i =
 /// Σ_j m W_ij), in handler order.
 pub fn particle_volumes(handlers: &HandlerArray, support: f32) -> Vec<f32> {
-    let (inv_h, sigma) = (1.0 / support, sigma(support));
+    let inv_h = 1.0 / support;
     map_particles(handlers, support, |near, x| {
         let [w] = spline_sum(near, x, inv_h);
-        1.0 / (sigma * w)
+        particle_volume(w, support)
     })
+}
+
+/// A particle's volume from Σ_j W(x_i − x_j) / σ, the sum of its [`spline`]s over the support.
+#[inline]
+pub(crate) fn particle_volume(splines: f32, support: f32) -> f32 {
+    1.0 / (sigma(support) * splines)
 }
 
 impl ScalarField for Density {
@@ -123,6 +129,10 @@ impl ScalarField for Density {
 
     fn particle_channels(&self, handlers: &HandlerArray) -> Vec<Vec<f32>> {
         vec![particle_volumes(handlers, self.support)]
+    }
+
+    fn volume_support(&self) -> Option<f32> {
+        Some(self.support)
     }
 
     fn value(&self, near: &Neighbourhood, x: Vec3) -> f32 {

@@ -32,6 +32,13 @@ pub(crate) trait ScalarField: Send + Sync {
         Vec::new()
     }
 
+    /// For fields whose only channel is the density field's particle volume: the support of
+    /// its summation, so that a pass over the same neighbourhoods can compute it alongside
+    /// ([`particle_volume`](super::density::particle_volume)). `None` for the others.
+    fn volume_support(&self) -> Option<f32> {
+        None
+    }
+
     /// For fields whose kernels adapt to the particles around them (the anisotropic field):
     /// the field fitted to the frame in `handlers`, to be sampled instead of `self` and
     /// gathered from the handler array it comes with. `None` for the others.

@@ -13,6 +13,8 @@ pub trait Lane:
     fn sqrt(self) -> Self;
     /// `f32::max` where `other` is not NaN: `other` wherever `self` is NaN.
     fn max(self, other: Self) -> Self;
+    /// 1 where `lo < self < hi`, else 0 (NaN: 0).
+    fn between(self, lo: f32, hi: f32) -> Self;
 }
 
 impl Lane for f32 {
@@ -27,6 +29,10 @@ impl Lane for f32 {
     #[inline(always)]
     fn max(self, other: f32) -> f32 {
         f32::max(self, other)
+    }
+    #[inline(always)]
+    fn between(self, lo: f32, hi: f32) -> f32 {
+        if lo < self && self < hi { 1.0 } else { 0.0 }
     }
 }
 
@@ -98,6 +104,15 @@ mod avx2 {
         fn max(self, other: F8) -> F8 {
             // SAFETY: AVX2 is there (see the type).
             F8(unsafe { _mm256_max_ps(self.0, other.0) })
+        }
+        #[inline(always)]
+        fn between(self, lo: f32, hi: f32) -> F8 {
+            // SAFETY: AVX2 is there (see the type).
+            F8(unsafe {
+                let above = _mm256_cmp_ps::<_CMP_GT_OQ>(self.0, _mm256_set1_ps(lo));
+                let below = _mm256_cmp_ps::<_CMP_LT_OQ>(self.0, _mm256_set1_ps(hi));
+                _mm256_and_ps(_mm256_and_ps(above, below), _mm256_set1_ps(1.0))
+            })
         }
     }
 }

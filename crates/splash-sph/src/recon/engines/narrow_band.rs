@@ -16,7 +16,7 @@ use crate::recon::stages::band_closure::close_band;
 use crate::recon::stages::deferred_values::Deferred;
 use crate::recon::stages::field_sampling::sample_field;
 use crate::recon::stages::lone_particles::band_half_widths;
-use crate::recon::stages::surface_particles::{SurfaceCriteria, surface_particles};
+use crate::recon::stages::surface_particles::SurfaceCriteria;
 use crate::recon::stages::triangulation::triangulate;
 use crate::report::{Stage, Stages};
 
@@ -26,7 +26,10 @@ pub(crate) fn gather(
     params: &Params,
     mut stages: Stages,
 ) -> Result<Reconstruction> {
-    let prepared = prepare(particles, params, &mut stages)?;
+    let criteria = SurfaceCriteria::of(params);
+    let narrow = params.engine == Engine::NarrowBand;
+    let mut prepared = prepare(particles, params, &mut stages, narrow.then_some(&criteria))?;
+    let surface = prepared.surface.take();
     let (field, samples) = prepared.sampling();
     // The full grid reaches as far as the fitted kernels do.
     let params = &Params {
@@ -34,10 +37,7 @@ pub(crate) fn gather(
         ..params.clone()
     };
     let held = prepared.heap_bytes() as u64;
-    let (mut band, limits) = if params.engine == Engine::NarrowBand {
-        let surface = stages.run(Stage::SurfaceParticles, || {
-            surface_particles(&prepared.handlers, &SurfaceCriteria::of(params))
-        });
+    let (mut band, limits) = if let Some(surface) = surface {
         stages.stats.surface_particles = surface.len();
         let band = stages.run(Stage::Band, || {
             band_around(&surface, &prepared.handlers, field, params, held)

@@ -16,6 +16,9 @@ use crate::recon::bricks::band::Band;
 use crate::recon::bricks::brick_values::BrickValues;
 use crate::recon::budget::{self, PER_PARTICLE, mul};
 use crate::recon::stages::normals::set_normals;
+use crate::recon::stages::surface_particles::{
+    SurfaceCriteria, surface_particles, surface_particles_and_volumes,
+};
 use crate::recon::stages::triangulation::Triangulation;
 use crate::recon::stages::vertex_correction::correct_vertices;
 use crate::report::{CorrectionFigures, FrameStats, Stage, Stages};
@@ -35,6 +38,8 @@ pub(super) struct Prepared {
     field: Arc<dyn ScalarField>,
     pub handlers: HandlerArray,
     fitted: Option<Fitted>,
+    /// The surface particles, where [`prepare`] was asked for them.
+    pub surface: Option<Vec<Vec3>>,
 }
 
 impl Prepared {
@@ -51,10 +56,14 @@ impl Prepared {
     }
 }
 
+/// The handler array of `particles` with the field's channels, and with `surface` criteria
+/// the surface particles too: from the same pass as the density field's volumes where their
+/// supports agree.
 pub(super) fn prepare(
     particles: &[Vec3],
     params: &Params,
     stages: &mut Stages<'_>,
+    surface: Option<&SurfaceCriteria>,
 ) -> Result<Prepared> {
     let field = Arc::clone(&params.field);
     let n = particles.len();
@@ -66,9 +75,18 @@ pub(super) fn prepare(
         HandlerArray::new(particles, lookup_cell(params))
     })?;
     // Per-particle work, like the colour field: counted with t_sp.
-    handlers.channels = stages.run(Stage::SurfaceParticles, || {
-        field.particle_channels(&handlers)
+    let (channels, surface) = stages.run(Stage::SurfaceParticles, || match surface {
+        Some(criteria) if field.volume_support() == Some(criteria.support) => {
+            let (surface, volumes) = surface_particles_and_volumes(&handlers, criteria);
+            (vec![volumes], Some(surface))
+        }
+        Some(criteria) => (
+            field.particle_channels(&handlers),
+            Some(surface_particles(&handlers, criteria)),
+        ),
+        None => (field.particle_channels(&handlers), None),
     });
+    handlers.channels = channels;
     let fitted = stages
         .run(Stage::ScalarField, || field.fit(&handlers))
         .transpose()?;
@@ -76,6 +94,7 @@ pub(super) fn prepare(
         field,
         handlers,
         fitted,
+        surface,
     })
 }
 

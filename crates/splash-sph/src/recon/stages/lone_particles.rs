@@ -94,7 +94,7 @@ pub(crate) mod tests {
 
     use crate::Engine;
     use crate::config::Normals;
-    use crate::tests::common::{field_params, lattice_ball, reconstruct};
+    use crate::tests::common::{lattice_ball, reconstruct};
 
     thread_local!(pub static OFF: Cell<bool> = const { Cell::new(false) });
 
@@ -120,10 +120,14 @@ pub(crate) mod tests {
             ("blobby", "r/2", Normals::Grid),
             ("metaball", "r/2", Normals::Field),
         ] {
-            let params = crate::config::Params {
+            // Resolved with its normals, which choose the density field's band.
+            let config = crate::Config {
+                cell: crate::Length::parse(cell).unwrap(),
+                field: crate::field::FieldConfig::named(kind).unwrap(),
                 normals,
-                ..field_params(kind, r, cell)
+                ..crate::Config::default()
             };
+            let params = crate::config::Params::resolve(&config, r);
             let run = |off: bool| {
                 OFF.set(off);
                 let out = reconstruct(&ps, &params, Engine::NarrowBand).unwrap();

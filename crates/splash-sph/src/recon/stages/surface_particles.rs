@@ -7,7 +7,10 @@ use std::f32::consts::PI;
 use glam::Vec3;
 
 use crate::config::Params;
+use crate::field::density::{particle_volume, spline};
 use crate::neighbours::handler_array::HandlerArray;
+use crate::neighbours::lane::Lane;
+use crate::neighbours::lane_sums::lane_sums;
 use crate::neighbours::lane_sums::{Lanes, lanes_path};
 use crate::neighbours::neighbourhood::{LANES, Neighbourhood, map_particles};
 
@@ -34,25 +37,81 @@ impl SurfaceCriteria {
 
 /// Positions of the surface particles, in handler order.
 pub fn surface_particles(handlers: &HandlerArray, criteria: &SurfaceCriteria) -> Vec<Vec3> {
-    let h = criteria.support;
-    // |∇c|·h for the poly6 kernel W = 315/(64π h⁹)(h² − d²)³ written with q = d/h:
-    // ∇c = −V·945/(32π h⁴) Σ (1 − q²)² (x_i − x_j)/h.
-    let scale = criteria.volume * 945.0 / (32.0 * PI * h.powi(3));
-    let inv_h2 = 1.0 / (h * h);
-    let flags = map_particles(handlers, h, |near, x| {
+    let inv_h2 = 1.0 / (criteria.support * criteria.support);
+    let flags = map_particles(handlers, criteria.support, |near, x| {
         let (gradient, neighbours) = colour_gradient(near, x, inv_h2);
+        criteria.on_surface(gradient, neighbours)
+    });
+    positions_flagged(handlers, &flags)
+}
+
+/// [`surface_particles`] and the density field's particle volumes (of support
+/// `criteria.support`, as `field::density::particle_volumes` gives them, bit for bit) from one
+/// pass over the particles' neighbourhoods: one gather, and one loop for both sums.
+pub fn surface_particles_and_volumes(
+    handlers: &HandlerArray,
+    criteria: &SurfaceCriteria,
+) -> (Vec<Vec3>, Vec<f32>) {
+    let h = criteria.support;
+    let (inv_h2, inv_h) = (1.0 / (h * h), 1.0 / h);
+    let (flags, volumes): (Vec<bool>, Vec<f32>) = map_particles(handlers, h, |near, x| {
+        let [gx, gy, gz, neighbours, splines] = colour_and_splines(near, x, (inv_h2, inv_h));
+        // The sums of x_j − x: the colour field's of x − x_j negated, exactly.
+        let gradient = -Vec3::new(gx, gy, gz) * inv_h2.sqrt();
+        (
+            criteria.on_surface(gradient, neighbours),
+            particle_volume(splines, h),
+        )
+    })
+    .into_iter()
+    .unzip();
+    (positions_flagged(handlers, &flags), volumes)
+}
+
+impl SurfaceCriteria {
+    /// Whether a particle with this colour gradient sum (see [`colour_gradient`]) and count
+    /// of neighbours is on the surface.
+    fn on_surface(&self, gradient: Vec3, neighbours: f32) -> bool {
+        let h = self.support;
+        // |∇c|·h for the poly6 kernel W = 315/(64π h⁹)(h² − d²)³ written with q = d/h:
+        // ∇c = −V·945/(32π h⁴) Σ (1 − q²)² (x_i − x_j)/h.
+        let scale = self.volume * 945.0 / (32.0 * PI * h.powi(3));
         // Neighbours at the particle's own position (itself, duplicates) are not counted: a
         // point mass of 30 coincident particles has a zero gradient by symmetry and would
         // otherwise count as inside, leaving no surface particle and an empty mesh.
-        neighbours < criteria.min_neighbours as f32
-            || gradient.length() * scale > criteria.colour_threshold
-    });
+        neighbours < self.min_neighbours as f32 || gradient.length() * scale > self.colour_threshold
+    }
+}
+
+fn positions_flagged(handlers: &HandlerArray, flags: &[bool]) -> Vec<Vec3> {
     handlers
         .positions
         .iter()
-        .zip(&flags)
+        .zip(flags)
         .filter_map(|(&p, &s)| s.then_some(p))
         .collect()
+}
+
+lane_sums! {
+    /// [`colour_gradient`]'s sums with d_j = x_j − x (the same terms negated) and its count,
+    /// then the density field's Σ W(d_j) of `spline_sum`, from the same squared distances.
+    vector fn colour_and_splines(inv: (f32, f32)) -> [5] |dx, dy, dz| {
+        colour_and_spline(dx, dy, dz, inv)
+    }
+}
+
+#[inline(always)]
+fn colour_and_spline<L: Lane>(dx: L, dy: L, dz: L, (inv_h2, inv_h): (f32, f32)) -> [L; 5] {
+    let q2 = (dx * dx + dy * dy + dz * dz) * L::splat(inv_h2);
+    let t = (L::splat(1.0) - q2).max(L::splat(0.0));
+    let w = t * t;
+    [
+        w * dx,
+        w * dy,
+        w * dz,
+        q2.between(0.0, 1.0),
+        spline(dx, dy, dz, inv_h),
+    ]
 }
 
 /// Returns Σ (1 − q²)² (x − x_j)/h and the number of particles with 0 < q < 1 (particles at
@@ -156,6 +215,55 @@ mod tests {
     use crate::neighbours::lane_sums::Lanes;
     use crate::neighbours::lane_sums::tests::FORCED;
     use crate::neighbours::neighbourhood::Neighbourhood;
+
+    #[test]
+    fn one_pass_gives_the_two_passes_surface_and_volumes_bit_for_bit() {
+        use super::{SurfaceCriteria, surface_particles, surface_particles_and_volumes};
+        use crate::field::density::particle_volumes;
+        use crate::neighbours::handler_array::HandlerArray;
+        use crate::neighbours::lane_sums::tests::on_every_path;
+        // A ball of fluid at spacing 1, jittered, splashes, and a particle twice over.
+        let mut next = crate::tests::common::uniform(23);
+        let mut ps = crate::tests::common::lattice_ball(Vec3::ZERO, 8.0, 1.0);
+        for p in &mut ps {
+            *p += (crate::tests::common::uniform_point(&mut next) - 0.5) * 0.2;
+        }
+        ps.extend((0..40).map(|_| crate::tests::common::uniform_point(&mut next) * 30.0 - 15.0));
+        ps.push(ps[0]);
+        let h = 2.0;
+        let handlers = HandlerArray::new(&ps, h).unwrap();
+        let criteria = SurfaceCriteria {
+            support: h,
+            volume: 1.0,
+            colour_threshold: 0.4,
+            min_neighbours: 25,
+        };
+        let bits = |v: &[Vec3]| v.iter().map(|p| p.to_array().map(f32::to_bits)).collect();
+        let runs = on_every_path(|| {
+            let two: (Vec<[u32; 3]>, Vec<u32>) = (
+                bits(&surface_particles(&handlers, &criteria)),
+                particle_volumes(&handlers, h)
+                    .iter()
+                    .map(|v| v.to_bits())
+                    .collect(),
+            );
+            let (surface, volumes) = surface_particles_and_volumes(&handlers, &criteria);
+            let one = (
+                bits(&surface),
+                volumes.iter().map(|v| v.to_bits()).collect(),
+            );
+            (one, two)
+        });
+        let (some, all) = (runs[0].1.1.0.len(), ps.len());
+        assert!(
+            some > 100 && some < all - 100,
+            "{some} of {all} on the surface"
+        );
+        for (path, (one, two)) in &runs {
+            assert_eq!(one, two, "{path:?}");
+            assert_eq!(one, &runs[0].1.0, "{path:?} against the scalar path");
+        }
+    }
 
     #[test]
     fn colour_lanes_are_the_same_on_every_path() {

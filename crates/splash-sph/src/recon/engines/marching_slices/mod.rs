@@ -61,7 +61,7 @@ pub fn reconstruct(
     checks: Checks,
     mut stages: Stages<'_>,
 ) -> Result<(Reconstruction, SlicesReport)> {
-    let prepared = prepare(particles, params, &mut stages)?;
+    let prepared = prepare(particles, params, &mut stages, None)?;
     let (field, samples) = prepared.sampling();
     let cell = params.cell;
     let held = prepared.heap_bytes() as u64;

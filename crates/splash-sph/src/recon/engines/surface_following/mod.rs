@@ -65,7 +65,7 @@ pub fn reconstruct(
     baseline: Baseline,
     mut stages: Stages<'_>,
 ) -> Result<Reconstruction> {
-    let prepared = prepare(particles, params, &mut stages)?;
+    let prepared = prepare(particles, params, &mut stages, None)?;
     let (field, samples) = prepared.sampling();
     let held = prepared.heap_bytes() as u64;
     let (cell, n) = (params.cell, particles.len());
