@@ -373,7 +373,7 @@ fn completions(shell: clap_complete::Shell) -> Result<ExitCode> {
 
 fn show_config(args: &ConfigArgs) -> Result<ExitCode> {
     let config = args.resolve()?;
-    print!("{}", config.to_toml());
+    print!("{}", config.effective().to_toml());
     Ok(ExitCode::SUCCESS)
 }
 

@@ -345,9 +345,15 @@ impl Config {
 
     /// The configuration as TOML, every key written.
     pub fn to_toml(&self) -> String {
-        let mut shown = self.clone();
-        shown.band.half_width = Some(self.band_half_width());
-        toml::to_string(&shown).expect("a configuration is always representable in TOML")
+        toml::to_string(self).expect("a configuration is always representable in TOML")
+    }
+
+    /// The configuration with the defaults that depend on other keys written out (the band
+    /// the field chooses), as `splash config show` prints it.
+    pub fn effective(&self) -> Config {
+        let mut c = self.clone();
+        c.band.half_width = Some(self.band_half_width());
+        c
     }
 
     /// `band.half_width`, or where it is not set the field's own; 2r with grid normals, which
@@ -592,9 +598,14 @@ mod tests {
         c.cell = Length::Spacings(0.5);
         c.band.half_width = Some(Length::Spacings(2.0));
         assert_eq!(Params::resolve(&c, 1.0).band_half_width, 2.0);
-        // What `config show` prints is the band that runs.
+        // What `config show` prints is the band that runs; what is read back is what was set.
         c.band.half_width = None;
-        assert!(c.to_toml().contains("[band]\nhalf_width = \"r\""));
+        assert!(!c.to_toml().contains("half_width"));
+        assert!(
+            c.effective()
+                .to_toml()
+                .contains("[band]\nhalf_width = \"r\"")
+        );
         c.normals = Normals::Grid;
         assert_eq!(Params::resolve(&c, 1.0).band_half_width, 2.0);
     }
