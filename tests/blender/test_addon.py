@@ -314,6 +314,43 @@ def test_live(live, splash_sph, command, ui):
         ),
         "live on the imported particles: their velocity",
     )
+    # Played forward, the next file's surface is made in the background meanwhile: the
+    # package's mesh, with the settings and particles of the frame it is shown at.
+    ball = splash_sph.read_particles(os.path.join(WORK, "particles", "frame_0003.ply"))
+
+    def shows(cell, what):
+        want = splash_sph.reconstruct(
+            ball.positions, SPACING, cell=cell, field=s.viewport.field, normals="none",
+            raw=s.viewport.raw, attributes={"velocity": ball["velocity"]},
+        )  # fmt: skip
+        v, f = mesh_arrays(live.surface_object(scene, points))
+        check(
+            np.array_equal(v, want.vertices) and np.array_equal(f, want.faces),
+            f"live, {what}: the package's mesh",
+        )
+
+    scene.frame_set(3)
+    check("read ahead" in s.status, f"live played forward: read ahead ({s.status})")
+    shows("r", "read ahead")
+    # Settings changed meanwhile: what was made ahead is dropped.
+    s.cache_mb = 0
+    for frame in (1, 2):
+        scene.frame_set(frame)
+    s.viewport.cell = "2r"
+    scene.frame_set(3)
+    check("read ahead" not in s.status, f"live: a stale read-ahead is dropped ({s.status})")
+    shows("2r", "the settings changed after the read-ahead started")
+    # A modifier may move the particles: no read-ahead.
+    points.modifiers.new("move", "DISPLACE")
+    for frame in (1, 2, 3):
+        scene.frame_set(frame)
+    check("read ahead" not in s.status, f"live: no read-ahead through a modifier ({s.status})")
+    points.modifiers.remove(points.modifiers[0])
+    # Frame 4 shows the last file still: its surface stays, not reconstructed again.
+    scene.frame_set(3)
+    scene.frame_set(4)
+    check(s.status.startswith("frame 3:"), f"live: a held file keeps its surface ({s.status})")
+    s.viewport.cell, s.cache_mb = "r", 1024
     s.enabled = False
 
 
