@@ -16,7 +16,8 @@ import numpy as np
 from . import vendor
 
 _pool = None
-_job = {}  # "path": the file being made, "future": its (key, arrays) or None
+_job = {}  # "path": the file being made, "settings", "future": its (key, arrays) or None
+_last = None  # the future last submitted, taken or not
 
 
 def key(name, positions, velocities, spacing, options):
@@ -49,8 +50,8 @@ def start(path, name, velocity, spacing, options, known):
     would make of it as object `name`), unless it is being made already. `velocity`: whether
     its `velocity` attribute is carried; `known(key)`: whether a surface is at hand already
     (then only the file is read)."""
-    global _pool
-    if _job and (_job["path"] == path or not _job["future"].done()):
+    global _pool, _last
+    if _job.get("path") == path or (_last is not None and not _last.done()):
         return  # one job at a time, never queued behind another
     if _pool is None:
         _pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="splash-ahead")
@@ -69,16 +70,21 @@ def start(path, name, velocity, spacing, options, known):
             return None
         return k, surface(positions, velocities, spacing, options)
 
-    _job.update(path=path, future=_pool.submit(job))
+    _job.update(path=path, settings=(name, round(spacing, 9), tuple(options.items())))
+    _job["future"] = _last = _pool.submit(job)
 
 
 def take(path, k):
     """The surface made ahead for the particle file `path` if its key is `k` (waiting for it
-    while it is being made), else None. Either way the job is done with."""
+    while it is being made, when its settings are `k`'s), else None. Either way the job is
+    done with."""
     if path is None or _job.get("path") != path:
         return None
+    same_settings = _job["settings"] == (k[0], k[4], k[5])
     future = _job.pop("future")
     _job.clear()
+    if not same_settings:
+        return None  # not waited for: it runs on, unused
     try:
         made = future.result()
     except Exception:  # the frame is reconstructed again, which reports the error
@@ -88,8 +94,9 @@ def take(path, k):
 
 def wait():
     """Waits for the job in flight, if any, drops it and ends the thread."""
-    global _pool
+    global _pool, _last
     _job.clear()
+    _last = None
     if _pool is not None:
         _pool.shutdown(wait=True)
         _pool = None
