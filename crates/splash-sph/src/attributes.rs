@@ -20,12 +20,14 @@ use crate::neighbours::handler_array::HandlerArray;
 /// `kernel`, through one neighbour structure: each vertex gets the Shepard-normalised kernel
 /// mean of the particles within the kernel's support, so a constant attribute stays that
 /// constant. A vertex with no particle within the support (which the field's surface never
-/// has) gets zero.
+/// has) gets zero. `cell`: the vertices' spacing (the Marching Cubes cell, 0 when unknown),
+/// which sizes the groups of vertices sharing one gather, never the values.
 pub fn interpolate(
     vertices: &[Vec3],
     particles: &[Vec3],
     attributes: &[&Attribute],
     kernel: &RadialKernel,
+    cell: f32,
 ) -> Result<Vec<Attribute>> {
     let support = kernel.support();
     let widths: Vec<usize> = attributes
@@ -63,18 +65,20 @@ pub fn interpolate(
         let handlers = HandlerArray::with_channels(particles, support, channels)?;
         match *kernel {
             // The kernel chosen once, outside the loops, so that they inline its weight.
-            RadialKernel::Poly6 { .. } => {
-                sweep(vertices, &handlers, k, &mut flat, |d2| kernel.weight(d2))
-            }
+            RadialKernel::Poly6 { .. } => sweep(vertices, &handlers, k, &mut flat, cell, |d2| {
+                kernel.weight(d2)
+            }),
             RadialKernel::CubicSpline { .. } => {
-                sweep(vertices, &handlers, k, &mut flat, |d2| kernel.weight(d2))
+                sweep(vertices, &handlers, k, &mut flat, cell, |d2| {
+                    kernel.weight(d2)
+                })
             }
-            RadialKernel::Blobby { .. } => {
-                sweep(vertices, &handlers, k, &mut flat, |d2| kernel.weight(d2))
-            }
-            RadialKernel::Metaball { .. } => {
-                sweep(vertices, &handlers, k, &mut flat, |d2| kernel.weight(d2))
-            }
+            RadialKernel::Blobby { .. } => sweep(vertices, &handlers, k, &mut flat, cell, |d2| {
+                kernel.weight(d2)
+            }),
+            RadialKernel::Metaball { .. } => sweep(vertices, &handlers, k, &mut flat, cell, |d2| {
+                kernel.weight(d2)
+            }),
         }
     }
     let mut offset = 0;
@@ -106,6 +110,10 @@ const BLOCK: usize = 256;
 /// (cbd-small frame 40, SSP07 at r/2, 1 thread: 83 ms against 162 ms for a gather per vertex,
 /// the same bits).
 const BIN: f32 = 0.5;
+/// The bins' least edge in cells: with coarse cells (Blender's viewport: density at cell r,
+/// support 2r) half a support held a vertex or two, and gathering took 4/5 of the time
+/// (cbd-small, 11 frames, 1 thread: 0.184 -> 0.100 s; SSP07 at r/2 keeps half a support).
+const BIN_CELLS: f32 = 4.0;
 
 /// The candidates of a bin's vertices: the particles within the support of their box, in
 /// handler order over the cells in (z, y, x) order, as coordinate and channel arrays.
@@ -122,7 +130,8 @@ struct Candidates {
 
 /// The Shepard means of the handler array's `k` channels at every vertex into `flat` (`k`
 /// values per vertex), with the kernel `weight` of the squared distance (zero from the
-/// support on). The vertices are binned in space, and each bin's share one list of candidate
+/// support on). The vertices are binned in space (bins of `BIN` supports, at least
+/// `BIN_CELLS` × `cell`), and each bin's share one list of candidate
 /// particles; the particles within the support of a vertex are still visited in the order of
 /// its own cells, so each vertex gets the same bits whatever its bin and however many threads
 /// run.
@@ -131,10 +140,11 @@ fn sweep(
     handlers: &HandlerArray,
     k: usize,
     flat: &mut [f32],
+    cell: f32,
     weight: impl Fn(f32) -> f32 + Sync,
 ) {
     let support = handlers.cell_size();
-    let bin = BIN * support;
+    let bin = (BIN * support).max(BIN_CELLS * cell);
     let mut order: Vec<((i32, i32, i32), u32)> = vertices
         .par_iter()
         .enumerate()
@@ -249,7 +259,7 @@ fn interpolate_velocities(
     }
     let velocities = Attribute::Vector(velocities.to_vec());
     let kernel = RadialKernel::Poly6 { support };
-    match interpolate(vertices, particles, &[&velocities], &kernel)?.pop() {
+    match interpolate(vertices, particles, &[&velocities], &kernel, 0.0)?.pop() {
         Some(Attribute::Vector(v)) => Ok(v),
         _ => unreachable!("one vector in, one vector out"),
     }
@@ -327,7 +337,7 @@ mod tests {
             .collect();
         let density = Attribute::Scalar(vec![998.25; particles.len()]);
         let velocity = Attribute::Vector(vec![Vec3::new(0.5, -3.0, 1e-3); particles.len()]);
-        let out = interpolate(&vertices, &particles, &[&density, &velocity], &kernel).unwrap();
+        let out = interpolate(&vertices, &particles, &[&density, &velocity], &kernel, 0.0).unwrap();
         let (Attribute::Scalar(d), Attribute::Vector(v)) = (&out[0], &out[1]) else {
             panic!("kinds changed: {out:?}");
         };
@@ -358,7 +368,7 @@ mod tests {
             .filter(|x| x.min_element() > support && x.max_element() < 1.3 - support)
             .collect();
         assert!(interior.len() > 20);
-        let Attribute::Scalar(l) = interpolate(&interior, &particles, &[&linear], &kernel)
+        let Attribute::Scalar(l) = interpolate(&interior, &particles, &[&linear], &kernel, 0.0)
             .unwrap()
             .remove(0)
         else {
@@ -373,18 +383,20 @@ mod tests {
         assert!(worst > 0.0);
         // Nothing to interpolate, or no particles: zeros of the right kinds.
         assert!(
-            interpolate(&vertices, &particles, &[], &kernel)
+            interpolate(&vertices, &particles, &[], &kernel, 0.0)
                 .unwrap()
                 .is_empty()
         );
-        let none = interpolate(&vertices, &[], &[&Attribute::Scalar(vec![])], &kernel).unwrap();
+        let none =
+            interpolate(&vertices, &[], &[&Attribute::Scalar(vec![])], &kernel, 0.0).unwrap();
         assert_eq!(none, [Attribute::Scalar(vec![0.0; vertices.len()])]);
         assert!(
             interpolate(
                 &vertices,
                 &particles,
                 &[&Attribute::Scalar(vec![1.0])],
-                &kernel
+                &kernel,
+                0.0
             )
             .is_err()
         );
@@ -404,6 +416,38 @@ mod tests {
     }
 
     #[test]
+    fn the_bins_never_change_the_bits() {
+        let r = 0.1;
+        let particles = jittered(14, r);
+        let velocity = Attribute::Vector(
+            particles
+                .iter()
+                .map(|p| Vec3::new(p.y.sin(), p.z * p.x, 1.0 / (1.0 + p.x)))
+                .collect(),
+        );
+        let vertices: Vec<Vec3> = (0..2000)
+            .map(|i| {
+                let t = i as f32 / 2000.0;
+                Vec3::new(t, (t * 7.0).fract(), (t * 13.0).fract()) * 1.4
+            })
+            .collect();
+        let kernel = RadialKernel::CubicSpline { support: 2.0 * r };
+        let bits = |cell: f32| match interpolate(&vertices, &particles, &[&velocity], &kernel, cell)
+            .unwrap()
+            .remove(0)
+        {
+            Attribute::Vector(v) => v.iter().map(|v| v.to_array().map(f32::to_bits)).collect(),
+            Attribute::Scalar(_) => Vec::new(),
+        };
+        let want: Vec<[u32; 3]> = bits(0.0);
+        assert!(want.iter().any(|v| v[0] != 0));
+        // Bins of half a support, then of one, two and four supports.
+        for cell in [r / 2.0, r, 2.0 * r] {
+            assert_eq!(bits(cell), want, "cell {cell}");
+        }
+    }
+
+    #[test]
     fn every_fields_kernel_keeps_constants_reproduces_linear_fields_and_its_support() {
         let r = 0.1;
         let (n, side) = (16, 1.5);
@@ -419,7 +463,8 @@ mod tests {
         let linear = Attribute::Scalar(particles.iter().map(|p| grad.dot(*p)).collect());
         for (kind, kernel) in field_kernels(r) {
             let support = kernel.support();
-            let out = interpolate(&vertices, &particles, &[&constant, &linear], &kernel).unwrap();
+            let out =
+                interpolate(&vertices, &particles, &[&constant, &linear], &kernel, 0.0).unwrap();
             let (Attribute::Scalar(c), Attribute::Scalar(l)) = (&out[0], &out[1]) else {
                 panic!("kinds changed");
             };
@@ -455,6 +500,7 @@ mod tests {
                     &with_probe,
                     &[&Attribute::Scalar(probe)],
                     &kernel,
+                    0.0,
                 )
                 .unwrap()
                 .remove(0) else {
