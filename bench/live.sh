@@ -7,20 +7,27 @@
 #
 #   bench/live.sh -n 3 --vs 4405cf0 ../shared/data/cbd-small 0.014
 #   BPY_PYTHON=/path/venv/bin/python bench/live.sh ../shared/data/cbd-small 0.014
+#   bench/live.sh --play 24 --vs HEAD ../shared/data/cbd-small 0.014
+#
+# --play FPS plays the frames as an imported particle sequence paced at FPS (bench_live.py
+# --play): end to end is then the main thread's time per frame change, and the CPU column
+# counts every thread (live mode's read-ahead included) and the idle wait.
 #
 # Environment: BLENDER (default blender), or BPY_PYTHON, a Python with the `bpy` module
 # (`pip install "bpy==4.5.*"`). Builds the add-on with scripts/build-blender-addon (maturin).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-runs=1 vs=""
+runs=1 vs="" play=()
+usage="usage: bench/live.sh [-n RUNS] [--vs REV] [--play FPS] PARTICLES SPACING"
 while [ $# -gt 2 ]; do
     case "$1" in
         -n) runs=$2; shift 2 ;;
         --vs) vs=$2; shift 2 ;;
-        *) echo "usage: bench/live.sh [-n RUNS] [--vs REV] PARTICLES SPACING" >&2; exit 2 ;;
+        --play) play=(--play "$2"); shift 2 ;;
+        *) echo "$usage" >&2; exit 2 ;;
     esac
 done
-[ $# -eq 2 ] || { echo "usage: bench/live.sh [-n RUNS] [--vs REV] PARTICLES SPACING" >&2; exit 2; }
+[ $# -eq 2 ] || { echo "$usage" >&2; exit 2; }
 particles=$(realpath "$1") spacing=$2
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
@@ -40,7 +47,8 @@ export BLENDER_USER_CONFIG="$work/config" BLENDER_USER_SCRIPTS="$work/scripts"
 for run in $(seq "$runs"); do
     for name in "${names[@]}"; do
         rm -rf "$work/config" "$work/scripts"
-        bench_args=(-- --addon "$work/$name.zip" --particles "$particles" --spacing "$spacing")
+        bench_args=(-- --addon "$work/$name.zip" --particles "$particles" --spacing "$spacing"
+                    ${play[@]+"${play[@]}"})
         if [ -n "${BPY_PYTHON:-}" ]; then
             "$BPY_PYTHON" tests/blender/bench_live.py "${bench_args[@]}"
         else
@@ -54,13 +62,14 @@ import re, statistics, sys
 rows = {}
 for line in open(sys.argv[1]):
     m = re.match(r"(\w+) run \d+: live (\w+) .*?mean ([\d.]+) s/frame.*?Blender's side ([\d.]+) s; "
-                 r"CPU [\d.]+ s \(package ([\d.]+), Blender's side ([\d.]+)\)", line)
+                 r"CPU ([\d.]+) s \((?:package ([\d.]+), Blender's side ([\d.]+))?", line)
     if m:
-        rows.setdefault((m[1], m[2]), []).append([float(x) for x in m.groups()[2:]])
-print("| add-on | settings | runs | end to end s/frame | Blender's side | its CPU | package CPU |")
-print("|---|---|---|---|---|---|---|")
+        rows.setdefault((m[1], m[2]), []).append([float(x or "nan") for x in m.groups()[2:]])
+print("| add-on | settings | runs | end to end s/frame | Blender's side | CPU | its CPU | "
+      "package CPU |")
+print("|---|---|---|---|---|---|---|---|")
 for (name, mode), values in sorted(rows.items()):
     med = [statistics.median(c) for c in zip(*values)]
-    print(f"| {name} | {mode} | {len(values)} | {med[0]:.3f} | {med[1]:.3f} | {med[3]:.3f} | "
-          f"{med[2]:.3f} |")
+    print(f"| {name} | {mode} | {len(values)} | {med[0]:.3f} | {med[1]:.3f} | {med[2]:.3f} | "
+          + " | ".join("–" if x != x else f"{x:.3f}" for x in med[4:2:-1]) + " |")
 PY

@@ -10,14 +10,13 @@ back, or rendering a frame already seen, costs no reconstruction. Errors go to t
 
 import logging
 import time
-import zlib
 from collections import OrderedDict
 
 import bpy
 from bpy.app.handlers import persistent
 from mathutils import Vector
 
-from . import meshdata, vendor
+from . import ahead, meshdata, sequence, vendor
 
 log = logging.getLogger("splash_blender")
 
@@ -59,6 +58,19 @@ def post_options(settings, q, source):
         "min_component": float(f"{q.min_component:.7g}") if q.use_min_component else None,
         "mesh_aabb": clip_box(settings.clip_object, source),
     }
+
+
+def shows_normals(q):
+    """Whether the settings group `q`'s normals from splash become the surface's custom
+    normals. A post-processed or decimated mesh's are its own area-weighted vertex normals,
+    which Blender's smooth shading all but reproduces (cbd-small at the render settings:
+    0.1-0.3 degrees apart on average, 1-3 at the 99th percentile). Blender 4.5 takes them as one
+    attribute; before it only as split normals, which cost Blender 3.4 about 2 s of CPU per
+    million triangles (setting them and every evaluation after): there they are left to
+    Blender, and the package does not compute them."""
+    if q.normals == "none":
+        return False
+    return meshdata.FREE_NORMALS or (q.raw and not q.use_decimate)
 
 
 def clip_box(box, source):
@@ -117,20 +129,16 @@ def reconstruct(scene, render, depsgraph=None):
             settings.spacing = splash_sph.estimate_spacing(positions)
             log.info("splash: estimated spacing r = %g from frame %d", settings.spacing, frame)
         q = quality(scene, render)
-        post = post_options(settings, q, source)
-        key = (
-            source.name,
-            frame,
-            len(positions),
-            zlib.crc32(positions.tobytes()),
-            None if velocities is None else zlib.crc32(velocities.tobytes()),
-            round(settings.spacing, 9),
-            q.cell,
-            q.field,
-            q.normals,
-            q.engine,
-            tuple(post.items()),
-        )
+        options = {
+            "cell": _length(q.cell),
+            "field": q.field,
+            "normals": q.normals if shows_normals(q) else "none",
+            "engine": q.engine,
+            **post_options(settings, q, source),
+        }
+        # The frame is not part of the key: a sequence saved every n-th frame holds each
+        # surface for n frames.
+        key = ahead.key(source.name, positions, velocities, settings.spacing, options)
         surface = surface_object(scene, source)
         if _state.get("shown") == (surface.name, key) and len(surface.data.vertices):
             # Already showing it (a render's frame_change_post, then its render_pre).
@@ -139,22 +147,14 @@ def reconstruct(scene, render, depsgraph=None):
             return surface
         started = time.perf_counter()
         arrays = _cache.get(key)
-        cached = arrays is not None
+        cached, made_ahead = arrays is not None, False
         if cached:
             _cache.move_to_end(key)
         else:
-            mesh = splash_sph.reconstruct(
-                positions,
-                settings.spacing,
-                cell=_length(q.cell),
-                field=q.field,
-                normals=q.normals,
-                engine=q.engine,
-                attributes=None if velocities is None else {"velocity": velocities},
-                **post,
-            )
-            normals = mesh.normals if len(mesh.normals) else None
-            arrays = (mesh.vertices, mesh.faces, normals, dict(mesh.attributes))
+            arrays = ahead.take(_sequence_file(source), key)
+            made_ahead = arrays is not None
+            if not made_ahead:
+                arrays = ahead.surface(positions, velocities, settings.spacing, options)
             _remember(key, arrays, settings.cache_mb * 1e6)
     except ValueError as e:
         raise LiveError(f"frame {frame}: {e}") from None
@@ -165,10 +165,50 @@ def reconstruct(scene, render, depsgraph=None):
     settings.status = (
         f"frame {frame}: {len(positions)} particles, {len(arrays[1])} triangles, "
         f"{seconds:.2f} s ({'render' if render else 'viewport'}"
-        f"{', cached' if cached else ''}{', in place' if in_place else ''})"
+        f"{', cached' if cached else ''}{', read ahead' if made_ahead else ''}"
+        f"{', in place' if in_place else ''})"
     )
     settings.error = ""
+    _read_ahead(source, frame, settings, options)
     return surface
+
+
+def _sequence_file(source):
+    """The particle file `source` shows, when it is an imported particle sequence."""
+    group = source.splash_sequence
+    return group.file if group.particles and group.directory and group.file else None
+
+
+def _read_ahead(source, frame, settings, options):
+    """Starts making the surface of the sequence's next file when frames go forward (played,
+    stepped or rendered in order) and `source` shows its files as they are (no modifier
+    or shape key changes its vertices)."""
+    previous = _state.get("frame")
+    _state["frame"] = (source.name, frame)
+    path = _sequence_file(source)
+    if (
+        path is None
+        or previous is None
+        or previous[0] != source.name
+        or previous[1] >= frame
+        or len(source.modifiers)
+        or source.data.shape_keys is not None
+    ):
+        return
+    group = source.splash_sequence
+    try:
+        files = [p for _, p in sequence.frame_files(group.directory, particles=True)]
+    except sequence.SequenceError:
+        return
+    if path in files and files.index(path) + 1 < len(files):
+        ahead.start(
+            files[files.index(path) + 1],
+            source.name,
+            settings.velocity,
+            settings.spacing,
+            options,
+            known=lambda k: k in _cache,
+        )
 
 
 def _remember(key, arrays, limit):
@@ -212,8 +252,10 @@ def update(scene, render=None, depsgraph=None):
 
 
 def clear_cache():
+    ahead.wait()
     _cache.clear()
     _state.pop("shown", None)
+    _state.pop("frame", None)
 
 
 def on_settings_changed(scene):

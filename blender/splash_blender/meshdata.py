@@ -19,7 +19,7 @@ from mathutils import Matrix
 
 _POSITION_ATTRIBUTE = bpy.app.version >= (3, 5, 0)
 _CORNER_VERT_ATTRIBUTE = bpy.app.version >= (3, 6, 0)
-_FREE_NORMALS = bpy.app.version >= (4, 5, 0)
+FREE_NORMALS = bpy.app.version >= (4, 5, 0)
 # Blender < 4.0 keeps each polygon's size; later ones derive it from the offsets.
 _LOOP_TOTAL = not bpy.types.MeshPolygon.bl_rna.properties["loop_total"].is_readonly
 _INTERNAL = ("position", "custom_normal")
@@ -110,7 +110,7 @@ def _set_positions(mesh, vertices):
 
 
 def _set_normals(mesh, normals):
-    if _FREE_NORMALS:
+    if FREE_NORMALS:
         # Blender 4.5's "free" custom normals: a float vector attribute, no lnor spaces.
         _set_attribute(mesh, "custom_normal", normals)
     else:

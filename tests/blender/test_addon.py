@@ -228,7 +228,21 @@ def test_live(live, splash_sph, command, ui):
         same = np.array_equal(v, want.vertices) and np.array_equal(f, want.faces)
         check(same, f"live {q.cell} {q.field}: the package's mesh ({len(f)} triangles)")
         check(np.array_equal(velocity_of(surface), want.attributes["velocity"]), "live velocity")
-        check(surface.data.has_custom_normals == rendering, "live: custom normals at render")
+        # Custom normals at render: the post-processed mesh's area-weighted ones go to
+        # Blender only where it takes them as one attribute (4.5+).
+        custom = rendering and live.meshdata.FREE_NORMALS
+        check(surface.data.has_custom_normals == custom, f"live: custom normals {custom}")
+    # Raw, the field's normals become custom normals in every Blender.
+    s.render.raw = True
+    check(live.update(scene, render=True), "live render, raw")
+    want = splash_sph.reconstruct(p.positions, SPACING, cell="r/2", field="ssp07", raw=True)
+    loop_n, loop_v = split_normals(surface)
+    check(
+        surface.data.has_custom_normals
+        and np.sum(loop_n * want.normals[loop_v], axis=1).min() > 0.9999,
+        "live render, raw: the field's normals as custom normals",
+    )
+    s.render.raw = False
     for rendering in (False, True):
         live.update(scene, render=rendering)
         check("cached" in s.status, f"live: back to a setting seen, from the cache ({s.status})")
@@ -300,6 +314,43 @@ def test_live(live, splash_sph, command, ui):
         ),
         "live on the imported particles: their velocity",
     )
+    # Played forward, the next file's surface is made in the background meanwhile: the
+    # package's mesh, with the settings and particles of the frame it is shown at.
+    ball = splash_sph.read_particles(os.path.join(WORK, "particles", "frame_0003.ply"))
+
+    def shows(cell, what):
+        want = splash_sph.reconstruct(
+            ball.positions, SPACING, cell=cell, field=s.viewport.field, normals="none",
+            raw=s.viewport.raw, attributes={"velocity": ball["velocity"]},
+        )  # fmt: skip
+        v, f = mesh_arrays(live.surface_object(scene, points))
+        check(
+            np.array_equal(v, want.vertices) and np.array_equal(f, want.faces),
+            f"live, {what}: the package's mesh",
+        )
+
+    scene.frame_set(3)
+    check("read ahead" in s.status, f"live played forward: read ahead ({s.status})")
+    shows("r", "read ahead")
+    # Settings changed meanwhile: what was made ahead is dropped.
+    s.cache_mb = 0
+    for frame in (1, 2):
+        scene.frame_set(frame)
+    s.viewport.cell = "2r"
+    scene.frame_set(3)
+    check("read ahead" not in s.status, f"live: a stale read-ahead is dropped ({s.status})")
+    shows("2r", "the settings changed after the read-ahead started")
+    # A modifier may move the particles: no read-ahead.
+    points.modifiers.new("move", "DISPLACE")
+    for frame in (1, 2, 3):
+        scene.frame_set(frame)
+    check("read ahead" not in s.status, f"live: no read-ahead through a modifier ({s.status})")
+    points.modifiers.remove(points.modifiers[0])
+    # Frame 4 shows the last file still: its surface stays, not reconstructed again.
+    scene.frame_set(3)
+    scene.frame_set(4)
+    check(s.status.startswith("frame 3:"), f"live: a held file keeps its surface ({s.status})")
+    s.viewport.cell, s.cache_mb = "r", 1024
     s.enabled = False
 
 

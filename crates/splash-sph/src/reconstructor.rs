@@ -218,7 +218,7 @@ impl Reconstructor {
     ) -> Result<Vec<Attribute>> {
         self.install(|| {
             let kernel = self.params.field.radial_kernel();
-            attributes::interpolate(&mesh.vertices, positions, values, &kernel)
+            attributes::interpolate(&mesh.vertices, positions, values, &kernel, self.params.cell)
         })
     }
 

@@ -19,7 +19,7 @@ pub struct Reach {
 }
 
 #[cfg(target_arch = "x86_64")]
-pub use avx2::{Out, filter, gather};
+pub use avx2::{FRONT, Out, filter, gather};
 
 /// The AVX2 paths, on x86-64 only (elsewhere the scalar paths run alone).
 #[cfg(target_arch = "x86_64")]
@@ -33,7 +33,7 @@ mod avx2 {
 
     /// Lane permutations: entry `m` moves the lanes set in the 8-bit mask `m` to the front, in
     /// order.
-    static FRONT: [[i32; 8]; 256] = {
+    pub static FRONT: [[i32; 8]; 256] = {
         let mut table = [[0; 8]; 256];
         let mut m = 0;
         while m < 256 {

@@ -2,7 +2,7 @@
 //! them: the handler array of Akinci et al. 2012 (Sec. 4.1, eq. 8) and the neighbourhoods
 //! gathered from it, narrowed per brick, block and vertex.
 
-mod box_filter;
+pub(crate) mod box_filter;
 pub(crate) mod bucket_grid;
 mod counting_sort;
 pub(crate) mod handler_array;
