@@ -11,7 +11,6 @@
 
 use std::fmt::Write as _;
 use std::hint::select_unpredictable;
-use std::mem::MaybeUninit;
 
 use super::decimal_lanes::{self, BLOCK, Decimals, Integers};
 
@@ -487,46 +486,44 @@ const SPARE: usize = 128;
 
 /// The [`SPARE`] bytes of spare capacity reserved at the end of a `Vec`, written by fixed-size stores
 /// (a store past the number's end is harmless: the next number overwrites it) and committed.
+/// They are reached through a pointer taken once, in a register: through the `Vec` each store
+/// reloaded its fields (a byte store may alias them).
 struct Spare<'a> {
     out: &'a mut Vec<u8>,
+    bytes: *mut u8,
 }
 
 impl<'a> Spare<'a> {
     #[inline]
     fn of(out: &'a mut Vec<u8>) -> Self {
         out.reserve(SPARE);
-        Self { out }
-    }
-
-    #[inline]
-    fn bytes(&mut self) -> &mut [MaybeUninit<u8>; SPARE] {
-        (&mut self.out.spare_capacity_mut()[..SPARE])
-            .try_into()
-            .expect("SPARE bytes reserved")
-    }
-
-    #[inline]
-    fn put1(&mut self, at: usize, byte: u8) {
-        self.bytes()[at].write(byte);
+        let bytes = out.spare_capacity_mut()[..SPARE].as_mut_ptr().cast();
+        Self { out, bytes }
     }
 
     /// Writes `bytes` at `at`; returns where they end.
     #[inline]
     fn put<const N: usize>(&mut self, at: usize, bytes: &[u8; N]) -> usize {
-        self.bytes()[at..at + N].copy_from_slice(&bytes.map(MaybeUninit::new));
+        assert!(at + N <= SPARE, "within the reserved bytes");
+        // SAFETY: `self.bytes` points to SPARE bytes of `self.out`'s capacity, which `self`
+        // borrows; the bytes written lie within them (asserted).
+        unsafe { self.bytes.add(at).cast::<[u8; N]>().write_unaligned(*bytes) };
         at + N
     }
 
     #[inline]
+    fn put1(&mut self, at: usize, byte: u8) {
+        self.put(at, &[byte]);
+    }
+
+    #[inline]
     fn put8(&mut self, at: usize, word: u64) {
-        let bytes = word.to_le_bytes().map(MaybeUninit::new);
-        self.bytes()[at..at + 8].copy_from_slice(&bytes);
+        self.put(at, &word.to_le_bytes());
     }
 
     #[inline]
     fn put16(&mut self, at: usize, word: u128) {
-        let bytes = word.to_le_bytes().map(MaybeUninit::new);
-        self.bytes()[at..at + 16].copy_from_slice(&bytes);
+        self.put(at, &word.to_le_bytes());
     }
 
     /// Appends the first `len` bytes written.
