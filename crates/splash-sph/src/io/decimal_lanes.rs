@@ -65,25 +65,25 @@ pub(super) fn available() -> bool {
     false
 }
 
-/// The decimals of `x`; only where [`available`] says so.
-pub(super) fn decimals(x: &[f32; BLOCK]) -> Decimals {
+/// The decimals of `x` into `out`; only where [`available`] says so.
+pub(super) fn decimals(x: &[f32; BLOCK], out: &mut Decimals) {
     #[cfg(target_arch = "x86_64")]
     {
         assert!(available(), "AVX-512 F, DQ and CD");
         // SAFETY: the CPU has the features, checked just above.
-        unsafe { avx512::decimals(x) }
+        unsafe { avx512::decimals(x, out) }
     }
     #[cfg(not(target_arch = "x86_64"))]
     unreachable!("no lanes on this architecture ({x:?})")
 }
 
-/// The digits of `v + offset` for each `v`; only where [`available`] says so.
-pub(super) fn integers(v: &[u32; BLOCK], offset: u32) -> Integers {
+/// The digits of `v + offset` for each `v` into `out`; only where [`available`] says so.
+pub(super) fn integers(v: &[u32; BLOCK], offset: u32, out: &mut Integers) {
     #[cfg(target_arch = "x86_64")]
     {
         assert!(available(), "AVX-512 F, DQ and CD");
         // SAFETY: the CPU has the features, checked just above.
-        unsafe { avx512::integers(v, offset) }
+        unsafe { avx512::integers(v, offset, out) }
     }
     #[cfg(not(target_arch = "x86_64"))]
     unreachable!("no lanes on this architecture ({v:?}, {offset})")
@@ -162,12 +162,11 @@ mod avx512 {
 
     /// The scalar `digits8_text` lane by lane, for integers below 10^8.
     #[target_feature(enable = "avx512f,avx512dq,avx512cd")]
-    pub(super) fn integers(v: &[u32; BLOCK], offset: u32) -> Integers {
-        let mut out = Integers::EMPTY;
+    pub(super) fn integers(v: &[u32; BLOCK], offset: u32, out: &mut Integers) {
+        out.scalar = 0;
         for (group, v) in v.chunks_exact(8).enumerate() {
-            integers8(v.try_into().expect("8 lanes"), offset, &mut out, 8 * group);
+            integers8(v.try_into().expect("8 lanes"), offset, out, 8 * group);
         }
-        out
     }
 
     /// [`integers`] of 8 lanes into `out` from `at`.
@@ -201,12 +200,11 @@ mod avx512 {
     /// The scalar `schubfach` and `digits9_trailing`/`digits8_text` of `float_text`, lane by
     /// lane.
     #[target_feature(enable = "avx512f,avx512dq,avx512cd")]
-    pub(super) fn decimals(x: &[f32; BLOCK]) -> Decimals {
-        let mut out = Decimals::EMPTY;
+    pub(super) fn decimals(x: &[f32; BLOCK], out: &mut Decimals) {
+        out.scalar = 0;
         for (group, x) in x.chunks_exact(8).enumerate() {
-            decimals8(x.try_into().expect("8 lanes"), &mut out, 8 * group);
+            decimals8(x.try_into().expect("8 lanes"), out, 8 * group);
         }
-        out
     }
 
     /// [`decimals`] of 8 lanes into `out` from `at`, in 64 bits (the scalar path's `scaled`

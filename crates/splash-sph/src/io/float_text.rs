@@ -68,7 +68,7 @@ impl<'a> F32Text<'a> {
     }
 
     /// [`push_f32_row`] of values `3·row..3·row + 3`.
-    #[inline]
+    #[inline(always)]
     pub(crate) fn push_row<const P: usize, const S: usize, const E: usize>(
         &mut self,
         out: &mut Vec<u8>,
@@ -122,6 +122,7 @@ impl<'a> F32Text<'a> {
     }
 
     /// The lanes of values `j..j + BLOCK` (past the end: ones).
+    #[inline(never)]
     fn fill(&mut self, j: usize) {
         let block = match self.values.get(j..j + BLOCK) {
             Some(block) => block.try_into().expect("a block"),
@@ -132,7 +133,7 @@ impl<'a> F32Text<'a> {
                 block
             }
         };
-        self.decimals = decimal_lanes::decimals(&block);
+        decimal_lanes::decimals(&block, &mut self.decimals);
         self.start = j;
     }
 }
@@ -343,7 +344,7 @@ impl<'a> IntText<'a> {
     }
 
     /// [`push_int_row`] of values `3·row..3·row + 3`, each plus the offset.
-    #[inline]
+    #[inline(always)]
     pub(crate) fn push_row<const P: usize, const S: usize, const E: usize>(
         &mut self,
         out: &mut Vec<u8>,
@@ -385,14 +386,20 @@ impl<'a> IntText<'a> {
         spare.commit(at);
     }
 
-    /// The lane of value `j`, filled with values `j..j + BLOCK` (past the end: zeros) unless
-    /// it holds `j` already.
+    /// The lane of value `j`, filled with values `j..j + BLOCK` unless it holds `j` already.
     #[inline(always)]
     fn lane(&mut self, j: usize) -> usize {
         let lane = j.wrapping_sub(self.start);
         if lane < BLOCK {
             return lane;
         }
+        self.fill(j);
+        0
+    }
+
+    /// The lanes of values `j..j + BLOCK` (past the end: zeros).
+    #[inline(never)]
+    fn fill(&mut self, j: usize) {
         let block = match self.values.get(j..j + BLOCK) {
             Some(block) => block.try_into().expect("a block"),
             None => {
@@ -402,9 +409,8 @@ impl<'a> IntText<'a> {
                 block
             }
         };
-        self.integers = decimal_lanes::integers(&block, self.offset);
+        decimal_lanes::integers(&block, self.offset, &mut self.integers);
         self.start = j;
-        0
     }
 }
 
