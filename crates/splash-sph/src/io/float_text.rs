@@ -846,7 +846,7 @@ mod tests {
         if decimal_lanes::available() {
             paths.push(true);
         } else {
-            println!("skipped the lanes: this CPU lacks AVX-512 F, DQ or CD");
+            println!("skipped the lanes: this CPU lacks AVX-512 F, DQ, CD or BW");
         }
         for lanes in paths {
             for skip in 0..3 {
@@ -885,7 +885,7 @@ mod tests {
         if decimal_lanes::available() {
             paths.push(true);
         } else {
-            println!("skipped the lanes: this CPU lacks AVX-512 F, DQ or CD");
+            println!("skipped the lanes: this CPU lacks AVX-512 F, DQ, CD or BW");
         }
         for lanes in paths {
             for offset in [0, 1] {
