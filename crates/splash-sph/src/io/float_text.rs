@@ -11,7 +11,8 @@
 
 use std::fmt::Write as _;
 use std::hint::select_unpredictable;
-use std::mem::MaybeUninit;
+
+use super::decimal_lanes::{self, BLOCK, Decimals, Integers};
 
 /// Appends `prefix`, `values` as [`push_f32`] prints them with `separator` between them,
 /// and `end`: a row composed in one reservation of spare capacity and appended at once,
@@ -37,6 +38,110 @@ pub(crate) fn push_f32_row<const P: usize, const S: usize, const E: usize>(
     }
     at = spare.put(at, end);
     spare.commit(at);
+}
+
+/// A slice of floats printed as [`push_f32_row`] prints them, in rows of three taken in
+/// order: their shortest digits are found eight at a time in AVX-512 lanes
+/// ([`decimal_lanes`]) where the CPU has them, ahead of their placement, else by [`schubfach`].
+pub(crate) struct F32Text<'a> {
+    values: &'a [f32],
+    lanes: bool,
+    /// The index of the first value in `decimals`.
+    start: usize,
+    decimals: Decimals,
+}
+
+impl<'a> F32Text<'a> {
+    pub(crate) fn new(values: &'a [f32]) -> Self {
+        Self::with(values, decimal_lanes::available())
+    }
+
+    /// With the lanes or without them (they must be available).
+    fn with(values: &'a [f32], lanes: bool) -> Self {
+        Self {
+            values,
+            lanes,
+            // Past every value: none is in the lanes yet.
+            start: values.len() + BLOCK,
+            decimals: Decimals::EMPTY,
+        }
+    }
+
+    /// [`push_f32_row`] of values `3·row..3·row + 3`.
+    #[inline(always)]
+    pub(crate) fn push_row<const P: usize, const S: usize, const E: usize>(
+        &mut self,
+        out: &mut Vec<u8>,
+        prefix: &[u8; P],
+        row: usize,
+        separator: &[u8; S],
+        end: &[u8; E],
+    ) {
+        let first = 3 * row;
+        let values: [f32; 3] = self.values[first..first + 3].try_into().expect("3 values");
+        if !self.lanes {
+            return push_f32_row(out, prefix, values, separator, end);
+        }
+        let mut spare = Spare::of(out);
+        let mut at = spare.put(0, prefix);
+        for k in 0..3 {
+            if k > 0 {
+                at = spare.put(at, separator);
+            }
+            match self.place(&mut spare, at, first + k) {
+                Some(end) => at = end,
+                None => return push_f32_row_slowly(out, prefix, values, separator, end),
+            }
+        }
+        at = spare.put(at, end);
+        spare.commit(at);
+    }
+
+    /// Writes value `j` at `at` as [`schubfach`] does, from the lanes; `None` as it.
+    #[inline(always)]
+    fn place(&mut self, spare: &mut Spare<'_>, at: usize, j: usize) -> Option<usize> {
+        let mut lane = j.wrapping_sub(self.start);
+        if lane >= BLOCK {
+            self.fill(j);
+            lane = 0;
+        }
+        let x = self.values[j];
+        let decimals = &self.decimals;
+        if decimals.scalar >> lane & 1 != 0 {
+            return schubfach_apart(spare, at, x);
+        }
+        // The sign, overwritten by the first digit of a positive x.
+        spare.put1(at, b'-');
+        let at = at + (x.to_bits() >> 31) as usize;
+        let text = u128::from(decimals.low[lane]) | u128::from(decimals.high[lane]) << 64;
+        let (n, e) = (
+            decimals.digits[lane] as usize,
+            decimals.exponent[lane] as i32,
+        );
+        Some(place16(spare, at, text, n, e))
+    }
+
+    /// The lanes of values `j..j + BLOCK` (past the end: ones).
+    #[inline(never)]
+    fn fill(&mut self, j: usize) {
+        let block = match self.values.get(j..j + BLOCK) {
+            Some(block) => block.try_into().expect("a block"),
+            None => {
+                let mut block = [1.0; BLOCK];
+                let rest = &self.values[j..];
+                block[..rest.len()].copy_from_slice(rest);
+                block
+            }
+        };
+        decimal_lanes::decimals(&block, &mut self.decimals);
+        self.start = j;
+    }
+}
+
+/// [`schubfach`] as a call, for the values the lanes leave.
+#[inline(never)]
+fn schubfach_apart(spare: &mut Spare<'_>, at: usize, x: f32) -> Option<usize> {
+    schubfach(spare, at, x)
 }
 
 /// [`push_f32_row`] one value at a time, for the rare rows with a value outside
@@ -209,6 +314,106 @@ pub(crate) fn push_int_row<const P: usize, const S: usize, const E: usize>(
     spare.commit(at);
 }
 
+/// A slice of integers, each plus an offset, printed as [`push_int_row`] prints them, in
+/// rows of three taken in order: their digits are found eight at a time in AVX-512 lanes
+/// ([`decimal_lanes`]) where the CPU has them, else as [`push_int_row`] does.
+pub(crate) struct IntText<'a> {
+    values: &'a [u32],
+    offset: u32,
+    lanes: bool,
+    /// The index of the first value in `integers`.
+    start: usize,
+    integers: Integers,
+}
+
+impl<'a> IntText<'a> {
+    pub(crate) fn new(values: &'a [u32], offset: u32) -> Self {
+        Self::with(values, offset, decimal_lanes::available())
+    }
+
+    /// With the lanes or without them (they must be available).
+    fn with(values: &'a [u32], offset: u32, lanes: bool) -> Self {
+        Self {
+            values,
+            offset,
+            lanes,
+            // Past every value: none is in the lanes yet.
+            start: values.len() + BLOCK,
+            integers: Integers::EMPTY,
+        }
+    }
+
+    /// [`push_int_row`] of values `3·row..3·row + 3`, each plus the offset.
+    #[inline(always)]
+    pub(crate) fn push_row<const P: usize, const S: usize, const E: usize>(
+        &mut self,
+        out: &mut Vec<u8>,
+        prefix: &[u8; P],
+        row: usize,
+        separator: &[u8; S],
+        infix: Option<&[u8; 2]>,
+        end: &[u8; E],
+    ) {
+        let first = 3 * row;
+        let values: [u32; 3] = self.values[first..first + 3].try_into().expect("3 values");
+        let values = values.map(|v| u64::from(v) + u64::from(self.offset));
+        if !self.lanes {
+            return push_int_row(out, prefix, values, separator, infix, end);
+        }
+        let mut spare = Spare::of(out);
+        let mut at = spare.put(0, prefix);
+        for k in 0..3 {
+            if k > 0 {
+                at = spare.put(at, separator);
+            }
+            let lane = self.lane(first + k);
+            if self.integers.scalar >> lane & 1 != 0 {
+                return push_int_row_slowly(out, prefix, values, separator, infix, end);
+            }
+            let (text, n) = (
+                self.integers.text[lane],
+                self.integers.digits[lane] as usize,
+            );
+            spare.put8(at, text);
+            at += n;
+            if let Some(infix) = infix {
+                at = spare.put(at, infix);
+                spare.put8(at, text);
+                at += n;
+            }
+        }
+        at = spare.put(at, end);
+        spare.commit(at);
+    }
+
+    /// The lane of value `j`, filled with values `j..j + BLOCK` unless it holds `j` already.
+    #[inline(always)]
+    fn lane(&mut self, j: usize) -> usize {
+        let lane = j.wrapping_sub(self.start);
+        if lane < BLOCK {
+            return lane;
+        }
+        self.fill(j);
+        0
+    }
+
+    /// The lanes of values `j..j + BLOCK` (past the end: zeros).
+    #[inline(never)]
+    fn fill(&mut self, j: usize) {
+        let block = match self.values.get(j..j + BLOCK) {
+            Some(block) => block.try_into().expect("a block"),
+            None => {
+                let mut block = [0; BLOCK];
+                let rest = &self.values[j..];
+                block[..rest.len()].copy_from_slice(rest);
+                block
+            }
+        };
+        decimal_lanes::integers(&block, self.offset, &mut self.integers);
+        self.start = j;
+    }
+}
+
 /// [`push_int_row`] by `itoa`, for indices of 9 digits or more (meshes of 10^8 vertices).
 #[cold]
 fn push_int_row_slowly(
@@ -287,46 +492,44 @@ const SPARE: usize = 128;
 
 /// The [`SPARE`] bytes of spare capacity reserved at the end of a `Vec`, written by fixed-size stores
 /// (a store past the number's end is harmless: the next number overwrites it) and committed.
+/// They are reached through a pointer taken once, in a register: through the `Vec` each store
+/// reloaded its fields (a byte store may alias them).
 struct Spare<'a> {
     out: &'a mut Vec<u8>,
+    bytes: *mut u8,
 }
 
 impl<'a> Spare<'a> {
     #[inline]
     fn of(out: &'a mut Vec<u8>) -> Self {
         out.reserve(SPARE);
-        Self { out }
-    }
-
-    #[inline]
-    fn bytes(&mut self) -> &mut [MaybeUninit<u8>; SPARE] {
-        (&mut self.out.spare_capacity_mut()[..SPARE])
-            .try_into()
-            .expect("SPARE bytes reserved")
-    }
-
-    #[inline]
-    fn put1(&mut self, at: usize, byte: u8) {
-        self.bytes()[at].write(byte);
+        let bytes = out.spare_capacity_mut()[..SPARE].as_mut_ptr().cast();
+        Self { out, bytes }
     }
 
     /// Writes `bytes` at `at`; returns where they end.
     #[inline]
     fn put<const N: usize>(&mut self, at: usize, bytes: &[u8; N]) -> usize {
-        self.bytes()[at..at + N].copy_from_slice(&bytes.map(MaybeUninit::new));
+        assert!(at + N <= SPARE, "within the reserved bytes");
+        // SAFETY: `self.bytes` points to SPARE bytes of `self.out`'s capacity, which `self`
+        // borrows; the bytes written lie within them (asserted).
+        unsafe { self.bytes.add(at).cast::<[u8; N]>().write_unaligned(*bytes) };
         at + N
     }
 
     #[inline]
+    fn put1(&mut self, at: usize, byte: u8) {
+        self.put(at, &[byte]);
+    }
+
+    #[inline]
     fn put8(&mut self, at: usize, word: u64) {
-        let bytes = word.to_le_bytes().map(MaybeUninit::new);
-        self.bytes()[at..at + 8].copy_from_slice(&bytes);
+        self.put(at, &word.to_le_bytes());
     }
 
     #[inline]
     fn put16(&mut self, at: usize, word: u128) {
-        let bytes = word.to_le_bytes().map(MaybeUninit::new);
-        self.bytes()[at..at + 16].copy_from_slice(&bytes);
+        self.put(at, &word.to_le_bytes());
     }
 
     /// Appends the first `len` bytes written.
@@ -493,7 +696,7 @@ fn place8(spare: &mut Spare<'_>, at: usize, text: u64, n: usize, e: i32) -> usiz
 }
 
 /// [`place8`] for d of 9 digits, in `text` as [`digits9_trailing`] gives them.
-#[inline]
+#[inline(always)]
 fn place16(spare: &mut Spare<'_>, at: usize, text: u128, n: usize, e: i32) -> usize {
     let before = n as i32 + e;
     if e >= 0 {
@@ -577,12 +780,11 @@ mod tests {
         }
     }
 
-    /// Rows of three as `push_f32_row` writes them against `format!`: 3 million pseudo-random bit
-    /// patterns (every exponent, both signs, subnormals, NaNs), so that a row mixes the fast
-    /// path with the fallbacks; decimal grids as a mesh's coordinates are (i·0.007, i·10^−j);
-    /// and the powers of ten from 10^−12 to 10^8 with their neighbours.
-    #[test]
-    fn rows_print_as_fmt_prints() {
+    /// 3 million pseudo-random bit patterns (every exponent, both signs, subnormals, NaNs), so
+    /// that a row mixes the fast path with the fallbacks; decimal grids as a mesh's
+    /// coordinates are (i·0.007, i·10^−j); and the powers of ten from 10^−12 to 10^8 with their
+    /// neighbours.
+    fn assorted() -> Vec<f32> {
         let mut state = 0x9e37_79b9_7f4a_7c15u64;
         let mut random = || {
             // xorshift64*
@@ -604,17 +806,131 @@ mod tests {
                 values.extend([f32::from_bits(bits), -f32::from_bits(bits)]);
             }
         }
-        let (mut ours, mut expected) = (Vec::new(), String::new());
+        values
+    }
+
+    /// Asserts that `ours` holds the rows of three of `values` as `format!` prints them.
+    fn assert_rows(ours: Vec<u8>, values: &[f32]) {
+        let ours = String::from_utf8(ours).unwrap();
+        let mut lines = ours.lines();
         for row in values.chunks_exact(3) {
             let [x, y, z] = [row[0], row[1], row[2]];
-            push_f32_row(&mut ours, b"<", [x, y, z], b", ", b">\n");
-            expected += &format!("<{x}, {y}, {z}>\n");
+            assert_eq!(lines.next(), Some(format!("<{x}, {y}, {z}>").as_str()));
         }
-        let ours = String::from_utf8(ours).unwrap();
-        for (a, b) in ours.lines().zip(expected.lines()) {
-            assert_eq!(a, b);
+        assert_eq!(lines.next(), None);
+    }
+
+    /// Rows of three as `push_f32_row` writes them against `format!`.
+    #[test]
+    fn rows_print_as_fmt_prints() {
+        let values = assorted();
+        let mut ours = Vec::new();
+        for row in values.chunks_exact(3) {
+            push_f32_row(&mut ours, b"<", [row[0], row[1], row[2]], b", ", b">\n");
         }
-        assert_eq!(ours.len(), expected.len());
+        assert_rows(ours, &values);
+    }
+
+    /// `F32Text`'s rows with the lanes and without them against `format!`: the assorted values
+    /// and Schubfach's range (2^-40 ≤ |x| < 2^24, every 997th bit pattern, both signs), whose
+    /// lanes the scalar path fills where the lanes leave them; started at each offset into
+    /// their blocks of eight, and ended inside one.
+    #[test]
+    fn lanes_print_as_fmt_prints() {
+        let mut values = assorted();
+        for bits in (0x2b80_0000u32..0x4b80_0000).step_by(997) {
+            values.extend([f32::from_bits(bits), -f32::from_bits(bits)]);
+        }
+        values.truncate(values.len() / 3 * 3 - 3);
+        let mut paths = vec![false];
+        if decimal_lanes::available() {
+            paths.push(true);
+        } else {
+            println!("skipped the lanes: this CPU lacks AVX-512 F, DQ, CD or BW");
+        }
+        for lanes in paths {
+            for skip in 0..3 {
+                let values = &values[3 * skip..];
+                let mut text = F32Text::with(values, lanes);
+                let mut ours = Vec::new();
+                for row in 0..values.len() / 3 {
+                    text.push_row(&mut ours, b"<", row, b", ", b">\n");
+                }
+                assert_rows(ours, values);
+            }
+        }
+    }
+
+    /// Every 13th float the lanes print themselves (2^-26 ≤ x < 2^24, and the negative of
+    /// every 61st of those) through the lanes and through the scalar path, on all threads: the
+    /// same bytes. Every float of that range was checked this way once (step 1: 402 M floats).
+    #[test]
+    fn lanes_print_every_float_as_the_scalar_path() {
+        use rayon::prelude::*;
+        if !decimal_lanes::available() {
+            println!("skipped: this CPU lacks AVX-512 F, DQ, CD or BW");
+            return;
+        }
+        let (first, last) = (0x3280_0000u32, 0x4b80_0000u32);
+        let step = 3 << 16;
+        (first..last)
+            .into_par_iter()
+            .step_by(step)
+            .for_each(|start| {
+                let mut values: Vec<f32> = (start..(start + step as u32).min(last))
+                    .step_by(13)
+                    .map(f32::from_bits)
+                    .collect();
+                values.extend(values.iter().step_by(61).map(|x| -x).collect::<Vec<f32>>());
+                values.truncate(values.len() / 3 * 3);
+                let mut text = F32Text::with(&values, true);
+                let (mut lanes, mut scalar) = (Vec::new(), Vec::new());
+                for (row, v) in values.chunks_exact(3).enumerate() {
+                    text.push_row(&mut lanes, b"", row, b" ", b"\n");
+                    push_f32_row(&mut scalar, b"", [v[0], v[1], v[2]], b" ", b"\n");
+                }
+                assert!(lanes == scalar, "from bits {start:#x}");
+            });
+    }
+
+    /// `IntText`'s rows with the lanes and without them, offsets 0 and 1, against `format!`:
+    /// every width from 1 to 10 digits and its edges (10^8 − 1 + 1 is the first the lanes
+    /// leave), u32::MAX, and 300 000 pseudo-random integers of every width.
+    #[test]
+    fn integer_lanes_print_in_decimal() {
+        let mut values = vec![0u32, 1, u32::MAX, u32::MAX - 1];
+        for k in 1..10 {
+            let p = 10u32.pow(k);
+            values.extend([p - 2, p - 1, p, p + 7]);
+        }
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        for _ in 0..300_000 {
+            state ^= state >> 12;
+            state ^= state << 25;
+            state ^= state >> 27;
+            let random = state.wrapping_mul(0x2545_f491_4f6c_dd1d);
+            // A random width: every count of digits about equally often.
+            values.push((random >> 32) as u32 >> (random % 32));
+        }
+        values.truncate(values.len() / 3 * 3);
+        let mut paths = vec![false];
+        if decimal_lanes::available() {
+            paths.push(true);
+        } else {
+            println!("skipped the lanes: this CPU lacks AVX-512 F, DQ, CD or BW");
+        }
+        for lanes in paths {
+            for offset in [0, 1] {
+                let mut text = IntText::with(&values, offset, lanes);
+                let (mut ours, mut expected) = (Vec::new(), String::new());
+                for (row, v) in values.chunks_exact(3).enumerate() {
+                    let [a, b, c] = [v[0], v[1], v[2]].map(|v| u64::from(v) + u64::from(offset));
+                    text.push_row(&mut ours, b"f ", row, b" ", Some(b"//"), b"\n");
+                    expected += &format!("f {a}//{a} {b}//{b} {c}//{c}\n");
+                }
+                assert_eq!(String::from_utf8(ours).unwrap(), expected, "lanes {lanes}");
+            }
+        }
     }
 
     /// Every width from 1 to 20 digits and the edges of each, in rows of three that mix the

@@ -36,6 +36,7 @@ pub(crate) mod atomic;
 mod attribute_columns;
 mod bgeo;
 mod csv;
+mod decimal_lanes;
 mod float_text;
 mod lines;
 mod mesh_read;

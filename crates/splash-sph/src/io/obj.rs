@@ -4,8 +4,8 @@ use std::io::{self, Write};
 
 use glam::Vec3;
 
-use super::float_text::{push_f32_row, push_int_row};
-use super::text_records::write_records;
+use super::float_text::{F32Text, IntText};
+use super::text_records::{each_record, write_chunks};
 use crate::mesh::TriMesh;
 
 /// Writes `v`, then `vn` lines, then 1-based `f` lines (`a//a` when there are normals), each
@@ -21,9 +21,12 @@ pub(super) fn write(mesh: &TriMesh, out: &mut impl Write) -> io::Result<()> {
     vectors(out, b"v ", &mesh.vertices)?;
     vectors(out, b"vn ", &mesh.normals)?;
     let infix = (!mesh.normals.is_empty()).then_some(b"//");
-    write_records(out, mesh.triangles.len(), |i, line| {
-        let corners = mesh.triangles[i].map(|corner| u64::from(corner) + 1);
-        push_int_row(line, b"f ", corners, b" ", infix, b"\n");
+    let corners = bytemuck::cast_slice(&mesh.triangles);
+    write_chunks(out, mesh.triangles.len(), |rows, buffer| {
+        let mut text = IntText::new(corners, 1);
+        each_record(rows, buffer, |i, line| {
+            text.push_row(line, b"f ", i, b" ", infix, b"\n")
+        });
     })
 }
 
@@ -33,7 +36,11 @@ fn vectors<const K: usize>(
     key: &[u8; K],
     vectors: &[Vec3],
 ) -> io::Result<()> {
-    write_records(out, vectors.len(), |i, line| {
-        push_f32_row(line, key, vectors[i].to_array(), b" ", b"\n");
+    let values = bytemuck::cast_slice(vectors);
+    write_chunks(out, vectors.len(), |rows, buffer| {
+        let mut text = F32Text::new(values);
+        each_record(rows, buffer, |i, line| {
+            text.push_row(line, key, i, b" ", b"\n")
+        });
     })
 }

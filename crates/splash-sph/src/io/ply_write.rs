@@ -11,8 +11,8 @@ use ply_rs_bw::ply::{
 };
 use ply_rs_bw::writer::Writer;
 
-use super::float_text::{push_f32, push_f32_row, push_int_row};
-use super::text_records::write_records;
+use super::float_text::{F32Text, IntText, push_f32};
+use super::text_records::{each_record, write_chunks};
 use super::vertex_attributes::{AttributeValues, VertexAttributes};
 use crate::mesh::TriMesh;
 
@@ -170,25 +170,33 @@ fn write_ascii(
     arrays: &[(&str, AttributeValues)],
     out: &mut impl Write,
 ) -> io::Result<()> {
-    write_records(out, mesh.vertices.len(), |i, line| {
-        push_f32_row(line, b"", mesh.vertices[i].to_array(), b" ", b"");
-        if let Some(n) = mesh.normals.get(i) {
-            push_f32_row(line, b" ", n.to_array(), b" ", b"");
-        }
-        for (_, values) in arrays {
-            let (row, width) = match values {
-                AttributeValues::Scalar(s) => ([s[i], 0.0, 0.0], 1),
-                AttributeValues::Vector(v) => (v[i].to_array(), 3),
-            };
-            for &x in &row[..width] {
-                line.push(b' ');
-                push_f32(line, x);
+    let normals = !mesh.normals.is_empty();
+    write_chunks(out, mesh.vertices.len(), |rows, buffer| {
+        let mut vertices = F32Text::new(bytemuck::cast_slice(&mesh.vertices));
+        let mut normal = F32Text::new(bytemuck::cast_slice(&mesh.normals));
+        each_record(rows, buffer, |i, line| {
+            vertices.push_row(line, b"", i, b" ", b"");
+            if normals {
+                normal.push_row(line, b" ", i, b" ", b"");
             }
-        }
-        line.push(b'\n');
+            for (_, values) in arrays {
+                let (row, width) = match values {
+                    AttributeValues::Scalar(s) => ([s[i], 0.0, 0.0], 1),
+                    AttributeValues::Vector(v) => (v[i].to_array(), 3),
+                };
+                for &x in &row[..width] {
+                    line.push(b' ');
+                    push_f32(line, x);
+                }
+            }
+            line.push(b'\n');
+        });
     })?;
-    write_records(out, mesh.triangles.len(), |i, line| {
-        let corners = mesh.triangles[i].map(u64::from);
-        push_int_row(line, b"3 ", corners, b" ", None, b"\n");
+    let corners = bytemuck::cast_slice(&mesh.triangles);
+    write_chunks(out, mesh.triangles.len(), |rows, buffer| {
+        let mut text = IntText::new(corners, 0);
+        each_record(rows, buffer, |i, line| {
+            text.push_row(line, b"3 ", i, b" ", None, b"\n")
+        });
     })
 }

@@ -11,8 +11,8 @@ use std::io::{self, Write};
 
 use glam::Vec3;
 
-use super::float_text::{push_f32_row, push_int_row};
-use super::text_records::write_records;
+use super::float_text::{F32Text, IntText};
+use super::text_records::{each_record, write_chunks};
 use crate::mesh::TriMesh;
 
 /// The name a `--format pov` file declares its mesh under: `object { SplashMesh … }`.
@@ -37,10 +37,13 @@ pub(super) fn write(mesh: &TriMesh, out: &mut impl Write) -> io::Result<()> {
     }
     writeln!(out, "  face_indices {{\n    {},", mesh.triangles.len())?;
     let triangles = &mesh.triangles;
-    write_records(out, triangles.len(), |i, line| {
-        let corners = triangles[i].map(u64::from);
-        push_int_row(line, b"    <", corners, b",", None, b">");
-        end(line, i, triangles.len());
+    let corners = bytemuck::cast_slice(triangles);
+    write_chunks(out, triangles.len(), |rows, buffer| {
+        let mut text = IntText::new(corners, 0);
+        each_record(rows, buffer, |i, line| {
+            text.push_row(line, b"    <", i, b",", None, b">");
+            end(line, i, triangles.len());
+        });
     })?;
     writeln!(out, "  }}")?;
     // Any direction works for a closed mesh; one that is not along an axis avoids grazing rays
@@ -53,9 +56,13 @@ pub(super) fn write(mesh: &TriMesh, out: &mut impl Write) -> io::Result<()> {
 /// Coordinates are printed as `{}` prints them: the shortest text that reads back as the same
 /// `f32`, never in exponent form.
 fn vectors(out: &mut impl Write, vectors: &[Vec3]) -> io::Result<()> {
-    write_records(out, vectors.len(), |i, line| {
-        push_f32_row(line, b"    <", vectors[i].to_array(), b",", b">");
-        end(line, i, vectors.len());
+    let values = bytemuck::cast_slice(vectors);
+    write_chunks(out, vectors.len(), |rows, buffer| {
+        let mut text = F32Text::new(values);
+        each_record(rows, buffer, |i, line| {
+            text.push_row(line, b"    <", i, b",", b">");
+            end(line, i, vectors.len());
+        });
     })?;
     writeln!(out, "  }}")
 }

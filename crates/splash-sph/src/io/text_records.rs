@@ -4,6 +4,7 @@
 //! not the whole file.
 
 use std::io::{self, Write};
+use std::ops::Range;
 
 use rayon::prelude::*;
 
@@ -23,6 +24,34 @@ pub(super) fn write_records(
     count: usize,
     record: impl Fn(usize, &mut Vec<u8>) + Sync,
 ) -> io::Result<()> {
+    write_chunks(out, count, |records, buffer| {
+        each_record(records, buffer, &record)
+    })
+}
+
+/// Appends records `records` to `buffer` by `record(i, buffer)`, with room for them all made
+/// after the first: at the first record's length and a quarter more (growing from empty would
+/// copy the chunk about once more).
+pub(super) fn each_record(
+    mut records: Range<usize>,
+    buffer: &mut Vec<u8>,
+    mut record: impl FnMut(usize, &mut Vec<u8>),
+) {
+    if let Some(i) = records.next() {
+        record(i, buffer);
+        buffer.reserve(buffer.len() * records.len() / 4 * 5);
+    }
+    records.for_each(|i| record(i, buffer));
+}
+
+/// [`write_records`] a chunk at a time: `chunk(records, buffer)` appends records `records`
+/// to the empty `buffer` (a chunk's records are formatted in order on one thread, so that
+/// they can share work, as [`super::float_text::F32Text`] does).
+pub(super) fn write_chunks(
+    out: &mut impl Write,
+    count: usize,
+    chunk: impl Fn(Range<usize>, &mut Vec<u8>) + Sync,
+) -> io::Result<()> {
     let wave = (CHUNKS_PER_THREAD * rayon::current_num_threads()).max(1);
     // Whole waves of chunks of one size, so that no thread idles through a last wave of
     // fewer chunks than threads.
@@ -35,14 +64,7 @@ pub(super) fn write_records(
         buffers.par_iter_mut().enumerate().for_each(|(k, buffer)| {
             buffer.clear();
             let start = (first + k) * per_chunk;
-            let mut records = start..count.min(start + per_chunk);
-            if let Some(i) = records.next() {
-                record(i, buffer);
-                // Room for the chunk at the first record's length and a quarter more: growing
-                // from empty would copy the chunk about once more.
-                buffer.reserve(buffer.len() * records.len() / 4 * 5);
-            }
-            records.for_each(|i| record(i, buffer));
+            chunk(start..count.min(start + per_chunk), buffer);
         });
     };
     let (mut ready, mut next) = (vec![Vec::new(); wave], vec![Vec::new(); wave]);

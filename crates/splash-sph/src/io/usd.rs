@@ -13,13 +13,14 @@
 //! frame from its first few lines ([`declarations`]).
 
 use std::io::{self, BufRead, Write};
+use std::ops::Range;
 
 use glam::Vec3;
 
 use super::UpAxis;
 use super::failure::invalid_input;
-use super::float_text::{push_f32, push_f32_row, push_int_row};
-use super::text_records::write_records;
+use super::float_text::{F32Text, IntText, push_f32, push_f32_row};
+use super::text_records::{each_record, write_chunks, write_records};
 use super::vertex_attributes::{AttributeValues, VertexAttributes};
 use crate::mesh::TriMesh;
 
@@ -226,11 +227,27 @@ fn values(out: &mut impl Write, values: &Values) -> io::Result<()> {
             line.push(b']');
             out.write_all(&line)
         }
-        Values::Vectors(v) => array(out, v.len(), |i, line| push_tuple(line, v[i])),
+        Values::Vectors(v) => {
+            let values = bytemuck::cast_slice(v);
+            array_chunks(out, v.len(), |rows, buffer| {
+                let mut text = F32Text::new(values);
+                each_record(rows, buffer, |i, line| {
+                    text.push_row(line, b"(", i, b", ", b")");
+                    item_end(line, i, v.len());
+                });
+            })
+        }
         Values::Scalars(s) => array(out, s.len(), |i, line| push_f32(line, s[i])),
-        Values::Indices(t) => array(out, t.len(), |i, line| {
-            push_int_row(line, b"", t[i].map(u64::from), b", ", None, b"")
-        }),
+        Values::Indices(t) => {
+            let corners = bytemuck::cast_slice(t);
+            array_chunks(out, t.len(), |rows, buffer| {
+                let mut text = IntText::new(corners, 0);
+                each_record(rows, buffer, |i, line| {
+                    text.push_row(line, b"", i, b", ", None, b"");
+                    item_end(line, i, t.len());
+                });
+            })
+        }
         Values::Counts(n) => {
             out.write_all(b"[")?;
             write_records(out, n, |i, line| {
@@ -250,15 +267,32 @@ fn array(
     count: usize,
     item: impl Fn(usize, &mut Vec<u8>) + Sync,
 ) -> io::Result<()> {
+    array_chunks(out, count, |items, buffer| {
+        each_record(items, buffer, |i, line| {
+            item(i, line);
+            item_end(line, i, count);
+        });
+    })
+}
+
+/// [`array`] a chunk at a time, as [`write_chunks`] formats it: each item ended by
+/// [`item_end`].
+fn array_chunks(
+    out: &mut impl Write,
+    count: usize,
+    chunk: impl Fn(Range<usize>, &mut Vec<u8>) + Sync,
+) -> io::Result<()> {
     if count == 0 {
         return out.write_all(b"[]");
     }
     out.write_all(b"[\n")?;
-    write_records(out, count, |i, line| {
-        item(i, line);
-        line.extend_from_slice(if i + 1 < count { b",\n" } else { b"\n" });
-    })?;
+    write_chunks(out, count, chunk)?;
     out.write_all(b"]")
+}
+
+/// Ends item `i` of `count` in an array: a comma but after the last, and a new line.
+fn item_end(line: &mut Vec<u8>, i: usize, count: usize) {
+    line.extend_from_slice(if i + 1 < count { b",\n" } else { b"\n" });
 }
 
 /// `(x, y, z)`, each the shortest text that reads back as the same `f32`.
