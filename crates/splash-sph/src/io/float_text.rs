@@ -542,7 +542,7 @@ impl<'a> Spare<'a> {
 }
 
 /// Powers of five up to 5^15.
-const POW5: [u64; 16] = {
+pub(super) const POW5: [u64; 16] = {
     let mut p = [1u64; 16];
     let mut k = 1;
     while k < 16 {
