@@ -94,9 +94,8 @@ pub(super) fn integers(v: &[u32; BLOCK], offset: u32, out: &mut Integers) {
 mod avx512 {
     use std::arch::x86_64::*;
 
-    use crate::io::float_text::POW5;
     use super::{BLOCK, Decimals, Integers};
-
+    use crate::io::float_text::POW5;
 
     /// Eight `'0'`s, as the bytes of a little-endian `u64`.
     const ZEROS8: i64 = i64::from_le_bytes([b'0'; 8]);
