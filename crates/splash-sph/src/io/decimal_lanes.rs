@@ -90,12 +90,22 @@ pub(super) fn integers(v: &[u32; BLOCK], offset: u32, out: &mut Integers) {
     unreachable!("no lanes on this architecture ({v:?}, {offset})")
 }
 
+/// Powers of five up to 5^15.
+pub(super) const POW5: [u64; 16] = {
+    let mut p = [1u64; 16];
+    let mut k = 1;
+    while k < 16 {
+        p[k] = p[k - 1] * 5;
+        k += 1;
+    }
+    p
+};
+
 #[cfg(target_arch = "x86_64")]
 mod avx512 {
     use std::arch::x86_64::*;
 
-    use super::{BLOCK, Decimals, Integers};
-    use crate::io::float_text::POW5;
+    use super::{BLOCK, Decimals, Integers, POW5};
 
     /// Eight `'0'`s, as the bytes of a little-endian `u64`.
     const ZEROS8: i64 = i64::from_le_bytes([b'0'; 8]);

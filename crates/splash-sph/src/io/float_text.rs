@@ -12,7 +12,7 @@
 use std::fmt::Write as _;
 use std::hint::select_unpredictable;
 
-use super::decimal_lanes::{self, BLOCK, Decimals, Integers};
+use super::decimal_lanes::{self, BLOCK, Decimals, Integers, POW5};
 
 /// Appends `prefix`, `values` as [`push_f32`] prints them with `separator` between them,
 /// and `end`: a row composed in one reservation of spare capacity and appended at once,
@@ -540,17 +540,6 @@ impl<'a> Spare<'a> {
         unsafe { self.out.set_len(self.out.len() + len) };
     }
 }
-
-/// Powers of five up to 5^15.
-pub(super) const POW5: [u64; 16] = {
-    let mut p = [1u64; 16];
-    let mut k = 1;
-    while k < 16 {
-        p[k] = p[k - 1] * 5;
-        k += 1;
-    }
-    p
-};
 
 /// Powers of ten up to 10^19, the largest below 2^64.
 const POW10: [u64; 20] = {
