@@ -34,7 +34,9 @@ def key(name, positions, velocities, spacing, options):
 
 
 def surface(positions, velocities, spacing, options):
-    """(vertices, faces, normals or None, attributes) of the package's `reconstruct`."""
+    """(vertices, faces, normals or None, attributes, edges) of the package's `reconstruct`:
+    `edges` as `Mesh.edges` gives them, which Blender would otherwise rebuild on the main
+    thread."""
     mesh = vendor.splash_sph().reconstruct(
         positions,
         spacing,
@@ -42,7 +44,7 @@ def surface(positions, velocities, spacing, options):
         **options,
     )
     normals = mesh.normals if len(mesh.normals) else None
-    return mesh.vertices, mesh.faces, normals, dict(mesh.attributes)
+    return mesh.vertices, mesh.faces, normals, dict(mesh.attributes), mesh.edges()
 
 
 def start(path, name, velocity, spacing, options, known):

@@ -221,8 +221,8 @@ def _remember(key, arrays, limit):
 
 
 def _nbytes(arrays):
-    vertices, faces, normals, attributes = arrays
-    extra = sum(a.nbytes for a in attributes.values())
+    vertices, faces, normals, attributes, edges = arrays
+    extra = sum(a.nbytes for a in attributes.values()) + sum(a.nbytes for a in edges)
     return vertices.nbytes + faces.nbytes + (0 if normals is None else normals.nbytes) + extra
 
 

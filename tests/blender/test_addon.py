@@ -124,6 +124,26 @@ def mesh_arrays(obj):
     return v.reshape(-1, 3), f.reshape(-1, 3)
 
 
+def edges_match(me):
+    """Whether `me` has each side of its triangles once as an edge and each corner points to
+    the edge to the next corner, as Blender's own `calc_edges` would make them, and
+    `validate` finds nothing to mend."""
+    e = np.empty(2 * len(me.edges), np.int32)
+    me.edges.foreach_get("vertices", e)
+    e = np.sort(e.reshape(-1, 2), axis=1)
+    corner_edge = np.empty(len(me.loops), np.int32)
+    me.loops.foreach_get("edge_index", corner_edge)
+    f = np.empty(len(me.loops), np.int32)
+    me.polygons.foreach_get("vertices", f)
+    f = f.reshape(-1, 3)
+    sides = np.sort(np.stack([f.ravel(), np.roll(f, -1, axis=1).ravel()], axis=1), axis=1)
+    return (
+        len(np.unique(e, axis=0)) == len(e) == len(np.unique(sides, axis=0))
+        and np.array_equal(e[corner_edge], sides)
+        and not me.validate(verbose=False)
+    )
+
+
 def velocity_of(obj):
     a = obj.data.attributes.get("velocity")
     if a is None:
@@ -228,6 +248,7 @@ def test_live(live, splash_sph, command, ui):
         same = np.array_equal(v, want.vertices) and np.array_equal(f, want.faces)
         check(same, f"live {q.cell} {q.field}: the package's mesh ({len(f)} triangles)")
         check(np.array_equal(velocity_of(surface), want.attributes["velocity"]), "live velocity")
+        check(edges_match(surface.data), f"live {q.cell} {q.field}: the package's edges")
         # Custom normals at render: the post-processed mesh's area-weighted ones go to
         # Blender only where it takes them as one attribute (4.5+).
         custom = rendering and live.meshdata.FREE_NORMALS

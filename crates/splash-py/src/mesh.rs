@@ -2,11 +2,13 @@
 
 use std::path::PathBuf;
 
-use numpy::{PyArray2, PyUntypedArrayMethods};
+use ndarray::Array2;
+use numpy::{PyArray1, PyArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use splash_sph::io::{self, VertexAttributes};
+use splash_sph::mesh::edges::Edges;
 use splash_sph::{Attribute, MeshFormat, TriMesh, UpAxis};
 
 use crate::arrays;
@@ -171,6 +173,30 @@ impl Mesh {
             io::write_mesh_file_with(&path, &mesh, &attributes, format)
         })
         .map_err(to_py)
+    }
+
+    /// The mesh's edges, as Blender's meshes hold them beside the faces: ``(edges,
+    /// corner_edges)``, ``edges`` each distinct edge once as an (E, 2) uint32 array of vertex
+    /// indices, the lower first, and ``corner_edges`` an (3F,) uint32 array giving for corner
+    /// ``3 f + k`` the edge from vertex ``faces[f, k]`` to ``faces[f, (k + 1) % 3]``. A closed
+    /// mesh has 3F/2 edges. Computed from the arrays as they are now, with the GIL released.
+    ///
+    /// Raises ValueError when a face names a vertex beyond the vertex array.
+    fn edges<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> PyResult<(Bound<'py, PyArray2<u32>>, Bound<'py, PyArray1<u32>>)> {
+        let triangles = arrays::triangles(self.faces.bind(py).as_any(), "mesh.faces")?;
+        let vertices = self.vertices.bind(py).shape()[0];
+        let edges = py
+            .detach(|| Edges::of(vertices, &triangles))
+            .map_err(to_py)?;
+        let pairs = Array2::from_shape_vec((edges.pairs.len(), 2), edges.pairs.concat())
+            .expect("2 vertices per edge");
+        Ok((
+            PyArray2::from_owned_array(py, pairs),
+            PyArray1::from_vec(py, edges.corners),
+        ))
     }
 
     fn __repr__(&self, py: Python<'_>) -> String {

@@ -83,6 +83,25 @@ def test_outputs_own_the_library_memory(reference):
         assert not isinstance(a.base, np.ndarray)
 
 
+def test_edges_are_the_faces_distinct_sides(reference):
+    """Checked against numpy's own unique edges: each corner points to the edge from its
+    vertex to the next corner's, every edge is walked twice on the closed mesh."""
+    f = reference.faces
+    edges, corner_edges = reference.edges()
+    assert edges.dtype == np.uint32 and edges.shape == (3 * len(f) // 2, 2)
+    assert corner_edges.dtype == np.uint32 and corner_edges.shape == (3 * len(f),)
+    sides = np.stack([f.ravel(), np.roll(f, -1, axis=1).ravel()], axis=1)
+    expected = np.unique(np.sort(sides, axis=1), axis=0)
+    np.testing.assert_array_equal(np.unique(edges, axis=0), expected)
+    np.testing.assert_array_equal(edges[corner_edges], np.sort(sides, axis=1))
+    assert (np.bincount(corner_edges) == 2).all()
+    # From the arrays as edited; a face beyond the vertices is refused.
+    bad = splash_sph.reconstruct(ball(SPACING), spacing=SPACING)
+    bad.faces[3, 1] = len(bad.vertices)
+    with pytest.raises(ValueError, match="triangle 3"):
+        bad.edges()
+
+
 def test_normals_none(particles):
     mesh = splash_sph.reconstruct(particles, spacing=SPACING, normals="none")
     assert mesh.normals.shape == (0, 3)

@@ -1,7 +1,7 @@
 """Type stubs of the native extension; the ``splash_sph`` package re-exports all of it."""
 
 import os
-from typing import Any, Callable, Dict, List, Mapping, NamedTuple, Optional, Sequence, TypedDict, Union, final, type_check_only
+from typing import Any, Callable, Dict, List, Mapping, NamedTuple, Optional, Sequence, Tuple, TypedDict, Union, final, type_check_only
 
 import numpy as np
 import numpy.typing as npt
@@ -84,6 +84,15 @@ class Mesh:
     @property
     def report(self) -> Dict[str, Any]:
         """Counts, lengths and stage times of the reconstruction (see ``reconstruct``)."""
+    def edges(self) -> Tuple[npt.NDArray[np.uint32], npt.NDArray[np.uint32]]:
+        """The mesh's edges, as Blender's meshes hold them beside the faces: ``(edges,
+        corner_edges)``, ``edges`` each distinct edge once as an (E, 2) uint32 array of vertex
+        indices, the lower first, and ``corner_edges`` an (3F,) uint32 array giving for corner
+        ``3 f + k`` the edge from vertex ``faces[f, k]`` to ``faces[f, (k + 1) % 3]``. A closed
+        mesh has 3F/2 edges. Computed from the arrays as they are now, with the GIL released.
+
+        Raises ValueError when a face names a vertex beyond the vertex array.
+        """
     def write(
         self,
         path: _Path,

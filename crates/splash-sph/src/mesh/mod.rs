@@ -5,6 +5,7 @@ pub mod clipping;
 pub mod components;
 pub mod correction;
 pub mod decimation;
+pub mod edges;
 pub(crate) mod marching_cubes;
 pub mod post;
 pub mod quality;
