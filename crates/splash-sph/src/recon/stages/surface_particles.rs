@@ -11,8 +11,7 @@ use crate::field::density::{particle_volume, spline};
 use crate::neighbours::handler_array::HandlerArray;
 use crate::neighbours::lane::Lane;
 use crate::neighbours::lane_sums::lane_sums;
-use crate::neighbours::lane_sums::{Lanes, lanes_path};
-use crate::neighbours::neighbourhood::{LANES, Neighbourhood, map_particles};
+use crate::neighbours::neighbourhood::map_particles;
 
 pub struct SurfaceCriteria {
     /// Colour field support h; also the neighbour count radius.
@@ -38,9 +37,10 @@ impl SurfaceCriteria {
 /// Positions of the surface particles, in handler order.
 pub fn surface_particles(handlers: &HandlerArray, criteria: &SurfaceCriteria) -> Vec<Vec3> {
     let inv_h2 = 1.0 / (criteria.support * criteria.support);
+    let scale = criteria.gradient_scale();
     let flags = map_particles(handlers, criteria.support, |near, x| {
-        let (gradient, neighbours) = colour_gradient(near, x, inv_h2);
-        criteria.on_surface(gradient, neighbours)
+        let [gx, gy, gz, neighbours] = colour_sums(near, x, inv_h2);
+        criteria.on_surface(scale, colour_gradient([gx, gy, gz], inv_h2), neighbours)
     });
     positions_flagged(handlers, &flags)
 }
@@ -54,12 +54,11 @@ pub fn surface_particles_and_volumes(
 ) -> (Vec<Vec3>, Vec<f32>) {
     let h = criteria.support;
     let (inv_h2, inv_h) = (1.0 / (h * h), 1.0 / h);
+    let scale = criteria.gradient_scale();
     let (flags, volumes): (Vec<bool>, Vec<f32>) = map_particles(handlers, h, |near, x| {
         let [gx, gy, gz, neighbours, splines] = colour_and_splines(near, x, (inv_h2, inv_h));
-        // The sums of x_j − x: the colour field's of x − x_j negated, exactly.
-        let gradient = -Vec3::new(gx, gy, gz) * inv_h2.sqrt();
         (
-            criteria.on_surface(gradient, neighbours),
+            criteria.on_surface(scale, colour_gradient([gx, gy, gz], inv_h2), neighbours),
             particle_volume(splines, h),
         )
     })
@@ -69,13 +68,16 @@ pub fn surface_particles_and_volumes(
 }
 
 impl SurfaceCriteria {
-    /// Whether a particle with this colour gradient sum (see [`colour_gradient`]) and count
-    /// of neighbours is on the surface.
-    fn on_surface(&self, gradient: Vec3, neighbours: f32) -> bool {
-        let h = self.support;
-        // |∇c|·h for the poly6 kernel W = 315/(64π h⁹)(h² − d²)³ written with q = d/h:
-        // ∇c = −V·945/(32π h⁴) Σ (1 − q²)² (x_i − x_j)/h.
-        let scale = self.volume * 945.0 / (32.0 * PI * h.powi(3));
+    /// |∇c|·h per unit of the gradient sum (see [`colour_gradient`]) for the poly6 kernel
+    /// W = 315/(64π h⁹)(h² − d²)³ written with q = d/h:
+    /// ∇c = −V·945/(32π h⁴) Σ (1 − q²)² (x_i − x_j)/h.
+    fn gradient_scale(&self) -> f32 {
+        self.volume * 945.0 / (32.0 * PI * self.support.powi(3))
+    }
+
+    /// Whether a particle with this colour gradient sum and count of neighbours is on the
+    /// surface; `scale` is [`gradient_scale`](Self::gradient_scale).
+    fn on_surface(&self, scale: f32, gradient: Vec3, neighbours: f32) -> bool {
         // Neighbours at the particle's own position (itself, duplicates) are not counted: a
         // point mass of 30 coincident particles has a zero gradient by symmetry and would
         // otherwise count as inside, leaving no surface particle and an empty mesh.
@@ -93,127 +95,42 @@ fn positions_flagged(handlers: &HandlerArray, flags: &[bool]) -> Vec<Vec3> {
 }
 
 lane_sums! {
-    /// [`colour_gradient`]'s sums with d_j = x_j − x (the same terms negated) and its count,
-    /// then the density field's Σ W(d_j) of `spline_sum`, from the same squared distances.
-    vector fn colour_and_splines(inv: (f32, f32)) -> [5] |dx, dy, dz| {
-        colour_and_spline(dx, dy, dz, inv)
+    /// The colour field's sums ([`colour`]) and the number of particles with 0 < q < 1
+    /// (particles at `x` itself are left out).
+    vector fn colour_sums(inv_h2: f32) -> [4] |dx, dy, dz| {
+        colour(dx, dy, dz, inv_h2)
     }
 }
 
+lane_sums! {
+    /// [`colour_sums`], then the density field's Σ W(d_j) of `spline_sum`, from the same
+    /// squared distances.
+    vector fn colour_and_splines(inv: (f32, f32)) -> [5] |dx, dy, dz| {
+        let [gx, gy, gz, count] = colour(dx, dy, dz, inv.0);
+        [gx, gy, gz, count, spline(dx, dy, dz, inv.1)]
+    }
+}
+
+/// (1 − q²)² d_j with d_j = x_j − x, and whether 0 < q < 1.
 #[inline(always)]
-fn colour_and_spline<L: Lane>(dx: L, dy: L, dz: L, (inv_h2, inv_h): (f32, f32)) -> [L; 5] {
+fn colour<L: Lane>(dx: L, dy: L, dz: L, inv_h2: f32) -> [L; 4] {
     let q2 = (dx * dx + dy * dy + dz * dz) * L::splat(inv_h2);
     let t = (L::splat(1.0) - q2).max(L::splat(0.0));
     let w = t * t;
-    [
-        w * dx,
-        w * dy,
-        w * dz,
-        q2.between(0.0, 1.0),
-        spline(dx, dy, dz, inv_h),
-    ]
+    [w * dx, w * dy, w * dz, q2.between(0.0, 1.0)]
 }
 
-/// Returns Σ (1 − q²)² (x − x_j)/h and the number of particles with 0 < q < 1 (particles at
-/// `x` itself are left out), summed in `LANES` lanes. Inlined into the per-particle closure.
-#[inline(always)]
-fn colour_gradient(near: &Neighbourhood, x: Vec3, inv_h2: f32) -> (Vec3, f32) {
-    // The kernel sums' choice of path (and the tests' pin on it).
-    match lanes_path() {
-        #[cfg(target_arch = "x86_64")]
-        // SAFETY: the CPU has AVX2 (AVX-512 implies it), as `lanes_path` checked.
-        Lanes::Avx2 | Lanes::Avx512 => unsafe { lanes_avx2(near, x, inv_h2) },
-        Lanes::Scalar => lanes(near, x, inv_h2),
-    }
-}
-
-/// The lanes' sums in lane order, as both paths add them.
-fn total(g: &[[f32; LANES]; 3], count: &[f32; LANES], inv_h: f32) -> (Vec3, f32) {
-    let sum = |a: &[f32; LANES]| a.iter().sum::<f32>();
-    (
-        Vec3::new(sum(&g[0]), sum(&g[1]), sum(&g[2])) * inv_h,
-        sum(count),
-    )
-}
-
-#[inline(always)]
-fn lanes(near: &Neighbourhood, x: Vec3, inv_h2: f32) -> (Vec3, f32) {
-    let mut g = [[0.0f32; LANES]; 3];
-    let mut count = [0.0f32; LANES];
-    for ((cx, cy), cz) in near
-        .x
-        .chunks_exact(LANES)
-        .zip(near.y.chunks_exact(LANES))
-        .zip(near.z.chunks_exact(LANES))
-    {
-        for l in 0..LANES {
-            let (dx, dy, dz) = (x.x - cx[l], x.y - cy[l], x.z - cz[l]);
-            let q2 = (dx * dx + dy * dy + dz * dz) * inv_h2;
-            let t = (1.0 - q2).max(0.0);
-            let w = t * t;
-            g[0][l] += w * dx;
-            g[1][l] += w * dy;
-            g[2][l] += w * dz;
-            count[l] += if q2 < 1.0 && q2 > 0.0 { 1.0 } else { 0.0 };
-        }
-    }
-    total(&g, &count, inv_h2.sqrt())
-}
-
-/// [`lanes`] written out in AVX2: the compiler kept its accumulators as single floats and
-/// rebuilt the vectors every step (a third of the colour field's time). The same IEEE
-/// operations in every lane: max(1 − q², 0) is 0 for NaN as `f32::max` is, and 1 − q² is never
-/// −0.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-unsafe fn lanes_avx2(near: &Neighbourhood, x: Vec3, inv_h2: f32) -> (Vec3, f32) {
-    use std::arch::x86_64::*;
-    let n = near.len() / LANES * LANES;
-    let (xs, ys, zs) = (&near.x[..n], &near.y[..n], &near.z[..n]);
-    let at = x.to_array().map(|v| _mm256_set1_ps(v));
-    let (inv, one, zero) = (
-        _mm256_set1_ps(inv_h2),
-        _mm256_set1_ps(1.0),
-        _mm256_setzero_ps(),
-    );
-    let (mut g, mut count) = ([zero; 3], zero);
-    for i in (0..n).step_by(LANES) {
-        // SAFETY: i + 8 ≤ n, the length of all three slices.
-        let load = |v: &[f32]| unsafe { _mm256_loadu_ps(v.as_ptr().add(i)) };
-        let d = [
-            _mm256_sub_ps(at[0], load(xs)),
-            _mm256_sub_ps(at[1], load(ys)),
-            _mm256_sub_ps(at[2], load(zs)),
-        ];
-        let sq = d.map(|d| _mm256_mul_ps(d, d));
-        let q2 = _mm256_mul_ps(_mm256_add_ps(_mm256_add_ps(sq[0], sq[1]), sq[2]), inv);
-        let t = _mm256_max_ps(_mm256_sub_ps(one, q2), zero);
-        let w = _mm256_mul_ps(t, t);
-        for k in 0..3 {
-            g[k] = _mm256_add_ps(g[k], _mm256_mul_ps(w, d[k]));
-        }
-        let inside = _mm256_and_ps(
-            _mm256_cmp_ps::<_CMP_LT_OQ>(q2, one),
-            _mm256_cmp_ps::<_CMP_GT_OQ>(q2, zero),
-        );
-        count = _mm256_add_ps(count, _mm256_and_ps(inside, one));
-    }
-    let lanes = |v: __m256| {
-        let mut out = [0.0f32; LANES];
-        // SAFETY: `out` holds 8 floats.
-        unsafe { _mm256_storeu_ps(out.as_mut_ptr(), v) };
-        out
-    };
-    total(&g.map(lanes), &lanes(count), inv_h2.sqrt())
+/// Σ (1 − q²)² (x − x_j)/h from the sums over x_j − x: those negated, exactly.
+fn colour_gradient(sums: [f32; 3], inv_h2: f32) -> Vec3 {
+    -Vec3::from_array(sums) * inv_h2.sqrt()
 }
 
 #[cfg(test)]
 mod tests {
     use glam::Vec3;
 
-    use super::colour_gradient;
-    use crate::neighbours::lane_sums::Lanes;
-    use crate::neighbours::lane_sums::tests::FORCED;
+    use super::{colour_gradient, colour_sums};
+    use crate::neighbours::lane_sums::tests::on_every_path;
     use crate::neighbours::neighbourhood::Neighbourhood;
 
     #[test]
@@ -221,7 +138,6 @@ mod tests {
         use super::{SurfaceCriteria, surface_particles, surface_particles_and_volumes};
         use crate::field::density::particle_volumes;
         use crate::neighbours::handler_array::HandlerArray;
-        use crate::neighbours::lane_sums::tests::on_every_path;
         // A ball of fluid at spacing 1, jittered, splashes, and a particle twice over.
         let mut next = crate::tests::common::uniform(23);
         let mut ps = crate::tests::common::lattice_ball(Vec3::ZERO, 8.0, 1.0);
@@ -276,16 +192,30 @@ mod tests {
         let mut near = Neighbourhood::default();
         near.set(Vec3::ZERO, &points);
         for x in [Vec3::ZERO, Vec3::new(0.3, -0.2, 0.1), Vec3::splat(0.9)] {
-            let run = |scalar: bool| {
-                FORCED.set(scalar.then_some(Lanes::Scalar));
-                let (g, n) = colour_gradient(&near, x, 1.0);
-                FORCED.set(None);
-                (g.to_array().map(f32::to_bits), n.to_bits())
-            };
-            let (simd, scalar) = (run(false), run(true));
-            assert_eq!(simd, scalar, "at {x}");
-            assert!(scalar.0.iter().all(|&b| f32::from_bits(b).is_finite()));
-            assert!(f32::from_bits(scalar.1) > 10.0, "neighbours counted");
+            let runs = on_every_path(|| colour_sums(&near, x, 1.0).map(f32::to_bits));
+            for (path, sums) in &runs {
+                assert_eq!(sums, &runs[0].1, "{path:?} at {x}");
+            }
+            let sums = runs[0].1.map(f32::from_bits);
+            assert!(sums.iter().all(|s| s.is_finite()));
+            assert!(sums[3] > 10.0, "neighbours counted");
+            // Against the sums written out, one particle at a time (x − x_j, as the colour
+            // field has it), in the lanes' order.
+            let mut lanes = [[0.0f32; 4]; 8];
+            for (j, p) in points.iter().enumerate() {
+                let d = x - *p;
+                let q2 = d.length_squared();
+                let w = (1.0 - q2).max(0.0).powi(2);
+                let lane = &mut lanes[j % 8];
+                for (k, v) in (w * d).to_array().into_iter().enumerate() {
+                    lane[k] += v;
+                }
+                lane[3] += f32::from(u8::from(q2 > 0.0 && q2 < 1.0));
+            }
+            let total = |k: usize| lanes.iter().map(|l| l[k]).sum::<f32>();
+            let gradient = colour_gradient([sums[0], sums[1], sums[2]], 1.0);
+            assert_eq!(gradient, Vec3::new(total(0), total(1), total(2)), "at {x}");
+            assert_eq!(sums[3], total(3));
         }
     }
 }
