@@ -34,9 +34,9 @@ def key(name, positions, velocities, spacing, options):
 
 
 def surface(positions, velocities, spacing, options):
-    """(vertices, faces, normals or None, attributes, edges) of the package's `reconstruct`:
-    `edges` as `Mesh.edges` gives them, which Blender would otherwise rebuild on the main
-    thread."""
+    """(vertices, faces, normals or None, attributes, edges) of the package's `reconstruct`,
+    `edges` as `mesh_edges` gives them (which Blender would otherwise search for on the main
+    thread)."""
     mesh = vendor.splash_sph().reconstruct(
         positions,
         spacing,
@@ -44,7 +44,8 @@ def surface(positions, velocities, spacing, options):
         **options,
     )
     normals = mesh.normals if len(mesh.normals) else None
-    return mesh.vertices, mesh.faces, normals, dict(mesh.attributes), mesh.edges()
+    edges = vendor.splash_sph().mesh_edges(mesh.faces, len(mesh.vertices))
+    return mesh.vertices, mesh.faces, normals, dict(mesh.attributes), edges
 
 
 def start(path, name, velocity, spacing, options, known):

@@ -31,7 +31,7 @@ _IDENTITY = Matrix.Identity(4)
 def fill(mesh, vertices, faces, normals=None, attributes=None, edges=None):
     """Makes `mesh` show `vertices` (V, 3), `faces` (F, 3) indices, optional unit `normals`
     (V, 3), `attributes` name -> (V, 3) or (V,) arrays and `edges` as the package's
-    `Mesh.edges` gives them (else Blender finds them); in place when the triangles are the
+    `mesh_edges` gives them (else Blender finds them); in place when the triangles are the
     mesh's already. Returns whether it was in place."""
     vertices = np.ascontiguousarray(vertices, dtype=np.float32).reshape(-1, 3)
     faces = np.ascontiguousarray(faces, dtype=np.uint32).reshape(-1, 3)

@@ -90,8 +90,8 @@ def file_for_frame(files, frame):
 
 
 def read(path, particles=False):
-    """(vertices, faces, normals or None, attributes) of the mesh or particle file `path`,
-    through a small cache keyed by size and time."""
+    """(vertices, faces, normals or None, attributes, edges or None) of the mesh or particle
+    file `path`, through a small cache keyed by size and time."""
     stat = os.stat(path)
     key = (path, particles, stat.st_size, stat.st_mtime_ns)
     mesh = _mesh_cache.get(key)
@@ -100,11 +100,12 @@ def read(path, particles=False):
         try:
             if particles:
                 p = splash_sph.read_particles(path)
-                mesh = (p.positions, np.zeros((0, 3), np.uint32), None, p.attributes)
+                mesh = (p.positions, np.zeros((0, 3), np.uint32), None, p.attributes, None)
             else:
                 m = splash_sph.read_mesh(path)
                 normals = m.normals if len(m.normals) else None
-                mesh = (m.vertices, m.faces, normals, m.attributes)
+                edges = splash_sph.mesh_edges(m.faces, len(m.vertices))
+                mesh = (m.vertices, m.faces, normals, m.attributes, edges)
         except ValueError as e:
             raise SequenceError(str(e)) from None
         _mesh_cache[key] = mesh

@@ -184,6 +184,7 @@ def test_sequences(sequence, particles):
             check((len(v), len(f)) == (nv, nf), f"{fmt} frame {frame}: {nv} vertices, {nf} faces")
             check(obj.data.has_custom_normals, f"{fmt} frame {frame}: custom split normals")
             check(all(p.use_smooth for p in obj.data.polygons[:50]), f"{fmt}: smooth shaded")
+            check(edges_match(obj.data), f"{fmt} frame {frame}: the package's edges")
             vel = velocity_of(obj)
             check((vel is None) == (fmt == "obj"), f"{fmt} frame {frame}: velocity iff PLY/VTU")
             if fmt == "ply":

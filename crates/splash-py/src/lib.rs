@@ -71,6 +71,7 @@ fn native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(read_mesh::read_mesh, m)?)?;
     read_mesh::add_type(m)?;
     m.add_function(wrap_pyfunction!(estimate_spacing, m)?)?;
+    m.add_function(wrap_pyfunction!(mesh::mesh_edges, m)?)?;
     m.add_function(wrap_pyfunction!(default_config, m)?)?;
     m.add_function(wrap_pyfunction!(config_toml, m)?)?;
     m.add_class::<mesh::Mesh>()?;

@@ -175,30 +175,6 @@ impl Mesh {
         .map_err(to_py)
     }
 
-    /// The mesh's edges, as Blender's meshes hold them beside the faces: ``(edges,
-    /// corner_edges)``, ``edges`` each distinct edge once as an (E, 2) uint32 array of vertex
-    /// indices, the lower first, and ``corner_edges`` an (3F,) uint32 array giving for corner
-    /// ``3 f + k`` the edge from vertex ``faces[f, k]`` to ``faces[f, (k + 1) % 3]``. A closed
-    /// mesh has 3F/2 edges. Computed from the arrays as they are now, with the GIL released.
-    ///
-    /// Raises ValueError when a face names a vertex beyond the vertex array.
-    fn edges<'py>(
-        &self,
-        py: Python<'py>,
-    ) -> PyResult<(Bound<'py, PyArray2<u32>>, Bound<'py, PyArray1<u32>>)> {
-        let triangles = arrays::triangles(self.faces.bind(py).as_any(), "mesh.faces")?;
-        let vertices = self.vertices.bind(py).shape()[0];
-        let edges = py
-            .detach(|| Edges::of(vertices, &triangles))
-            .map_err(to_py)?;
-        let pairs = Array2::from_shape_vec((edges.pairs.len(), 2), edges.pairs.concat())
-            .expect("2 vertices per edge");
-        Ok((
-            PyArray2::from_owned_array(py, pairs),
-            PyArray1::from_vec(py, edges.corners),
-        ))
-    }
-
     fn __repr__(&self, py: Python<'_>) -> String {
         format!(
             "Mesh({} vertices, {} faces)",
@@ -206,4 +182,30 @@ impl Mesh {
             self.faces.bind(py).shape()[0]
         )
     }
+}
+
+/// The edges of the triangles ``faces``, as Blender's meshes hold them beside the faces:
+/// ``(edges, corner_edges)``, ``edges`` each distinct edge once as an (E, 2) uint32 array of
+/// vertex indices, the lower first, and ``corner_edges`` an (3F,) uint32 array giving for
+/// corner ``3 f + k`` the edge from vertex ``faces[f, k]`` to ``faces[f, (k + 1) % 3]``.
+///
+/// ``faces``: an (F, 3) uint32 array (``Mesh.faces``, ``MeshArrays.faces``) over
+/// ``vertex_count`` vertices. A closed mesh has 3F/2 edges. The GIL is released while
+/// counting. Raises ValueError when a face names a vertex beyond ``vertex_count``.
+#[pyfunction]
+pub fn mesh_edges<'py>(
+    py: Python<'py>,
+    faces: &Bound<'py, PyAny>,
+    vertex_count: usize,
+) -> PyResult<(Bound<'py, PyArray2<u32>>, Bound<'py, PyArray1<u32>>)> {
+    let triangles = arrays::triangles(faces, "faces")?;
+    let edges = py
+        .detach(|| Edges::of(vertex_count, &triangles))
+        .map_err(to_py)?;
+    let pairs = Array2::from_shape_vec((edges.pairs.len(), 2), edges.pairs.concat())
+        .expect("2 vertices per edge");
+    Ok((
+        PyArray2::from_owned_array(py, pairs),
+        PyArray1::from_vec(py, edges.corners),
+    ))
 }

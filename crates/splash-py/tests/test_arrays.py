@@ -87,7 +87,7 @@ def test_edges_are_the_faces_distinct_sides(reference):
     """Checked against numpy's own unique edges: each corner points to the edge from its
     vertex to the next corner's, every edge is walked twice on the closed mesh."""
     f = reference.faces
-    edges, corner_edges = reference.edges()
+    edges, corner_edges = splash_sph.mesh_edges(f, len(reference.vertices))
     assert edges.dtype == np.uint32 and edges.shape == (3 * len(f) // 2, 2)
     assert corner_edges.dtype == np.uint32 and corner_edges.shape == (3 * len(f),)
     sides = np.stack([f.ravel(), np.roll(f, -1, axis=1).ravel()], axis=1)
@@ -95,11 +95,13 @@ def test_edges_are_the_faces_distinct_sides(reference):
     np.testing.assert_array_equal(np.unique(edges, axis=0), expected)
     np.testing.assert_array_equal(edges[corner_edges], np.sort(sides, axis=1))
     assert (np.bincount(corner_edges) == 2).all()
-    # From the arrays as edited; a face beyond the vertices is refused.
-    bad = splash_sph.reconstruct(ball(SPACING), spacing=SPACING)
-    bad.faces[3, 1] = len(bad.vertices)
+    # A face beyond the vertices, or faces not uint32 rows of three, are refused.
+    bad = f.copy()
+    bad[3, 1] = len(reference.vertices)
     with pytest.raises(ValueError, match="triangle 3"):
-        bad.edges()
+        splash_sph.mesh_edges(bad, len(reference.vertices))
+    with pytest.raises(ValueError, match="faces"):
+        splash_sph.mesh_edges(f.astype(np.int64), len(reference.vertices))
 
 
 def test_normals_none(particles):

@@ -20,6 +20,7 @@ __all__ = [
     "read_mesh",
     "MeshArrays",
     "estimate_spacing",
+    "mesh_edges",
     "default_config",
     "config_toml",
     "Mesh",
@@ -84,15 +85,6 @@ class Mesh:
     @property
     def report(self) -> Dict[str, Any]:
         """Counts, lengths and stage times of the reconstruction (see ``reconstruct``)."""
-    def edges(self) -> Tuple[npt.NDArray[np.uint32], npt.NDArray[np.uint32]]:
-        """The mesh's edges, as Blender's meshes hold them beside the faces: ``(edges,
-        corner_edges)``, ``edges`` each distinct edge once as an (E, 2) uint32 array of vertex
-        indices, the lower first, and ``corner_edges`` an (3F,) uint32 array giving for corner
-        ``3 f + k`` the edge from vertex ``faces[f, k]`` to ``faces[f, (k + 1) % 3]``. A closed
-        mesh has 3F/2 edges. Computed from the arrays as they are now, with the GIL released.
-
-        Raises ValueError when a face names a vertex beyond the vertex array.
-        """
     def write(
         self,
         path: _Path,
@@ -374,6 +366,19 @@ def preview(
     the config's ``[preview]`` table; ``values`` ((N,), or (N, 3) by magnitude) colours the
     surface through viridis with a legend unless ``legend=False``. The image
     does not depend on ``threads``. Raises ValueError for bad settings, cameras or sizes.
+    """
+
+def mesh_edges(
+    faces: npt.NDArray[np.uint32], vertex_count: int
+) -> Tuple[npt.NDArray[np.uint32], npt.NDArray[np.uint32]]:
+    """The edges of the triangles ``faces``, as Blender's meshes hold them beside the faces:
+    ``(edges, corner_edges)``, ``edges`` each distinct edge once as an (E, 2) uint32 array of
+    vertex indices, the lower first, and ``corner_edges`` an (3F,) uint32 array giving for
+    corner ``3 f + k`` the edge from vertex ``faces[f, k]`` to ``faces[f, (k + 1) % 3]``.
+
+    ``faces``: an (F, 3) uint32 array (``Mesh.faces``, ``MeshArrays.faces``) over
+    ``vertex_count`` vertices. A closed mesh has 3F/2 edges. The GIL is released while
+    counting. Raises ValueError when a face names a vertex beyond ``vertex_count``.
     """
 
 def estimate_spacing(positions: _Array) -> float:
