@@ -100,12 +100,15 @@ pub fn interpolate(
 /// Vertices per parallel task.
 const BLOCK: usize = 256;
 /// Edge of the bins that group vertices around one list of candidate particles, in supports:
-/// smaller bins gather more often, larger ones give each vertex more candidates to weigh.
+/// smaller bins gather more often, larger ones give each vertex more candidates to weigh
+/// (cbd-small frame 40, SSP07 at r/2, 1 thread: 0.35 and 0.7 no faster).
 const BIN: f32 = 0.5;
 /// The bins' least edge in cells: with coarse cells (Blender's viewport: density at cell r,
 /// support 2r) half a support held a vertex or two, and gathering took 4/5 of the time
-/// (cbd-small, 11 frames, 1 thread: 0.184 -> 0.100 s; SSP07 at r/2 keeps half a support).
-const BIN_CELLS: f32 = 4.0;
+/// (cbd-small, 11 frames, 1 thread: 0.184 -> 0.100 s with 4 cells). Since the means weigh
+/// every candidate, 3 (cbd-small frame 40, 1 thread: density at cell r 9.5 ms against 9.7
+/// with 4, the blobbies at r/2 50 against 55; SSP07 at r/2 keeps half a support).
+const BIN_CELLS: f32 = 3.0;
 
 /// The candidates of a bin's vertices: the particles within the support of their box, in
 /// handler order over the cells in (z, y, x) order, as one array per channel (x, y, z, then
@@ -710,7 +713,7 @@ mod tests {
                 assert_eq!(&got, want, "{kind}, {threads} threads");
             }
         }
-        // Bins of half a support, then of one, two and four: the same sums in other lanes.
+        // Bins of half a support, then of ¾, 1½ and 3: the same sums in other lanes.
         let kernel = RadialKernel::CubicSpline { support: 2.0 * r };
         let want = interpolated(&kernel, 0.0);
         for cell in [r / 2.0, r, 2.0 * r] {
