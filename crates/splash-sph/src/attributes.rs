@@ -125,12 +125,13 @@ struct Candidates {
 
 /// The Shepard means of the handler array's attribute channels (those after x, y, z: `k`) at
 /// every vertex into `flat` (`k` values per vertex), with `kernel`'s weights. The vertices are
-/// binned in space (bins of `BIN` supports, at least `BIN_CELLS` × `cell`, fixed by absolute
-/// coordinates), and each bin's vertices sorted in a block of `BLOCK` share one list of
-/// candidate particles, weighed whole at each vertex in `LANES` lanes (those beyond the
-/// support weigh 0). Which lane a particle is summed in depends on the list, so a vertex's bits
-/// depend on the vertices it shares it with, a choice fixed by the vertices' positions: never
-/// on the thread count or the CPU's vector width.
+/// binned in space (cubes of `BIN` supports, at least `BIN_CELLS` × `cell`, fixed by absolute
+/// coordinates) and sorted by bin; the vertices of a bin within one block of `BLOCK` sorted
+/// vertices share one list of candidate particles (those within the support of their bounding
+/// box), which each of them weighs whole in `LANES` lanes (those beyond the support weigh 0).
+/// A particle's lane is its place in that list, so a vertex's bits depend on which vertices
+/// share its list (fixed by the vertices, the bin edge and the block size), never on the
+/// thread count or the CPU's vector width.
 fn sweep(
     vertices: &[Vec3],
     handlers: &HandlerArray,
