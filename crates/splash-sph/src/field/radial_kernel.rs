@@ -2,6 +2,8 @@
 //! the mesh (issue 11): the same shape and support the field sums, so an attribute at a vertex
 //! comes from the particles that make the surface there.
 
+use crate::neighbours::lane::Lane;
+
 /// A radial kernel w(d²) ≥ 0, zero from [`support`](Self::support) on. Constant factors are
 /// left out: they cancel in the Shepard normalisation.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -33,27 +35,28 @@ impl RadialKernel {
         }
     }
 
-    /// The weight at squared distance `d2` (one branch that every call of a frame takes alike).
-    #[inline]
-    pub(crate) fn weight(&self, d2: f32) -> f32 {
+    /// The weight at squared distance `d2`, in one lane or eight (one branch that every call
+    /// of a frame takes alike; the Gaussian and the metaballs' power lane by lane).
+    #[inline(always)]
+    pub(crate) fn weight<L: Lane>(&self, d2: L) -> L {
         match *self {
             RadialKernel::Poly6 { support } => {
-                let t = (1.0 - d2 / (support * support)).max(0.0);
+                let t = (L::splat(1.0) - d2 / L::splat(support * support)).max(L::splat(0.0));
                 t * t * t
             }
             RadialKernel::CubicSpline { support } => {
-                super::cubic_spline::cubic_spline(d2.sqrt() / support)
+                super::cubic_spline::cubic_spline(d2.sqrt() / L::splat(support))
             }
             RadialKernel::Blobby {
                 radius,
                 blobbiness,
                 cutoff_s2,
-            } => {
+            } => d2.map(|d2| {
                 let s2 = (d2 / (radius * radius)).min(cutoff_s2);
                 (blobbiness * (1.0 - s2)).exp() - (blobbiness * (1.0 - cutoff_s2)).exp()
-            }
+            }),
             RadialKernel::Metaball { cutoff, exponent } => {
-                (1.0 - d2 / (cutoff * cutoff)).max(0.0).powi(exponent)
+                d2.map(|d2| (1.0 - d2 / (cutoff * cutoff)).max(0.0).powi(exponent))
             }
         }
     }

@@ -9,7 +9,15 @@ use std::ops::{Add, Div, Mul, Sub};
 pub trait Lane:
     Copy + Add<Output = Self> + Sub<Output = Self> + Mul<Output = Self> + Div<Output = Self>
 {
+    /// Floats per value: 1 or 8.
+    const WIDTH: usize;
     fn splat(v: f32) -> Self;
+    /// The first `WIDTH` floats of `v`.
+    fn load(v: &[f32]) -> Self;
+    /// Into the first `WIDTH` floats of `out`.
+    fn store(self, out: &mut [f32]);
+    /// `f` on each lane, for kernels written in scalar code only (exp, powi).
+    fn map(self, f: impl Fn(f32) -> f32) -> Self;
     fn sqrt(self) -> Self;
     /// `f32::max` where `other` is not NaN: `other` wherever `self` is NaN.
     fn max(self, other: Self) -> Self;
@@ -18,9 +26,22 @@ pub trait Lane:
 }
 
 impl Lane for f32 {
+    const WIDTH: usize = 1;
     #[inline(always)]
     fn splat(v: f32) -> f32 {
         v
+    }
+    #[inline(always)]
+    fn load(v: &[f32]) -> f32 {
+        v[0]
+    }
+    #[inline(always)]
+    fn store(self, out: &mut [f32]) {
+        out[0] = self;
+    }
+    #[inline(always)]
+    fn map(self, f: impl Fn(f32) -> f32) -> f32 {
+        f(self)
     }
     #[inline(always)]
     fn sqrt(self) -> f32 {
@@ -46,9 +67,10 @@ mod avx2 {
 
     use super::Lane;
 
-    /// Eight lanes in an AVX2 register. Only the AVX2 and AVX-512 paths of `lane_sums!` make
-    /// and use them, in functions compiled for AVX2 that run where the CPU has it: that is
-    /// what makes the intrinsics below sound, and why the type is not part of the public API.
+    /// Eight lanes in an AVX2 register. Only functions compiled for AVX2 that run where the
+    /// CPU has it make and use them (the AVX2 and AVX-512 paths of `lane_sums!`, the attribute
+    /// means): that is what makes the intrinsics below sound, and why the type is not part of
+    /// the public API.
     #[derive(Clone, Copy)]
     pub struct F8(__m256);
 
@@ -88,10 +110,27 @@ mod avx2 {
     binary!(Div, div, _mm256_div_ps);
 
     impl Lane for F8 {
+        const WIDTH: usize = 8;
         #[inline(always)]
         fn splat(v: f32) -> F8 {
             // SAFETY: AVX2 is there (see the type).
             F8(unsafe { _mm256_set1_ps(v) })
+        }
+        #[inline(always)]
+        fn load(v: &[f32]) -> F8 {
+            let v = &v[..8];
+            // SAFETY: `v` holds 8 floats; AVX2 is there (see the type).
+            F8(unsafe { _mm256_loadu_ps(v.as_ptr()) })
+        }
+        #[inline(always)]
+        fn store(self, out: &mut [f32]) {
+            let out = &mut out[..8];
+            // SAFETY: `out` holds 8 floats; AVX2 is there (see the type).
+            unsafe { _mm256_storeu_ps(out.as_mut_ptr(), self.0) }
+        }
+        #[inline(always)]
+        fn map(self, f: impl Fn(f32) -> f32) -> F8 {
+            F8::load(&self.to_array().map(f))
         }
         #[inline(always)]
         fn sqrt(self) -> F8 {
