@@ -724,3 +724,7 @@ except Exception:
     sys.stdout.flush()
     os._exit(1)
 sys.stdout.flush()
+if not bpy.app.binary_path:
+    # The bpy module, not Blender: 4.2's frees the registered panels after Python has shut
+    # down and crashes there (any add-on with a panel does), which Blender itself never does.
+    os._exit(0)
