@@ -37,14 +37,15 @@ def surface(positions, velocities, spacing, options):
     """(vertices, faces, normals or None, attributes, edges) of the package's `reconstruct`,
     `edges` as `mesh_edges` gives them (which Blender would otherwise search for on the main
     thread)."""
-    mesh = vendor.splash_sph().reconstruct(
+    splash_sph = vendor.splash_sph()
+    mesh = splash_sph.reconstruct(
         positions,
         spacing,
         attributes=None if velocities is None else {"velocity": velocities},
         **options,
     )
     normals = mesh.normals if len(mesh.normals) else None
-    edges = vendor.splash_sph().mesh_edges(mesh.faces, len(mesh.vertices))
+    edges = splash_sph.mesh_edges(mesh.faces, len(mesh.vertices))
     return mesh.vertices, mesh.faces, normals, dict(mesh.attributes), edges
 
 

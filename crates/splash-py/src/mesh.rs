@@ -1,4 +1,5 @@
-//! The `Mesh` that `reconstruct` returns: numpy arrays, the report, and `write`.
+//! The `Mesh` that `reconstruct` returns: numpy arrays, the report, and `write`; and the
+//! edges of a mesh's faces, as Blender holds them (`mesh_edges`).
 
 use std::path::PathBuf;
 

@@ -78,16 +78,13 @@ mod avx2 {
         /// `v` eight floats at a time (a shorter rest is left out).
         #[inline(always)]
         pub fn chunks(v: &[f32]) -> impl Iterator<Item = F8> + '_ {
-            // SAFETY: each chunk holds 8 floats; AVX2 is there (see the type).
-            v.chunks_exact(8)
-                .map(|c| F8(unsafe { _mm256_loadu_ps(c.as_ptr()) }))
+            v.chunks_exact(8).map(F8::load)
         }
 
         #[inline(always)]
         pub fn to_array(self) -> [f32; 8] {
             let mut out = [0.0f32; 8];
-            // SAFETY: `out` holds 8 floats; AVX2 is there (see the type).
-            unsafe { _mm256_storeu_ps(out.as_mut_ptr(), self.0) };
+            self.store(&mut out);
             out
         }
     }
