@@ -92,6 +92,9 @@ enum BenchTable {
     /// Marching Slices' Fig. 7 (Rosenberg & Birdwell 2008): the slices engine against
     /// surface-following Marching Cubes in blocks and with hash maps, time and memory.
     Slices(crate::bench_slices::BenchSlicesArgs),
+    /// Jitter of whole sequences (issue 38): raw, default, your variants and the peer on
+    /// consecutive frames, measured against the fluid's own motion, with time and memory.
+    Temporal(crate::bench_temporal::BenchTemporalArgs),
 }
 
 pub fn bench(args: BenchArgs) -> Result<ExitCode> {
@@ -99,6 +102,7 @@ pub fn bench(args: BenchArgs) -> Result<ExitCode> {
         Some(BenchTable::Iso(iso)) => return crate::bench_iso::run(iso),
         Some(BenchTable::Preview(preview)) => return crate::bench_preview::run(preview),
         Some(BenchTable::Slices(slices)) => return crate::bench_slices::run(slices),
+        Some(BenchTable::Temporal(temporal)) => return crate::bench_temporal::run(temporal),
         None => {}
     }
     let mut config = match &args.config {

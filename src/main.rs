@@ -12,6 +12,7 @@ mod bench_cli;
 mod bench_iso;
 mod bench_preview;
 mod bench_slices;
+mod bench_temporal;
 mod farm;
 mod log;
 mod memory;
@@ -163,6 +164,12 @@ struct ConfigArgs {
     #[arg(long)]
     raw: bool,
 
+    /// In a sequence, move each frame's surface towards its neighbouring frames' surfaces
+    /// carried by the fluid's motion (particle ids, else velocities with post.frame_time), a
+    /// low-pass in time against flicker. Experimental: about 2.4x the wall time
+    #[arg(long)]
+    temporal: bool,
+
     /// Decimate the mesh (quadric edge collapses) keeping every vertex and triangle centre
     /// within this distance of the full surface: 0.1r (a tenth of the spacing) or a length.
     /// Closed and manifold, components and volume kept
@@ -225,6 +232,7 @@ impl ConfigArgs {
             mesh_aabb: parsed(&self.mesh_aabb, "--mesh-aabb", splash_sph::parse_aabb)?,
             min_component: self.min_component,
             decimate: parsed(&self.decimate, "--decimate", Length::parse)?,
+            temporal: self.temporal.then_some(true),
         };
         Ok(config.apply(&overrides)?)
     }

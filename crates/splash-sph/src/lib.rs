@@ -47,6 +47,7 @@ pub mod pipeline;
 pub mod preview;
 mod recon;
 pub mod report;
+pub mod temporal;
 
 pub use bytes::Bytes;
 pub use config::{

@@ -46,6 +46,8 @@ pub struct Overrides {
     pub min_component: Option<f64>,
     /// `post.decimate`.
     pub decimate: Option<Length>,
+    /// `post.temporal`: surfaces that follow the fluid from frame to frame in a sequence.
+    pub temporal: Option<bool>,
 }
 
 impl Config {
@@ -74,6 +76,7 @@ impl Config {
         self.post.mesh_aabb = o.mesh_aabb.or(self.post.mesh_aabb);
         self.post.min_component = o.min_component.or(self.post.min_component);
         self.post.decimate = o.decimate.or(self.post.decimate);
+        self.post.temporal = o.temporal.unwrap_or(self.post.temporal);
         self.validate()?;
         Ok(self)
     }

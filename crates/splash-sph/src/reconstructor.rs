@@ -231,7 +231,8 @@ impl Reconstructor {
         full_grid::needed_bytes(p, &grid, positions.len())
     }
 
-    fn install<T: Send>(&self, f: impl FnOnce() -> T + Send) -> T {
+    /// Runs `f` in this reconstructor's thread pool (the caller's when `threads` is unset).
+    pub(crate) fn install<T: Send>(&self, f: impl FnOnce() -> T + Send) -> T {
         match &self.pool {
             Some(pool) => pool.install(f),
             None => f(),

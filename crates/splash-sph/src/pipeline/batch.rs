@@ -12,6 +12,7 @@
 
 use std::path::{Path, PathBuf};
 
+use super::following::run_following;
 use super::overlap::run_overlapped;
 use super::{FramePipeline, Plan, Progress, RunReport};
 use crate::config::Config;
@@ -156,7 +157,11 @@ impl Batch {
         if let Some(first) = plan.first {
             pipeline.spacing_from(&self.inputs[..first], progress);
         }
-        let report = run_overlapped(plan, self.fail_fast, progress, &mut pipeline);
+        let report = if pipeline.follows_fluid() && self.inputs.len() > 1 {
+            run_following(&self.inputs, plan, self.fail_fast, progress, &mut pipeline)
+        } else {
+            run_overlapped(plan, self.fail_fast, progress, &mut pipeline)
+        };
         let outputs = self.outputs()?;
         if let Some(stage) = self.usd_stage(&outputs) {
             self.write_usd_stage(&stage, &outputs, progress)?;

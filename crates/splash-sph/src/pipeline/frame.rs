@@ -27,6 +27,7 @@ use crate::mesh::TriMesh;
 use crate::reconstructor::Reconstructor;
 use crate::report::FrameStats;
 use crate::spacing::estimate_spacing;
+use crate::temporal::FrameMotion;
 
 /// Turns particle files into mesh files with one configuration, frame after frame.
 #[derive(Debug)]
@@ -139,6 +140,34 @@ impl FramePipeline {
         loaded: Loaded,
         progress: &mut dyn Progress,
     ) -> Result<Made> {
+        match self.prepare(input, loaded, progress)? {
+            Ready::Made(made) => Ok(made),
+            Ready::Surface(mut prepared) => {
+                let mesh = std::mem::take(&mut prepared.mesh);
+                self.finish(&prepared, mesh)
+            }
+        }
+    }
+
+    /// Seconds between frames, to carry particles without ids by their velocities.
+    pub(super) fn frame_time(&self) -> Option<f32> {
+        self.config.post.frame_time
+    }
+
+    /// Whether a sequence's frames follow the fluid from their neighbours (`post.temporal`,
+    /// for surfaces that are post-processed).
+    pub(super) fn follows_fluid(&self) -> bool {
+        self.iso.is_none() && self.config.post.temporal && !self.config.post.raw
+    }
+
+    /// Frame `input`'s post-processed surface, its attributes not yet carried onto it (an
+    /// isosurface, or a frame without particles, is made whole).
+    pub(super) fn prepare(
+        &mut self,
+        input: &Path,
+        loaded: Loaded,
+        progress: &mut dyn Progress,
+    ) -> Result<Ready> {
         let Loaded {
             positions,
             mut attributes,
@@ -152,7 +181,7 @@ impl FramePipeline {
             made.stats.timings.read = read;
             made.stats.particles_outside_box = outside_box;
             made.time = time;
-            return Ok(made);
+            return Ok(Ready::Made(made));
         }
         let mut names = self.config.output.attributes.clone();
         if self.format == MeshFormat::Usd
@@ -162,8 +191,17 @@ impl FramePipeline {
             attributes.insert("velocity".into(), velocity);
             names.push("velocity".into());
         }
+        let (motion, ids_warning) = if self.follows_fluid() {
+            FrameMotion::new(positions, &mut attributes)
+        } else {
+            let motion = FrameMotion {
+                positions,
+                ..FrameMotion::default()
+            };
+            (motion, None)
+        };
         let wanted = particle_attributes(input, attributes, &names)?;
-        if positions.is_empty() {
+        if motion.positions.is_empty() {
             // Nothing to reconstruct, and nothing to estimate a spacing from.
             let named: Vec<(String, Attribute)> = wanted
                 .iter()
@@ -178,14 +216,14 @@ impl FramePipeline {
             let mut stats = FrameStats::default();
             stats.timings.read = read;
             stats.particles_outside_box = outside_box;
-            return Ok(Made {
+            return Ok(Ready::Made(Made {
                 mesh: TriMesh::default(),
                 named,
                 stats,
                 time,
-            });
+            }));
         }
-        let r = self.sequence_spacing(input, &positions, progress)?;
+        let r = self.sequence_spacing(input, &motion.positions, progress)?;
         let reconstructor = match &mut self.reconstructor {
             Some(rec) => rec,
             slot => slot.insert(Reconstructor::new(Config {
@@ -195,26 +233,55 @@ impl FramePipeline {
         };
         if !self.checked {
             self.checked = true;
-            for warning in reconstructor.warnings(&positions) {
+            for warning in reconstructor.warnings(&motion.positions) {
                 progress.warning(Some(input), &warning);
             }
         }
-        let columns: Vec<&Attribute> = wanted.iter().map(|(_, a)| a).collect();
         let mut observer = progress.observer();
-        let surface = super::surface(reconstructor, &positions, &columns, observer.as_mut())?;
-        drop((columns, observer, positions));
-        let names = wanted.into_iter().map(|(name, _)| name);
-        let named: Vec<(String, Attribute)> = names.zip(surface.attributes).collect();
-        let mut stats = surface.stats;
+        let rec = reconstructor
+            .reconstruct_observed(&motion.positions, observer.as_mut())
+            .map_err(|e| e.context("reconstruction failed"))?;
+        drop(observer);
+        let mut stats = rec.stats;
         progress.measured(&mut stats);
         stats.particles_outside_box = outside_box;
         stats.timings.read = read;
-        Ok(Made {
-            mesh: surface.mesh,
-            named,
+        Ok(Ready::Surface(Prepared {
+            mesh: rec.mesh,
+            motion,
+            ids_warning,
+            wanted,
             stats,
             time,
+        }))
+    }
+
+    /// A prepared frame made whole with `mesh` (its own surface, or that surface moved): its
+    /// attributes carried onto the mesh's vertices.
+    pub(super) fn finish(&self, prepared: &Prepared, mesh: TriMesh) -> Result<Made> {
+        let columns: Vec<&Attribute> = prepared.wanted.iter().map(|(_, a)| a).collect();
+        let values = self.prepared_reconstructor().interpolate_all(
+            &mesh,
+            &prepared.motion.positions,
+            &columns,
+        )?;
+        let names = prepared.wanted.iter().map(|(name, _)| name.clone());
+        let mut stats = prepared.stats;
+        stats.triangles = mesh.triangles.len();
+        stats.vertices = mesh.vertices.len();
+        Ok(Made {
+            mesh,
+            named: names.zip(values).collect(),
+            stats,
+            time: prepared.time,
         })
+    }
+
+    /// The reconstructor of the frames prepared so far.
+    pub(super) fn prepared_reconstructor(&self) -> &Reconstructor {
+        self.reconstructor
+            .as_ref()
+            .expect("a prepared surface has its reconstructor")
     }
 
     /// One frame's isosurface, with its extra attributes.
@@ -323,8 +390,36 @@ impl Loader {
     }
 }
 
-/// A frame's mesh and vertex attributes, waiting to be written, with its figures.
+/// A frame made whole, or its surface waiting for its neighbours and its attributes.
 #[derive(Debug)]
+pub(super) enum Ready {
+    Made(Made),
+    Surface(Prepared),
+}
+
+/// A frame's post-processed surface before its attributes are carried onto it: what a
+/// sequence whose surfaces follow the fluid holds of a frame until its neighbours are made.
+#[derive(Debug)]
+pub(super) struct Prepared {
+    pub(super) mesh: TriMesh,
+    /// The particles, with their ids and velocities when the sequence follows the fluid.
+    pub(super) motion: FrameMotion,
+    /// Why the file's ids cannot carry the particles, for a warning.
+    pub(super) ids_warning: Option<String>,
+    wanted: Vec<(String, Attribute)>,
+    pub(super) stats: FrameStats,
+    time: Option<u64>,
+}
+
+impl Prepared {
+    /// The reconstructor's spacing and cell for the frame.
+    pub(super) fn grid(&self) -> (f32, f32) {
+        (self.stats.spacing, self.stats.cell)
+    }
+}
+
+/// A frame's mesh and vertex attributes, waiting to be written, with its figures.
+#[derive(Debug, Clone)]
 pub(super) struct Made {
     mesh: TriMesh,
     named: Vec<(String, Attribute)>,

@@ -34,6 +34,7 @@
 //! ```
 
 mod batch;
+mod following;
 mod frame;
 mod overlap;
 mod plan;

@@ -21,6 +21,8 @@ pub struct Plan {
     pub skipped: Vec<PathBuf>,
     /// The frames to do: (input, output), in frame order.
     pub frames: Vec<(PathBuf, PathBuf)>,
+    /// Each frame to do's position in the selection (its neighbours are the frames beside it).
+    pub positions: Vec<usize>,
     /// Position in the selection of the first frame to do (the frames before it are where a
     /// run over the whole sequence would have estimated the spacing).
     pub first: Option<usize>,
@@ -52,6 +54,7 @@ impl Plan {
                 .map(|&i| (inputs[i].clone(), outputs[i].clone()))
                 .collect(),
             first: to_do.first().copied(),
+            positions: to_do,
         }
     }
 

@@ -212,3 +212,44 @@ pub fn ball_frames(dir: &std::path::Path, count: u32) -> Vec<std::path::PathBuf>
         })
         .collect()
 }
+
+/// The unit sphere as an octahedron whose faces are split in four `level` times, the new
+/// vertices pushed onto the sphere; closed and wound counter-clockwise seen from outside.
+pub fn octasphere(level: u32) -> TriMesh {
+    let mut vertices = vec![Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z];
+    let mut triangles: Vec<[u32; 3]> = vec![
+        [0, 2, 4],
+        [2, 1, 4],
+        [1, 3, 4],
+        [3, 0, 4],
+        [2, 0, 5],
+        [1, 2, 5],
+        [3, 1, 5],
+        [0, 3, 5],
+    ];
+    for _ in 0..level {
+        let mut middles = std::collections::HashMap::new();
+        let mut middle = |a: u32, b: u32, vertices: &mut Vec<Vec3>| {
+            *middles.entry((a.min(b), a.max(b))).or_insert_with(|| {
+                let m = (vertices[a as usize] + vertices[b as usize]).normalize();
+                vertices.push(m);
+                vertices.len() as u32 - 1
+            })
+        };
+        let mut split = Vec::with_capacity(triangles.len() * 4);
+        for [a, b, c] in triangles {
+            let (ab, bc, ca) = (
+                middle(a, b, &mut vertices),
+                middle(b, c, &mut vertices),
+                middle(c, a, &mut vertices),
+            );
+            split.extend([[a, ab, ca], [ab, b, bc], [ca, bc, c], [ab, bc, ca]]);
+        }
+        triangles = split;
+    }
+    TriMesh {
+        normals: vertices.clone(),
+        vertices,
+        triangles,
+    }
+}

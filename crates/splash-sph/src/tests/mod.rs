@@ -16,6 +16,7 @@ mod post;
 mod reconstruction;
 mod slices;
 mod surface_following;
+mod temporal;
 
 /// The helpers the integration tests and the command line's tests share.
 #[allow(dead_code)]

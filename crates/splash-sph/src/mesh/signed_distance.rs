@@ -1,0 +1,314 @@
+//! Signed distance from points to a closed, consistently wound mesh, within a reach: the
+//! nearest point of the nearest triangle (Ericson 2005, *Real-Time Collision Detection*,
+//! §5.1.5), signed by the angle-weighted pseudonormal of the feature it lies on — face, edge or
+//! vertex (Bærentzen & Aanæs 2005, *Signed distance computation using the angle weighted
+//! pseudonormal*), which is exact for any closed manifold mesh. Negative inside. The triangles
+//! are binned in a hash grid of cells a quarter of the reach wide, searched shell by shell
+//! around the query until no farther cell can hold a nearer triangle, so that a point near the
+//! surface visits a few dozen triangles, and the structure grows with the surface, not the
+//! volume it encloses.
+
+use glam::{IVec3, Vec3};
+use rayon::prelude::*;
+use rustc_hash::FxHashMap;
+
+/// A mesh prepared for signed-distance queries up to `reach` away.
+#[derive(Debug)]
+pub struct SignedDistance<'a> {
+    vertices: &'a [Vec3],
+    triangles: &'a [[u32; 3]],
+    reach: f32,
+    /// The bins' edge, and how many shells of bins cover the reach.
+    cell: f32,
+    shells: i32,
+    /// Triangles by cell: a range of `binned` per non-empty cell.
+    cells: FxHashMap<[i32; 3], (u32, u32)>,
+    binned: Vec<u32>,
+}
+
+/// Which part of a triangle a point is nearest to.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Feature {
+    Face,
+    Edge,
+    Vertex(u32),
+}
+
+/// The nearest triangles so far: the squared distance, the nearest point, and the
+/// pseudonormal summed over every triangle that reaches that point (the faces of an edge or a
+/// vertex all do: ties within a hair of the distance).
+#[derive(Debug, Clone, Copy)]
+struct Nearest {
+    d2: f32,
+    point: Vec3,
+    normal: Vec3,
+    /// The triangles summed (a triangle binned in several cells is met again).
+    faces: [u32; 16],
+    count: usize,
+}
+
+impl<'a> SignedDistance<'a> {
+    /// Bins `triangles` (of `vertices`) for queries within `reach` (a positive length).
+    pub fn new(vertices: &'a [Vec3], triangles: &'a [[u32; 3]], reach: f32) -> Self {
+        // Bins about a triangle wide: a point near the surface then visits a few dozen.
+        let edges: f64 = triangles
+            .par_iter()
+            .map(|t| f64::from(vertices[t[0] as usize].distance(vertices[t[1] as usize])))
+            .sum();
+        let mean_edge = (edges / triangles.len().max(1) as f64) as f32;
+        let cell = (1.5 * mean_edge).clamp(reach / 8.0, reach);
+        let cell = if cell.is_finite() && cell > 0.0 {
+            cell
+        } else {
+            reach
+        };
+        let shells = (reach / cell).ceil() as i32 + 1;
+        let cell_of = |p: Vec3| (p / cell).floor().as_ivec3();
+        let mut pairs: Vec<(u64, u32)> = Vec::new();
+        let low = vertices.iter().fold(IVec3::MAX, |m, &v| m.min(cell_of(v)));
+        let key = |c: IVec3| {
+            let c = (c - low).as_uvec3();
+            (u64::from(c.z) << 42) | (u64::from(c.y) << 21) | u64::from(c.x)
+        };
+        pairs.par_extend(triangles.par_iter().enumerate().flat_map_iter(|(t, tri)| {
+            let [a, b, c] = tri.map(|i| vertices[i as usize]);
+            let (lo, hi) = (cell_of(a.min(b).min(c)), cell_of(a.max(b).max(c)));
+            (lo.z..=hi.z).flat_map(move |z| {
+                (lo.y..=hi.y).flat_map(move |y| {
+                    (lo.x..=hi.x).map(move |x| (key(IVec3::new(x, y, z)), t as u32))
+                })
+            })
+        }));
+        // Extents beyond 2^21 bins would overlap in the key: such meshes are binned by the
+        // coordinates themselves.
+        let span = vertices.iter().fold(IVec3::MIN, |m, &v| m.max(cell_of(v))) - low;
+        let mut cells = FxHashMap::default();
+        let mut binned = Vec::with_capacity(pairs.len());
+        if span.max_element() < 1 << 21 {
+            radsort::sort_by_key(&mut pairs, |&(k, t)| (k, t));
+            let unkey = |k: u64| {
+                let m = (1u64 << 21) - 1;
+                (low + IVec3::new((k & m) as i32, ((k >> 21) & m) as i32, (k >> 42) as i32))
+                    .to_array()
+            };
+            let mut start = 0;
+            for (i, &(k, t)) in pairs.iter().enumerate() {
+                binned.push(t);
+                if i + 1 == pairs.len() || pairs[i + 1].0 != k {
+                    cells.insert(unkey(k), (start as u32, i as u32 + 1));
+                    start = i + 1;
+                }
+            }
+        } else {
+            let mut wide: Vec<([i32; 3], u32)> = triangles
+                .iter()
+                .enumerate()
+                .flat_map(|(t, tri)| {
+                    let [a, b, c] = tri.map(|i| vertices[i as usize]);
+                    let (lo, hi) = (cell_of(a.min(b).min(c)), cell_of(a.max(b).max(c)));
+                    (lo.z..=hi.z).flat_map(move |z| {
+                        (lo.y..=hi.y)
+                            .flat_map(move |y| (lo.x..=hi.x).map(move |x| ([x, y, z], t as u32)))
+                    })
+                })
+                .collect();
+            wide.par_sort_unstable();
+            let mut start = 0;
+            for (i, &(k, t)) in wide.iter().enumerate() {
+                binned.push(t);
+                if i + 1 == wide.len() || wide[i + 1].0 != k {
+                    cells.insert(k, (start as u32, i as u32 + 1));
+                    start = i + 1;
+                }
+            }
+        }
+        SignedDistance {
+            vertices,
+            triangles,
+            reach,
+            cell,
+            shells,
+            cells,
+            binned,
+        }
+    }
+
+    /// The signed distance from `p` to the mesh (negative inside), or None when no triangle
+    /// lies within the reach. The triangles are visited in a fixed order, so that the answer
+    /// does not depend on the thread.
+    pub fn at(&self, p: Vec3) -> Option<f32> {
+        let home = (p / self.cell).floor().as_ivec3();
+        let mut best: Option<Nearest> = None;
+        for shell in 0..=self.shells {
+            for dz in -shell..=shell {
+                for dy in -shell..=shell {
+                    for dx in -shell..=shell {
+                        if dx.abs().max(dy.abs()).max(dz.abs()) != shell {
+                            continue;
+                        }
+                        let key = home + IVec3::new(dx, dy, dz);
+                        // A cell whose box is farther than the nearest triangle holds no nearer one.
+                        let lo = key.as_vec3() * self.cell;
+                        let gap = (lo - p).max(p - (lo + self.cell)).max(Vec3::ZERO);
+                        if best.is_some_and(|b| gap.length_squared() > b.d2 * (1.0 + TIE)) {
+                            continue;
+                        }
+                        if let Some(&(s, e)) = self.cells.get(&key.to_array()) {
+                            self.nearest_in(p, &self.binned[s as usize..e as usize], &mut best);
+                        }
+                    }
+                }
+            }
+            // Cells beyond this shell lie at least `shell` cells away.
+            let bound = shell as f32 * self.cell;
+            if best.is_some_and(|b| b.d2 * (1.0 + TIE) < bound * bound) {
+                break;
+            }
+        }
+        let b = best?;
+        let d = b.d2.sqrt();
+        if d > self.reach {
+            return None;
+        }
+        Some(if (p - b.point).dot(b.normal) < 0.0 {
+            -d
+        } else {
+            d
+        })
+    }
+
+    /// Folds `triangles` into `best`: a nearer one replaces it, one as near (a face of the same
+    /// edge or vertex, or a duplicate visit) adds its pseudonormal share.
+    fn nearest_in(&self, p: Vec3, triangles: &[u32], best: &mut Option<Nearest>) {
+        for &t in triangles {
+            let tri = self.triangles[t as usize];
+            let (q, feature) = closest_on_triangle(p, tri, self.vertices);
+            let d2 = p.distance_squared(q);
+            let [a, b, c] = tri.map(|i| self.vertices[i as usize]);
+            let face = (b - a).cross(c - a).normalize_or_zero();
+            // Bærentzen & Aanæs's pseudonormals: an edge's is the sum of its faces' normals, a
+            // vertex's the sum weighted by each face's angle there.
+            let normal = match feature {
+                Feature::Face | Feature::Edge => face,
+                Feature::Vertex(v) => {
+                    let k = tri.iter().position(|&i| i == v).unwrap_or(0);
+                    let [o, u, w] = [k, (k + 1) % 3, (k + 2) % 3].map(|i| [a, b, c][i]);
+                    face * (u - o).angle_between(w - o)
+                }
+            };
+            match best {
+                Some(n) if d2 > n.d2 * (1.0 + TIE) + f32::MIN_POSITIVE => {}
+                Some(n) if d2 >= n.d2 * (1.0 - TIE) => {
+                    if n.faces[..n.count].contains(&t) || n.count == n.faces.len() {
+                        continue;
+                    }
+                    n.faces[n.count] = t;
+                    n.count += 1;
+                    if d2 < n.d2 {
+                        n.d2 = d2;
+                        n.point = q;
+                    }
+                    n.normal += normal;
+                }
+                _ => {
+                    let mut faces = [0; 16];
+                    faces[0] = t;
+                    *best = Some(Nearest {
+                        d2,
+                        point: q,
+                        normal,
+                        faces,
+                        count: 1,
+                    })
+                }
+            }
+        }
+    }
+}
+
+/// Squared distances within this share of each other reach the same point: the faces of one
+/// edge or vertex, whose nearest points differ only by rounding.
+const TIE: f32 = 1e-5;
+
+/// The point of triangle `tri` nearest to `p`, and the feature it lies on (Ericson's Voronoi
+/// regions, in his order: vertex a, b, edge ab, vertex c, edges ac, bc, the face).
+fn closest_on_triangle(p: Vec3, tri: [u32; 3], vertices: &[Vec3]) -> (Vec3, Feature) {
+    let [ia, ib, ic] = tri;
+    let [a, b, c] = tri.map(|i| vertices[i as usize]);
+    let (ab, ac, ap) = (b - a, c - a, p - a);
+    let (d1, d2) = (ab.dot(ap), ac.dot(ap));
+    if d1 <= 0.0 && d2 <= 0.0 {
+        return (a, Feature::Vertex(ia));
+    }
+    let bp = p - b;
+    let (d3, d4) = (ab.dot(bp), ac.dot(bp));
+    if d3 >= 0.0 && d4 <= d3 {
+        return (b, Feature::Vertex(ib));
+    }
+    let vc = d1 * d4 - d3 * d2;
+    if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
+        let v = d1 / (d1 - d3);
+        return (a + ab * v, Feature::Edge);
+    }
+    let cp = p - c;
+    let (d5, d6) = (ab.dot(cp), ac.dot(cp));
+    if d6 >= 0.0 && d5 <= d6 {
+        return (c, Feature::Vertex(ic));
+    }
+    let vb = d5 * d2 - d1 * d6;
+    if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
+        let w = d2 / (d2 - d6);
+        return (a + ac * w, Feature::Edge);
+    }
+    let va = d3 * d6 - d5 * d4;
+    if va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0 {
+        let w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        return (b + (c - b) * w, Feature::Edge);
+    }
+    let denom = va + vb + vc;
+    if denom <= 0.0 {
+        // A degenerate triangle: its nearest corner.
+        let corner = [(a, ia), (b, ib), (c, ic)]
+            .into_iter()
+            .min_by(|x, y| p.distance_squared(x.0).total_cmp(&p.distance_squared(y.0)))
+            .expect("three corners");
+        return (corner.0, Feature::Vertex(corner.1));
+    }
+    let (v, w) = (vb / denom, vc / denom);
+    (a + ab * v + ac * w, Feature::Face)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::tests::common::octasphere;
+
+    /// A unit sphere's mesh: points inside are negative, outside positive, within the mesh's
+    /// flattening of the true distance; beyond the reach, nothing.
+    #[test]
+    fn a_sphere_is_negative_inside_and_positive_outside() {
+        let mesh = octasphere(4);
+        let sd = SignedDistance::new(&mesh.vertices, &mesh.triangles, 0.5);
+        // Level 4: its faces lie within 0.01 of the unit sphere.
+        for dir in [Vec3::X, Vec3::new(1.0, 2.0, -3.0).normalize(), -Vec3::Z] {
+            for r in [0.6, 0.9, 0.99, 1.01, 1.2, 1.45] {
+                let d = sd.at(dir * r).unwrap();
+                assert!((d - (r - 1.0)).abs() < 0.01, "r {r}: {d}");
+            }
+            assert_eq!(sd.at(dir * 1.6), None);
+            assert_eq!(sd.at(dir * 0.3), None);
+        }
+        // A vertex is on the mesh; points beside a vertex or an edge get their sign from the
+        // pseudonormals.
+        for v in &mesh.vertices {
+            assert_eq!(sd.at(*v), Some(0.0));
+            assert!(sd.at(*v * 1.001).unwrap() > 0.0);
+            assert!(sd.at(*v * 0.999).unwrap() < 0.0);
+        }
+        for t in &mesh.triangles {
+            let mid = (mesh.vertices[t[0] as usize] + mesh.vertices[t[1] as usize]) / 2.0;
+            assert!(sd.at(mid * 1.001).unwrap() > 0.0);
+            assert!(sd.at(mid * 0.999).unwrap() < 0.0);
+        }
+    }
+}

@@ -1,0 +1,204 @@
+//! A sequence whose surfaces follow the fluid (`post.temporal`, issue 38): frame t is written
+//! from its own post-processed surface moved towards its neighbours' (the frames beside it in
+//! the selection) carried to its time ([`follow_fluid`]). A frame's neighbours are
+//! reconstructed too, also where another job writes them (`--shard`) or their output exists
+//! (`skip_existing`), so that every job writes the bytes one run over the whole sequence
+//! writes. At most three prepared frames are held at once. A frame without both neighbours (the
+//! ends of the selection, a gap in its frame numbers, a neighbour that fails or has no
+//! particles, particles that cannot be matched) is post-processed alone, with a warning.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use super::frame::{Made, Prepared, Ready};
+use super::{FrameOutcome, FramePipeline, Plan, Progress, RunReport};
+use crate::error::{Error, Result};
+use crate::frames::path_frame_number;
+use crate::report::FrameStats;
+use crate::temporal::{Neighbour, follow_fluid};
+
+/// Runs the plan's frames of the selection `inputs`, each following the fluid from its
+/// neighbours; see the module's header.
+pub(super) fn run_following(
+    inputs: &[PathBuf],
+    plan: Plan,
+    fail_fast: bool,
+    progress: &mut dyn Progress,
+    pipeline: &mut FramePipeline,
+) -> RunReport {
+    let total = plan.frames.len();
+    let mut outcomes = Vec::with_capacity(total);
+    let mut not_attempted = 0;
+    let gaps = Gaps::new(inputs);
+    let (loader, writer) = (pipeline.loader(), pipeline.writer());
+    // Frames prepared, by position in the selection.
+    let mut held: BTreeMap<usize, Result<Ready>> = BTreeMap::new();
+    for (k, ((input, output), &at)) in plan.frames.iter().zip(&plan.positions).enumerate() {
+        if progress.cancelled() {
+            not_attempted = total - k;
+            break;
+        }
+        held.retain(|&j, _| j + 1 >= at);
+        let end = (at + 2).min(inputs.len());
+        for (j, path) in inputs
+            .iter()
+            .enumerate()
+            .take(end)
+            .skip(at.saturating_sub(1))
+        {
+            if let std::collections::btree_map::Entry::Vacant(slot) = held.entry(j) {
+                let prepared = loader
+                    .load(path)
+                    .and_then(|loaded| pipeline.prepare(path, loaded, progress));
+                slot.insert(prepared);
+            }
+        }
+        let own = held.remove(&at).expect("prepared above");
+        let result = match &own {
+            Ok(Ready::Surface(p)) => {
+                let mesh = follow(pipeline, inputs, &gaps, at, p, &held, progress);
+                pipeline.finish(p, mesh)
+            }
+            // Only frames without particles are made whole before their attributes.
+            Ok(Ready::Made(m)) => Ok(m.clone()),
+            Err(e) => Err(Error::input(e.to_string())),
+        };
+        held.insert(at, own.map_err(|e| Error::input(e.to_string())));
+        let result = result.and_then(|made: Made| writer.write(output, made));
+        let failed = report(&mut outcomes, input, output, result, k, total, progress);
+        if failed && fail_fast {
+            not_attempted = total - k - 1;
+            break;
+        }
+    }
+    RunReport {
+        plan,
+        outcomes,
+        not_attempted,
+    }
+}
+
+/// Frame `at`'s surface moved towards its neighbours', or its own where it cannot follow them
+/// (told as a warning).
+fn follow(
+    pipeline: &FramePipeline,
+    inputs: &[PathBuf],
+    gaps: &Gaps,
+    at: usize,
+    own: &Prepared,
+    held: &BTreeMap<usize, Result<Ready>>,
+    progress: &mut dyn Progress,
+) -> crate::mesh::TriMesh {
+    let neighbour = |j: Option<usize>, side: &str| -> std::result::Result<&Prepared, String> {
+        let Some(j) = j.filter(|&j| j < inputs.len()) else {
+            return Err(format!("no frame {side} it in the sequence"));
+        };
+        if gaps.between(at, j) {
+            return Err(format!("a gap in the frame numbers {side} it"));
+        }
+        match held.get(&j) {
+            Some(Ok(Ready::Surface(p))) => Ok(p),
+            Some(Ok(Ready::Made(_))) => Err(format!(
+                "the frame {side} it, '{}', has no particles",
+                inputs[j].display()
+            )),
+            Some(Err(e)) => Err(format!("the frame {side} it failed: {e}")),
+            None => unreachable!("neighbours are prepared before the frame"),
+        }
+    };
+    let (spacing, cell) = own.grid();
+    let frame_time = pipeline.frame_time();
+    let followed = neighbour(at.checked_sub(1), "before").and_then(|before| {
+        let after = neighbour(Some(at + 1), "after")?;
+        let moves = |other: &Prepared, steps| {
+            own.motion
+                .displacements(&other.motion, steps, frame_time)
+                .ok_or_else(|| {
+                    own.ids_warning.clone().unwrap_or_else(|| {
+                        "the particles have no ids (and post.frame_time is not set to carry \
+                         them by their velocities)"
+                            .to_string()
+                    })
+                })
+        };
+        let (back, ahead) = (moves(before, -1)?, moves(after, 1)?);
+        let mut mesh = own.mesh.clone();
+        let neighbours = [
+            Neighbour {
+                mesh: &before.mesh,
+                displacements: &back,
+            },
+            Neighbour {
+                mesh: &after.mesh,
+                displacements: &ahead,
+            },
+        ];
+        pipeline
+            .prepared_reconstructor()
+            .install(|| {
+                follow_fluid(
+                    &mut mesh,
+                    &own.motion.positions,
+                    neighbours,
+                    spacing,
+                    spacing,
+                    cell,
+                )
+            })
+            .map_err(|e| e.to_string())?;
+        Ok(mesh)
+    });
+    followed.unwrap_or_else(|why| {
+        let message = format!("post-processed alone, not following the fluid: {why}");
+        progress.warning(Some(&inputs[at]), &message);
+        own.mesh.clone()
+    })
+}
+
+/// Where the selection's frame numbers jump by more than its usual step.
+struct Gaps {
+    numbers: Vec<Option<u64>>,
+    step: Option<u64>,
+}
+
+impl Gaps {
+    fn new(inputs: &[PathBuf]) -> Gaps {
+        let numbers: Vec<Option<u64>> = inputs.iter().map(|p| path_frame_number(p)).collect();
+        let step = numbers
+            .windows(2)
+            .filter_map(|w| w[1]?.checked_sub(w[0]?))
+            .filter(|&d| d > 0)
+            .min();
+        Gaps { numbers, step }
+    }
+
+    /// Whether frames `a` and `b` of the selection lie farther apart than the usual step.
+    fn between(&self, a: usize, b: usize) -> bool {
+        match (self.numbers[a], self.numbers[b], self.step) {
+            (Some(x), Some(y), Some(step)) => x.abs_diff(y) > step,
+            _ => false,
+        }
+    }
+}
+
+/// Adds frame `k`'s outcome and tells the caller; returns whether it failed.
+fn report(
+    outcomes: &mut Vec<FrameOutcome>,
+    input: &Path,
+    output: &Path,
+    result: Result<FrameStats>,
+    k: usize,
+    total: usize,
+    progress: &mut dyn Progress,
+) -> bool {
+    let outcome = FrameOutcome {
+        input: input.to_path_buf(),
+        output: output.to_path_buf(),
+        frame: path_frame_number(input),
+        result,
+    };
+    progress.frame_done(&outcome, k + 1, total);
+    let failed = outcome.result.is_err();
+    outcomes.push(outcome);
+    failed
+}

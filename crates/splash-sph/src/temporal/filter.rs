@@ -1,0 +1,86 @@
+//! Surfaces that follow the fluid from frame to frame (issue 38): each vertex of frame t's mesh
+//! is moved along its normal to the binomial mean [1, 2, 1]/4 of where the surfaces of frames
+//! t−1, t and t+1 lie once carried to time t by the fluid's own motion (the kernel mean of the
+//! particles' displacements around the vertex, [`mean_motion`]). Where the fluid carries the
+//! surface as it moves, the neighbours agree with frame t and nothing moves; what jumps at one
+//! frame alone is shared with its neighbours, a low-pass in time along the flow (the explicit
+//! surfaces of Yu, Wojtan, Turk & Yap 2012 follow the fluid in the same sense). A neighbour
+//! farther than `reach` from the carried vertex (a topology change, a droplet that left) weighs
+//! less, smoothly down to nothing at the reach, so that no surface is pulled towards another.
+
+use glam::Vec3;
+use rayon::prelude::*;
+
+use super::motion::mean_motion;
+use crate::error::Result;
+use crate::mesh::{SignedDistance, TriMesh, area_weighted_normals};
+
+/// Frame t's neighbours for [`follow_fluid`]: a neighbour's mesh and, per particle of frame t,
+/// its displacement to that frame (None where a particle has no match).
+#[derive(Debug, Clone, Copy)]
+pub struct Neighbour<'a> {
+    /// The neighbour's mesh, post-processed as frame t's was.
+    pub mesh: &'a TriMesh,
+    /// Per particle of frame t: its position in the neighbour frame minus at t.
+    pub displacements: &'a [Option<Vec3>],
+}
+
+/// What [`follow_fluid`] did.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Followed {
+    /// Vertices moved.
+    pub moved: usize,
+    /// Root mean square and largest move, in world units.
+    pub rms: f64,
+    /// The largest move.
+    pub max: f32,
+}
+
+/// Moves the vertices of `mesh` (frame t, with `particles` its particles) towards the surfaces
+/// of `neighbours` (frames t−1 and t+1) carried to time t, as in the module's header, and
+/// recomputes its normals when it has them. `spacing`: r; the motion's kernel has support 2r,
+/// the neighbours count within `reach`.
+pub fn follow_fluid(
+    mesh: &mut TriMesh,
+    particles: &[Vec3],
+    neighbours: [Neighbour<'_>; 2],
+    spacing: f32,
+    reach: f32,
+    cell: f32,
+) -> Result<Followed> {
+    if mesh.triangles.is_empty() {
+        return Ok(Followed::default());
+    }
+    let normals = area_weighted_normals(&mesh.vertices, &mesh.triangles);
+    let support = 2.0 * spacing;
+    let mut offsets = vec![0.0f32; mesh.vertices.len()];
+    for n in neighbours {
+        let carried = mean_motion(&mesh.vertices, particles, n.displacements, support, cell)?;
+        let surface = SignedDistance::new(&n.mesh.vertices, &n.mesh.triangles, reach);
+        offsets
+            .par_iter_mut()
+            .zip(&mesh.vertices)
+            .zip(&carried)
+            .for_each(|((offset, &x), &a)| {
+                if let Some(e) = surface.at(x + a) {
+                    let taper = (1.0 - (e / reach).powi(2)).max(0.0);
+                    *offset -= 0.25 * e * taper * taper;
+                }
+            });
+    }
+    let mut followed = Followed::default();
+    let mut squares = 0.0f64;
+    for ((x, n), &offset) in mesh.vertices.iter_mut().zip(&normals).zip(&offsets) {
+        if offset != 0.0 && *n != Vec3::ZERO {
+            *x += *n * offset;
+            followed.moved += 1;
+            squares += f64::from(offset) * f64::from(offset);
+            followed.max = followed.max.max(offset.abs());
+        }
+    }
+    followed.rms = (squares / mesh.vertices.len() as f64).sqrt();
+    if !mesh.normals.is_empty() {
+        mesh.normals = area_weighted_normals(&mesh.vertices, &mesh.triangles);
+    }
+    Ok(followed)
+}

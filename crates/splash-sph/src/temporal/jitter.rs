@@ -1,0 +1,126 @@
+//! Jitter: surface motion the fluid does not explain (issue 38). A free surface moves with the
+//! fluid, so for a vertex x of mesh t with outward normal n, its signed distances d₊, d₋ to
+//! meshes t+1 and t−1 should be −m₊ and +m₋, the fluid's displacement along n towards each
+//! (the kernel mean of its particles' displacements, cubic spline of support 2r). What is left,
+//! e₊ = d₊ + m₊ and e₋ = d₋ − m₋, is the surface's own motion; a surface that drifts smoothly
+//! away from the fluid cancels in (e₊ + e₋)/2, one that jumps at frame t does not. Vertices
+//! more than 2r from either neighbour (where the topology changed) are left out.
+
+use glam::Vec3;
+use rayon::prelude::*;
+
+use super::motion::{FrameMotion, mean_motion};
+use crate::error::Result;
+use crate::mesh::{SignedDistance, TriMesh, area_weighted_normals};
+
+/// Sums of squares over the vertices of inner frames, in spacings r; add frames with `+=`.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Jitter {
+    /// Vertices measured.
+    pub vertices: u64,
+    /// Vertices left out: no surface within 2r in a neighbouring frame.
+    pub left_out: u64,
+    /// Σ ((e₊ + e₋)/2)².
+    pub jitter: f64,
+    /// Σ e₊²: drift and jitter.
+    pub forward: f64,
+    /// Σ ((d₊ + d₋)/2)²: the surface alone, without the particles.
+    pub surface: f64,
+}
+
+impl std::ops::AddAssign for Jitter {
+    fn add_assign(&mut self, o: Jitter) {
+        self.vertices += o.vertices;
+        self.left_out += o.left_out;
+        self.jitter += o.jitter;
+        self.forward += o.forward;
+        self.surface += o.surface;
+    }
+}
+
+impl Jitter {
+    /// RMS((e₊ + e₋)/2) in spacings r.
+    pub fn rms(&self) -> f64 {
+        self.mean(self.jitter)
+    }
+
+    /// RMS(e₊) in spacings r.
+    pub fn forward_rms(&self) -> f64 {
+        self.mean(self.forward)
+    }
+
+    /// RMS((d₊ + d₋)/2) in spacings r.
+    pub fn surface_rms(&self) -> f64 {
+        self.mean(self.surface)
+    }
+
+    fn mean(&self, sum: f64) -> f64 {
+        if self.vertices == 0 {
+            f64::NAN
+        } else {
+            (sum / self.vertices as f64).sqrt()
+        }
+    }
+}
+
+/// The meshes of frames t−1, t, t+1 and the particles of frame t with their displacements to
+/// frames t+1 (`forward`) and from t−1 (`backward`: the displacement of each particle of
+/// frame t since t−1).
+#[derive(Debug, Clone, Copy)]
+pub struct Window<'a> {
+    /// Meshes t−1, t, t+1.
+    pub meshes: [&'a TriMesh; 3],
+    /// Frame t's particles.
+    pub particles: &'a FrameMotion,
+    /// Per particle of frame t: its position at t+1 minus at t.
+    pub forward: &'a [Option<Vec3>],
+    /// Per particle of frame t: its position at t minus at t−1.
+    pub backward: &'a [Option<Vec3>],
+}
+
+/// The jitter of frame t's mesh in `window`, at spacing `spacing` (r).
+pub fn frame_jitter(window: &Window<'_>, spacing: f32) -> Result<Jitter> {
+    let [prev, mesh, next] = window.meshes;
+    let reach = 2.0 * spacing;
+    let normals = area_weighted_normals(&mesh.vertices, &mesh.triangles);
+    let positions = &window.particles.positions;
+    let support = 2.0 * spacing;
+    let (ahead, behind) = rayon::join(
+        || mean_motion(&mesh.vertices, positions, window.forward, support, 0.0),
+        || mean_motion(&mesh.vertices, positions, window.backward, support, 0.0),
+    );
+    let (ahead, behind) = (ahead?, behind?);
+    let (to_prev, to_next) = rayon::join(
+        || SignedDistance::new(&prev.vertices, &prev.triangles, reach),
+        || SignedDistance::new(&next.vertices, &next.triangles, reach),
+    );
+    let r = f64::from(spacing);
+    Ok(mesh
+        .vertices
+        .par_iter()
+        .enumerate()
+        .map(|(i, &x)| {
+            let mut out = Jitter::default();
+            let n = normals[i];
+            if n == Vec3::ZERO {
+                return out;
+            }
+            let (Some(d_next), Some(d_prev)) = (to_next.at(x), to_prev.at(x)) else {
+                out.left_out = 1;
+                return out;
+            };
+            let (m_next, m_prev) = (n.dot(ahead[i]), n.dot(behind[i]));
+            let e_next = f64::from(d_next + m_next) / r;
+            let e_prev = f64::from(d_prev - m_prev) / r;
+            let surface = f64::from(d_next + d_prev) / (2.0 * r);
+            out.vertices = 1;
+            out.jitter = ((e_next + e_prev) / 2.0).powi(2);
+            out.forward = e_next * e_next;
+            out.surface = surface * surface;
+            out
+        })
+        .reduce(Jitter::default, |mut a, b| {
+            a += b;
+            a
+        }))
+}

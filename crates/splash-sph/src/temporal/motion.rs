@@ -1,0 +1,139 @@
+//! The fluid's own motion between frames (issue 38): each particle's displacement to a
+//! neighbouring frame, matched by its identity (SPlisHSPlasH's `id`) or else its velocity × Δt,
+//! and the kernel mean of the displacements around a point — the motion a free surface follows
+//! (the kinematic condition).
+
+use std::collections::BTreeMap;
+
+use glam::Vec3;
+use rustc_hash::FxHashMap;
+
+use crate::attribute_names;
+use crate::attributes::interpolate;
+use crate::error::Result;
+use crate::field::radial_kernel::RadialKernel;
+use crate::io::Attribute;
+
+/// Ids are read as `f32` attributes: exact integers up to 2^24.
+const LARGEST_ID: f32 = (1 << 24) as f32;
+
+/// A frame's particles with what carries them to the neighbouring frames.
+#[derive(Debug, Clone, Default)]
+pub struct FrameMotion {
+    /// Positions, as read.
+    pub positions: Vec<Vec3>,
+    /// Each particle's identity across frames, where the file has unique integer ids.
+    pub ids: Option<Vec<u32>>,
+    /// Velocities, where the file has them.
+    pub velocities: Option<Vec<Vec3>>,
+}
+
+impl FrameMotion {
+    /// The positions with copies of the `id` and `velocity` attributes (any spelling of the
+    /// alias table) of `attributes`, which keeps them under their canonical names. Ids that
+    /// are not unique integers in [0, 2^24) are not used (the reason is returned, for a
+    /// warning); non-finite velocities neither.
+    pub fn new(
+        positions: Vec<Vec3>,
+        attributes: &mut BTreeMap<String, Attribute>,
+    ) -> (FrameMotion, Option<String>) {
+        let mut why = None;
+        let mut copy = |name: &str| {
+            let a = attribute_names::take(attributes, name)?;
+            attributes.insert(name.to_string(), a.clone());
+            Some(a)
+        };
+        let ids = match copy("id") {
+            Some(Attribute::Scalar(ids)) => match exact_ids(&ids) {
+                Ok(ids) => Some(ids),
+                Err(e) => {
+                    why = Some(e);
+                    None
+                }
+            },
+            _ => None,
+        };
+        let velocities = match copy("velocity") {
+            Some(Attribute::Vector(v)) if v.iter().all(|v| v.is_finite()) => Some(v),
+            _ => None,
+        };
+        (
+            FrameMotion {
+                positions,
+                ids,
+                velocities,
+            },
+            why,
+        )
+    }
+
+    /// The displacement of each of this frame's particles to frame `other`, `steps` frames
+    /// later (negative: earlier): matched by id where both frames have ids (None for a
+    /// particle `other` lacks), else `steps` × `frame_time` × the velocity where this frame
+    /// has velocities and the frame time is known; None when neither.
+    pub fn displacements(
+        &self,
+        other: &FrameMotion,
+        steps: i32,
+        frame_time: Option<f32>,
+    ) -> Option<Vec<Option<Vec3>>> {
+        if let (Some(ids), Some(other_ids)) = (&self.ids, &other.ids) {
+            let at: FxHashMap<u32, u32> = other_ids
+                .iter()
+                .enumerate()
+                .map(|(i, &id)| (id, i as u32))
+                .collect();
+            return Some(
+                ids.iter()
+                    .zip(&self.positions)
+                    .map(|(id, p)| at.get(id).map(|&j| other.positions[j as usize] - *p))
+                    .collect(),
+            );
+        }
+        let (velocities, dt) = (self.velocities.as_ref()?, frame_time?);
+        let scale = steps as f32 * dt;
+        Some(velocities.iter().map(|v| Some(*v * scale)).collect())
+    }
+}
+
+/// Unique integer ids, or why not.
+fn exact_ids(ids: &[f32]) -> std::result::Result<Vec<u32>, String> {
+    if let Some(bad) = ids
+        .iter()
+        .find(|&&id| !((0.0..LARGEST_ID).contains(&id) && id.fract() == 0.0))
+    {
+        return Err(format!(
+            "particle ids must be integers from 0 to 2^24 (read as 32-bit floats); found {bad}"
+        ));
+    }
+    let ids: Vec<u32> = ids.iter().map(|&id| id as u32).collect();
+    let mut sorted = ids.clone();
+    sorted.sort_unstable();
+    if let Some(w) = sorted.windows(2).find(|w| w[0] == w[1]) {
+        return Err(format!("particle id {} appears twice", w[0]));
+    }
+    Ok(ids)
+}
+
+/// The cubic-spline mean (support `support`, Shepard-normalised) of the displacements
+/// `moves` of `particles` at every point (zero where no matched particle is within reach).
+/// `cell`: the points' spacing, as for attribute interpolation.
+pub fn mean_motion(
+    points: &[Vec3],
+    particles: &[Vec3],
+    moves: &[Option<Vec3>],
+    support: f32,
+    cell: f32,
+) -> Result<Vec<Vec3>> {
+    let (at, moved): (Vec<Vec3>, Vec<Vec3>) = particles
+        .iter()
+        .zip(moves)
+        .filter_map(|(p, m)| m.map(|m| (*p, m)))
+        .unzip();
+    let kernel = RadialKernel::CubicSpline { support };
+    let mut out = interpolate(points, &at, &[&Attribute::Vector(moved)], &kernel, cell)?;
+    match out.pop() {
+        Some(Attribute::Vector(v)) => Ok(v),
+        _ => unreachable!("one vector attribute in, one out"),
+    }
+}
