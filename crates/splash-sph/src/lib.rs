@@ -30,6 +30,7 @@ mod error;
 pub mod attribute_names;
 mod attributes;
 mod config;
+mod data;
 mod length;
 mod neighbours;
 mod overrides;
@@ -53,9 +54,10 @@ pub use config::{
     ATTRIBUTES, BandConfig, Baseline, Config, Engine, Normals, OutputConfig, SlicesConfig,
     SurfaceParticles, parse_aabb,
 };
+pub use data::{Attribute, Particles};
 pub use error::{Error, Result};
 pub use glam::Vec3;
-pub use io::{Attribute, InputFormat, MeshFormat, Particles, UpAxis, read_particles};
+pub use io::{InputFormat, MeshFormat, UpAxis, read_particles};
 pub use length::Length;
 pub use mesh::TriMesh;
 pub use overrides::Overrides;

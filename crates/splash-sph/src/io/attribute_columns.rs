@@ -7,7 +7,7 @@ use std::collections::BTreeMap;
 
 use glam::Vec3;
 
-use super::particles::Attribute;
+use crate::data::Attribute;
 
 /// What one column of the file holds.
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -9,7 +9,7 @@ use glam::Vec3;
 use super::attribute_columns::AttributeColumns;
 use super::failure::Result;
 use super::lines::Lines;
-use super::particles::Particles;
+use crate::data::Particles;
 
 #[derive(Clone, Copy)]
 enum Separator {

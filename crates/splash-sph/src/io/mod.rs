@@ -42,7 +42,6 @@ mod lines;
 mod mesh_read;
 mod obj;
 mod obj_read;
-mod particles;
 mod ply;
 mod ply_ascii;
 mod ply_binary;
@@ -73,7 +72,8 @@ use crate::mesh::TriMesh;
 use failure::{invalid_input, listed, short};
 pub use mesh_read::{MeshFile, read_mesh};
 
-pub use particles::{Attribute, Particles};
+#[doc(no_inline)]
+pub use crate::data::{Attribute, Particles};
 pub use pov::POV_OBJECT;
 pub use usd::{USD_PRIM, UsdFrame};
 pub use usd_stage::{

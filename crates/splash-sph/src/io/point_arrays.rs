@@ -6,7 +6,7 @@ use std::collections::BTreeMap;
 use glam::Vec3;
 
 use super::failure::Result;
-use super::particles::{Attribute, Particles};
+use crate::data::{Attribute, Particles};
 
 /// A numeric type of a binary or text array.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

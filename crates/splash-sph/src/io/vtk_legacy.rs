@@ -7,8 +7,8 @@
 
 use super::failure::Result;
 use super::failure::short;
-use super::particles::Particles;
 use super::point_arrays::{self, Num, PointArray};
+use crate::data::Particles;
 
 pub(super) fn read(path: &std::path::Path) -> Result<Particles> {
     parse(&point_arrays::read_all(path)?)

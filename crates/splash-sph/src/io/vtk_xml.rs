@@ -16,8 +16,8 @@ use quick_xml::events::{BytesStart, Event};
 
 use super::failure::Result;
 use super::failure::short;
-use super::particles::Particles;
 use super::point_arrays::{self, Num, PointArray};
+use crate::data::Particles;
 
 /// Deflate inflates at most about 1032:1; more in a header is a lie.
 const MAX_DEFLATE_RATIO: usize = 1032;

@@ -6,7 +6,7 @@ use std::io::Read;
 use std::path::Path;
 
 use super::failure::{Failure, Result};
-use super::particles::Particles;
+use crate::data::Particles;
 
 /// Bytes looked at to tell text from binary.
 const SNIFF_BYTES: usize = 4096;
