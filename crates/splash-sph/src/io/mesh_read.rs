@@ -9,7 +9,7 @@ use super::failure::Result;
 use super::{
     Attribute, MeshFormat, Particles, obj_read, ply_mesh, point_arrays, vtk_legacy, vtk_xml,
 };
-use crate::mesh::TriMesh;
+use crate::data::TriMesh;
 
 /// A mesh read from a file: its triangles, vertex normals (empty when the file has none) and
 /// per-vertex attributes by name.

@@ -6,7 +6,7 @@ use glam::Vec3;
 
 use super::float_text::{F32Text, IntText};
 use super::text_records::{each_record, write_chunks};
-use crate::mesh::TriMesh;
+use crate::data::TriMesh;
 
 /// Writes `v`, then `vn` lines, then 1-based `f` lines (`a//a` when there are normals), each
 /// kind formatted on all threads. Coordinates are printed as `{}` prints them: the shortest text

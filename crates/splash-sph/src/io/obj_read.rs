@@ -5,7 +5,7 @@
 use glam::Vec3;
 
 use super::failure::Result;
-use crate::mesh::TriMesh;
+use crate::data::TriMesh;
 
 /// Parses the whole file's bytes.
 pub(super) fn parse(data: &[u8]) -> Result<TriMesh> {

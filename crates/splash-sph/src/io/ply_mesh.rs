@@ -12,7 +12,7 @@ use super::Attribute;
 use super::attribute_columns::AttributeColumns;
 use super::failure::Result;
 use super::ply_layout::{Element, Kind, Layout, Scalar};
-use crate::mesh::TriMesh;
+use crate::data::TriMesh;
 
 /// Parses the whole file's bytes; the normals are still the attribute `normal`.
 pub(super) fn parse(data: &[u8]) -> Result<(TriMesh, BTreeMap<String, Attribute>)> {

@@ -13,7 +13,7 @@ use glam::Vec3;
 
 use super::float_text::{F32Text, IntText};
 use super::text_records::{each_record, write_chunks};
-use crate::mesh::TriMesh;
+use crate::data::TriMesh;
 
 /// The name a `--format pov` file declares its mesh under: `object { SplashMesh … }`.
 pub const POV_OBJECT: &str = "SplashMesh";

@@ -232,8 +232,8 @@ fn asset(path: &Path, stage_dir: &Path) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::data::TriMesh;
     use crate::io::{Attribute, VertexAttributes, write_usd_file};
-    use crate::mesh::TriMesh;
     use glam::Vec3;
 
     #[test]
