@@ -14,10 +14,10 @@ use ply_rs_bw::ply::{DefaultElement, Encoding, Header};
 
 use super::attribute_columns::AttributeColumns;
 use super::failure::{Failure, Result};
-use super::lines::Lines;
 use super::ply_layout::{Kind, Layout};
 use super::{ply_ascii, ply_binary};
 use crate::data::Particles;
+use crate::io::text::lines::Lines;
 
 /// Headers are a few hundred bytes; the cap keeps a non-PLY file from being read whole.
 const MAX_HEADER_BYTES: u64 = 1 << 20;
