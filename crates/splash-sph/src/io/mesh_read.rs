@@ -6,10 +6,9 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use super::failure::Result;
-use super::{
-    Attribute, MeshFormat, Particles, obj_read, ply_mesh, point_arrays, vtk_legacy, vtk_xml,
-};
+use super::{Attribute, MeshFormat, Particles, obj_read, ply_mesh};
 use crate::data::TriMesh;
+use crate::io::particles::{point_arrays, vtk_read, vtu_read};
 
 /// A mesh read from a file: its triangles, vertex normals (empty when the file has none) and
 /// per-vertex attributes by name.
@@ -47,8 +46,8 @@ fn read(path: &Path) -> Result<MeshFile> {
             let (mesh, attributes) = ply_mesh::parse(data)?;
             Ok(with_normals(mesh, attributes, "normal"))
         },
-        Some(MeshFormat::Vtu | MeshFormat::Vtp) => |data| Ok(vtk_mesh(vtk_xml::parse_mesh(data)?)),
-        Some(MeshFormat::Vtk) => |data| Ok(vtk_mesh(vtk_legacy::parse_mesh(data)?)),
+        Some(MeshFormat::Vtu | MeshFormat::Vtp) => |data| Ok(vtk_mesh(vtu_read::parse_mesh(data)?)),
+        Some(MeshFormat::Vtk) => |data| Ok(vtk_mesh(vtk_read::parse_mesh(data)?)),
         Some(MeshFormat::Pov | MeshFormat::Usd) | None => bail_format!(
             "cannot tell the mesh format from the extension: meshes are read from .obj, .ply, \
              .vtk, .vtu and .vtp files"

@@ -33,31 +33,19 @@
 mod failure;
 
 pub(crate) mod atomic;
-mod attribute_columns;
-mod bgeo;
-mod csv;
 mod mesh_read;
 mod obj;
 mod obj_read;
-mod ply;
-mod ply_ascii;
-mod ply_binary;
-mod ply_layout;
+mod particles;
 mod ply_mesh;
 mod ply_write;
-mod point_arrays;
 mod pov;
-mod raw;
-mod records;
 mod text;
 mod usd;
 mod usd_stage;
 mod vertex_attributes;
-mod vtk_legacy;
 mod vtk_write;
-mod vtk_xml;
 mod vtu_write;
-mod xyz;
 
 use std::io::{self, BufWriter, Write};
 use std::path::Path;
@@ -65,6 +53,7 @@ use std::path::Path;
 use crate::data::TriMesh;
 use failure::{invalid_input, listed, short};
 pub use mesh_read::{MeshFile, read_mesh};
+pub use particles::{InputFormat, read_particles};
 
 #[doc(no_inline)]
 pub use crate::data::{Attribute, MeshFormat, Particles, UpAxis};
@@ -74,115 +63,6 @@ pub use usd_stage::{
     USD_FRAMES_PER_SECOND, UsdClip, usd_stage_path, usd_topology_path, write_usd_stage,
 };
 pub use vertex_attributes::VertexAttributes;
-
-/// Reads one particle frame, its positions and attributes; `format` overrides the guess from
-/// the file's extension.
-///
-/// Attributes are the PLY `vertex` element's scalar properties other than `x`, `y`, `z` (list
-/// properties are skipped), or the numeric columns of a text table with a header; raw files
-/// have none. Values of any type are converted to `f32`, and are not checked for finiteness.
-/// `{name}_x {name}_y {name}_z` make the vector attribute `{name}`, `vx vy vz` make
-/// `velocity` and `nx ny nz` `normal`; any other property or column is a scalar attribute of
-/// its own name (`density`). A triple whose name is also a property's or another triple's
-/// stays three scalars.
-///
-/// Text tables: fields are separated by commas if the first data or header line has one, else
-/// by semicolons if it has one, else by runs of spaces/tabs. Fields are trimmed and may be
-/// wrapped in double quotes (a quoted field cannot contain the separator). Blank lines and lines
-/// starting with `#` are skipped; CRLF line ends and a UTF-8 byte order mark are accepted. The
-/// first line is a header if any of its fields is not a number; the header must then name
-/// columns `x`, `y` and `z` (case-insensitive, anywhere), otherwise the first three columns are
-/// used and the others ignored. A header's other columns are attributes if they hold a number
-/// in the first row, and every later row must then hold one there; names compare ignoring
-/// case, and of two columns of one name the first is read.
-pub fn read_particles(path: &Path, format: Option<InputFormat>) -> crate::Result<Particles> {
-    let format = match format {
-        Some(format) => format,
-        None => InputFormat::from_path(path)?,
-    };
-    match format {
-        InputFormat::Ply => ply::read(path),
-        InputFormat::Csv => csv::read(path),
-        InputFormat::Raw => raw::read(path),
-        InputFormat::Vtk => vtk_legacy::read(path),
-        InputFormat::VtkXml => vtk_xml::read(path),
-        InputFormat::Bgeo => bgeo::read(path),
-        InputFormat::Xyz => xyz::read(path),
-    }
-    .map_err(|e| e.into_error(path))
-}
-
-/// File format of a particle frame.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum InputFormat {
-    /// PLY, ascii or binary.
-    Ply,
-    /// Text tables (`.csv`, `.txt`).
-    Csv,
-    /// Raw little-endian `f32` `x y z` triples (`.bin`, `.raw`).
-    Raw,
-    /// Legacy VTK, ascii or binary (`.vtk`).
-    Vtk,
-    /// VTK XML unstructured grid or poly data (`.vtu`, `.vtp`).
-    VtkXml,
-    /// Classic BGEO, version 5, plain or gzip-compressed (`.bgeo`, `.bgeo.gz`).
-    Bgeo,
-    /// `.xyz`: raw little-endian `f32` triples, or a text table when the file is text.
-    Xyz,
-}
-
-const INPUT_EXTENSIONS: &str =
-    ".ply, .csv, .txt, .bin, .raw, .vtk, .vtu, .vtp, .bgeo, .bgeo.gz, .xyz";
-
-/// The input names `--input-format` accepts.
-const INPUT_FORMATS: &str = "ply, csv, raw, vtk, vtu (or vtp), bgeo, xyz";
-
-impl InputFormat {
-    /// The format implied by the file's extension, case-insensitively: `.ply`; `.csv` and `.txt`
-    /// (text tables, whatever their separator); `.bin` and `.raw` (raw `f32` triples).
-    pub fn from_path(path: &Path) -> crate::Result<Self> {
-        let extension = path
-            .extension()
-            .and_then(|e| e.to_str())
-            .map(str::to_ascii_lowercase);
-        match extension.as_deref() {
-            Some("ply") => Ok(Self::Ply),
-            Some("csv" | "txt") => Ok(Self::Csv),
-            Some("bin" | "raw") => Ok(Self::Raw),
-            Some("vtk") => Ok(Self::Vtk),
-            Some("vtu" | "vtp") => Ok(Self::VtkXml),
-            Some("bgeo") => Ok(Self::Bgeo),
-            Some("xyz") => Ok(Self::Xyz),
-            Some("gz" | "sc") if has_bgeo_stem(path) => Ok(Self::Bgeo),
-            _ => bail_config!(
-                "cannot tell the particle format of '{}' from its extension: known extensions are \
-                 {INPUT_EXTENSIONS} (or give the input format explicitly: {INPUT_FORMATS})",
-                path.display()
-            ),
-        }
-    }
-
-    /// Parses a format name as given on the command line: `ply`, `csv` or `raw`.
-    pub fn parse(name: &str) -> crate::Result<Self> {
-        match name.trim().to_ascii_lowercase().as_str() {
-            "ply" => Ok(Self::Ply),
-            "csv" => Ok(Self::Csv),
-            "raw" => Ok(Self::Raw),
-            "vtk" => Ok(Self::Vtk),
-            "vtu" | "vtp" | "vtk-xml" => Ok(Self::VtkXml),
-            "bgeo" => Ok(Self::Bgeo),
-            "xyz" => Ok(Self::Xyz),
-            _ => bail_config!("unknown input format '{name}': expected {INPUT_FORMATS}"),
-        }
-    }
-}
-
-/// Whether `path` is `….bgeo.gz` or `….bgeo.sc` (any case).
-fn has_bgeo_stem(path: &Path) -> bool {
-    path.file_stem()
-        .and_then(|s| Path::new(s).extension())
-        .is_some_and(|e| e.eq_ignore_ascii_case("bgeo"))
-}
 
 /// Writes `mesh` in `format`. `normals` must be empty or have one entry per vertex; without
 /// normals, none are written.

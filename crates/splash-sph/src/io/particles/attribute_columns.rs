@@ -20,7 +20,7 @@ enum Role {
     Vector(usize, usize),
 }
 
-pub(super) struct AttributeColumns {
+pub(in crate::io) struct AttributeColumns {
     /// One per column of the file.
     roles: Vec<Role>,
     scalars: Vec<(String, Vec<f32>)>,

@@ -83,7 +83,7 @@ pub(super) fn parse(data: &[u8]) -> Result<Particles> {
 
 /// A mesh's one piece: its points and point data (the normals are still the array `Normals`)
 /// and its triangles: `.vtu` cells of type 5 (triangle), `.vtp` polygons of 3 corners.
-pub(super) fn parse_mesh(data: &[u8]) -> Result<(Particles, Vec<[u32; 3]>)> {
+pub(in crate::io) fn parse_mesh(data: &[u8]) -> Result<(Particles, Vec<[u32; 3]>)> {
     let (file, mut pieces) = parse_pieces(data, true)?;
     if pieces.len() != 1 {
         bail_format!("expected one Piece, found {}", pieces.len());

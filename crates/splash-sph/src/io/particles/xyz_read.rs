@@ -13,9 +13,9 @@ const SNIFF_BYTES: usize = 4096;
 
 pub(super) fn read(path: &Path) -> Result<Particles> {
     if is_text(path)? {
-        super::csv::read(path)
+        super::csv_read::read(path)
     } else {
-        super::raw::read(path)
+        super::raw_read::read(path)
     }
 }
 
