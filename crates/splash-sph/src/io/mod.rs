@@ -29,160 +29,40 @@
 //! sequence of USD layers plays as one animated mesh through a stage of value clips
 //! ([`write_usd_stage`]).
 
+// The layout, for whoever adds a format. io/ is split by what flows through it, and a file that
+// reads or writes one format is named `<format>_read.rs` or `<format>_write.rs`, in the folder
+// of what it reads or writes:
+// - particles/: particle frames in. mod.rs holds `read_particles` and `InputFormat`; ply_read.rs
+//   (the header, with ply_ascii_read.rs and ply_binary_read.rs for the payload), csv_read.rs,
+//   raw_read.rs, xyz_read.rs, bgeo_read.rs, vtk_read.rs (legacy VTK) and vtu_read.rs (VTK XML,
+//   `.vtu` and `.vtp`).
+// - mesh/: meshes out, and back in. mod.rs holds `write_mesh` and its kin, read.rs `read_mesh`;
+//   obj_write.rs, ply_write.rs, pov_write.rs, vtk_write.rs, vtu_write.rs (`.vtu` and `.vtp`),
+//   usd_write.rs (one layer), usd_stage_write.rs (a sequence's stage); obj_read.rs, ply_read.rs.
+//   VTK meshes are read by particles/vtk_read.rs and vtu_read.rs, which read triangles too.
+// - text/: text in and out. lines.rs reads the lines of text inputs; float_text.rs (with
+//   decimal_lanes.rs, its AVX-512 path) and text_records.rs format the numbers of text outputs.
+// - here: failure.rs, every reader's and writer's errors before the file's path is added, and
+//   atomic.rs, files replaced whole or not at all (meshes, and preview PNGs).
+// A file without a direction in its name holds what several readers or writers of its folder
+// share (ply_layout.rs, attribute_columns.rs, point_arrays.rs, records.rs, vertex_attributes.rs).
+// The types read and written (`Particles`, `Attribute`, `TriMesh`, `MeshFormat`, `UpAxis`) are
+// the crate's own, on its ground floor (data.rs), and re-exported here. Between the folders,
+// text/ imports neither other, particles/ imports text/, and mesh/ imports both.
+
 #[macro_use]
 mod failure;
 
 pub(crate) mod atomic;
-mod mesh_read;
-mod obj;
-mod obj_read;
+mod mesh;
 mod particles;
-mod ply_mesh;
-mod ply_write;
-mod pov;
 mod text;
-mod usd;
-mod usd_stage;
-mod vertex_attributes;
-mod vtk_write;
-mod vtu_write;
-
-use std::io::{self, BufWriter, Write};
-use std::path::Path;
-
-use crate::data::TriMesh;
-use failure::{invalid_input, listed, short};
-pub use mesh_read::{MeshFile, read_mesh};
-pub use particles::{InputFormat, read_particles};
 
 #[doc(no_inline)]
 pub use crate::data::{Attribute, MeshFormat, Particles, UpAxis};
-pub use pov::POV_OBJECT;
-pub use usd::{USD_PRIM, UsdFrame};
-pub use usd_stage::{
-    USD_FRAMES_PER_SECOND, UsdClip, usd_stage_path, usd_topology_path, write_usd_stage,
+pub use mesh::{
+    MeshFile, POV_OBJECT, USD_FRAMES_PER_SECOND, USD_PRIM, UsdClip, UsdFrame, VertexAttributes,
+    read_mesh, usd_stage_path, usd_topology_path, write_mesh, write_mesh_file,
+    write_mesh_file_with, write_mesh_with, write_usd_file, write_usd_stage,
 };
-pub use vertex_attributes::VertexAttributes;
-
-/// Writes `mesh` in `format`. `normals` must be empty or have one entry per vertex; without
-/// normals, none are written.
-pub fn write_mesh(mesh: &TriMesh, format: MeshFormat, w: &mut impl Write) -> io::Result<()> {
-    write_mesh_with(mesh, &VertexAttributes::default(), format, w)
-}
-
-/// Writes `mesh` with per-vertex `attributes` (one entry per vertex each); formats without
-/// room for an attribute refuse it.
-pub fn write_mesh_with(
-    mesh: &TriMesh,
-    attributes: &VertexAttributes,
-    format: MeshFormat,
-    w: &mut impl Write,
-) -> io::Result<()> {
-    check_mesh(mesh)?;
-    if !attributes.is_empty() && !format.holds_attributes() {
-        let names: Vec<&str> = attributes.arrays().iter().map(|(n, _)| *n).collect();
-        return Err(invalid_input(format!(
-            ".{} files cannot hold vertex attributes ({}): write PLY, VTK, VTU, VTP or USD",
-            format.extension(),
-            listed(names)
-        )));
-    }
-    check_attributes(mesh, attributes)?;
-    let mut out = BufWriter::with_capacity(1 << 16, w);
-    match format {
-        MeshFormat::Obj => obj::write(mesh, &mut out)?,
-        MeshFormat::PlyBinary => ply_write::write(mesh, attributes, false, &mut out)?,
-        MeshFormat::PlyAscii => ply_write::write(mesh, attributes, true, &mut out)?,
-        MeshFormat::Pov => pov::write(mesh, &mut out)?,
-        MeshFormat::Vtk => vtk_write::write(mesh, attributes, &mut out)?,
-        MeshFormat::Vtu => vtu_write::write(
-            mesh,
-            attributes,
-            vtu_write::Kind::UnstructuredGrid,
-            &mut out,
-        )?,
-        MeshFormat::Vtp => vtu_write::write(mesh, attributes, vtu_write::Kind::PolyData, &mut out)?,
-        MeshFormat::Usd => usd::write(mesh, attributes, UsdFrame::default(), &mut out)?,
-    }
-    out.flush()
-}
-
-/// Writes a USD layer of `mesh` placed in time and space by `frame` (its values sampled at
-/// the frame's time code, for a stage's value clips), whole or not at all, as
-/// [`write_mesh_file`] does.
-pub fn write_usd_file(
-    path: &Path,
-    mesh: &TriMesh,
-    attributes: &VertexAttributes,
-    frame: UsdFrame,
-) -> crate::Result<()> {
-    atomic::write_file(path, |file| {
-        check_mesh(mesh)?;
-        check_attributes(mesh, attributes)?;
-        let mut out = BufWriter::with_capacity(1 << 16, file);
-        usd::write(mesh, attributes, frame, &mut out)?;
-        out.flush()
-    })
-}
-
-/// Writes to a temporary file in the same directory, fsyncs, renames onto `path`; on any error
-/// removes the temporary and leaves an existing `path` untouched. Creates missing parent
-/// directories.
-pub fn write_mesh_file(path: &Path, mesh: &TriMesh, format: MeshFormat) -> crate::Result<()> {
-    write_mesh_file_with(path, mesh, &VertexAttributes::default(), format)
-}
-
-/// [`write_mesh_file`] with per-vertex attributes.
-pub fn write_mesh_file_with(
-    path: &Path,
-    mesh: &TriMesh,
-    attributes: &VertexAttributes,
-    format: MeshFormat,
-) -> crate::Result<()> {
-    atomic::write_file(path, |file| write_mesh_with(mesh, attributes, format, file))
-}
-
-/// Rejects attributes without one value per vertex, and a name given twice.
-fn check_attributes(mesh: &TriMesh, attributes: &VertexAttributes) -> io::Result<()> {
-    let arrays = attributes.arrays();
-    for (i, (name, values)) in arrays.iter().enumerate() {
-        if values.len() != mesh.vertices.len() {
-            return Err(invalid_input(format!(
-                "mesh has {} values of '{}' for {} vertices",
-                values.len(),
-                short(name),
-                mesh.vertices.len()
-            )));
-        }
-        if arrays[..i].iter().any(|(n, _)| n == name) {
-            return Err(invalid_input(format!(
-                "the vertex attribute '{}' is given twice",
-                short(name)
-            )));
-        }
-    }
-    Ok(())
-}
-
-/// Rejects meshes that would make a corrupt file rather than writing them.
-fn check_mesh(mesh: &TriMesh) -> io::Result<()> {
-    let invalid = |message: String| io::Error::new(io::ErrorKind::InvalidInput, message);
-    if !mesh.normals.is_empty() && mesh.normals.len() != mesh.vertices.len() {
-        return Err(invalid(format!(
-            "mesh has {} normals for {} vertices",
-            mesh.normals.len(),
-            mesh.vertices.len()
-        )));
-    }
-    let vertex_count = mesh.vertices.len();
-    let out_of_range = mesh.triangles.iter().enumerate().find_map(|(t, corners)| {
-        let bad = corners.iter().find(|&&i| i as usize >= vertex_count)?;
-        Some((t, *bad))
-    });
-    if let Some((t, index)) = out_of_range {
-        return Err(invalid(format!(
-            "mesh triangle {t} refers to vertex {index}, but there are only {vertex_count} vertices"
-        )));
-    }
-    Ok(())
-}
+pub use particles::{InputFormat, read_particles};

@@ -14,9 +14,9 @@ use std::fs::File;
 use std::io::{self, BufReader, Write};
 use std::path::{Path, PathBuf};
 
-use super::UpAxis;
-use super::atomic;
-use super::usd::{USD_PRIM, declarations, up_axis_token};
+use super::usd_write::{USD_PRIM, declarations, up_axis_token};
+use crate::data::UpAxis;
+use crate::io::atomic;
 
 /// The frame rate of the stages splash writes (USD's default): time codes per second, by
 /// which renderers scale the velocities (units per second) for motion blur. A simulation saved

@@ -197,8 +197,8 @@ mod tests {
 
     use glam::Vec3;
 
-    use super::super::{Attribute, MeshFormat, Particles, VertexAttributes, write_mesh_with};
     use crate::data::TriMesh;
+    use crate::io::{Attribute, MeshFormat, Particles, VertexAttributes, write_mesh_with};
 
     fn triangle() -> TriMesh {
         TriMesh {

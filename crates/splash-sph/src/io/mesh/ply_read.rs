@@ -8,9 +8,8 @@ use std::collections::BTreeMap;
 use glam::Vec3;
 use ply_rs_bw::ply::Encoding;
 
-use super::Attribute;
 use super::failure::Result;
-use crate::data::TriMesh;
+use crate::data::{Attribute, TriMesh};
 use crate::io::particles::attribute_columns::AttributeColumns;
 use crate::io::particles::ply_layout::{Element, Kind, Layout, Scalar};
 use crate::io::particles::ply_read::read_header;

@@ -6,8 +6,8 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use super::failure::Result;
-use super::{Attribute, MeshFormat, Particles, obj_read, ply_mesh};
-use crate::data::TriMesh;
+use super::{obj_read, ply_read};
+use crate::data::{Attribute, MeshFormat, Particles, TriMesh};
 use crate::io::particles::{point_arrays, vtk_read, vtu_read};
 
 /// A mesh read from a file: its triangles, vertex normals (empty when the file has none) and
@@ -43,7 +43,7 @@ fn read(path: &Path) -> Result<MeshFile> {
             })
         },
         Some(MeshFormat::PlyBinary | MeshFormat::PlyAscii) => |data| {
-            let (mesh, attributes) = ply_mesh::parse(data)?;
+            let (mesh, attributes) = ply_read::parse(data)?;
             Ok(with_normals(mesh, attributes, "normal"))
         },
         Some(MeshFormat::Vtu | MeshFormat::Vtp) => |data| Ok(vtk_mesh(vtu_read::parse_mesh(data)?)),
