@@ -23,6 +23,7 @@ use super::atomic;
 // The readers' and writers' errors and helpers are io's (`super::failure`, `super::short`).
 use super::failure::{self, invalid_input, listed, short};
 use crate::data::{MeshFormat, TriMesh};
+use crate::error::Result;
 pub use pov_write::POV_OBJECT;
 pub use read::{MeshFile, read_mesh};
 pub use usd_stage_write::{
@@ -82,7 +83,7 @@ pub fn write_usd_file(
     mesh: &TriMesh,
     attributes: &VertexAttributes,
     frame: UsdFrame,
-) -> crate::Result<()> {
+) -> Result<()> {
     atomic::write_file(path, |file| {
         check_mesh(mesh)?;
         check_attributes(mesh, attributes)?;
@@ -95,7 +96,7 @@ pub fn write_usd_file(
 /// Writes to a temporary file in the same directory, fsyncs, renames onto `path`; on any error
 /// removes the temporary and leaves an existing `path` untouched. Creates missing parent
 /// directories.
-pub fn write_mesh_file(path: &Path, mesh: &TriMesh, format: MeshFormat) -> crate::Result<()> {
+pub fn write_mesh_file(path: &Path, mesh: &TriMesh, format: MeshFormat) -> Result<()> {
     write_mesh_file_with(path, mesh, &VertexAttributes::default(), format)
 }
 
@@ -105,7 +106,7 @@ pub fn write_mesh_file_with(
     mesh: &TriMesh,
     attributes: &VertexAttributes,
     format: MeshFormat,
-) -> crate::Result<()> {
+) -> Result<()> {
     atomic::write_file(path, |file| write_mesh_with(mesh, attributes, format, file))
 }
 

@@ -29,7 +29,7 @@ pub struct MeshFile {
 /// vertex; a triangle's corners must be vertices of the file, and vertices finite. Errors name
 /// the file and what is wrong: [`Error::MeshFormat`](crate::Error::MeshFormat) for the
 /// content, [`Error::Io`](crate::Error::Io) when it cannot be read.
-pub fn read_mesh(path: &Path) -> crate::Result<MeshFile> {
+pub fn read_mesh(path: &Path) -> crate::error::Result<MeshFile> {
     read(path).map_err(|e| e.into_mesh_error(path))
 }
 

@@ -80,7 +80,7 @@ pub fn write_usd_stage(
     clips: &[UsdClip],
     frames_per_second: f64,
     up_axis: Option<UpAxis>,
-) -> crate::Result<()> {
+) -> crate::error::Result<()> {
     let (Some(first), Some(last)) = (clips.first(), clips.last()) else {
         bail_config!(
             "a USD stage needs at least one frame: '{}'",
@@ -101,7 +101,7 @@ pub fn write_usd_stage(
                 stage.display()
             ),
             Err(e) => {
-                return Err(crate::Error::Io {
+                return Err(crate::error::Error::Io {
                     path: clip.layer.clone(),
                     message: format!(
                         "cannot read the frame layer '{}' for the stage '{}': {e}",

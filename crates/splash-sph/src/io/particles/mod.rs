@@ -22,6 +22,7 @@ mod xyz_read;
 use std::path::Path;
 
 use crate::data::Particles;
+use crate::error::Result;
 // The readers' errors and helpers are io's (`super::failure` in every reader).
 use super::failure;
 
@@ -45,7 +46,7 @@ use super::failure;
 /// used and the others ignored. A header's other columns are attributes if they hold a number
 /// in the first row, and every later row must then hold one there; names compare ignoring
 /// case, and of two columns of one name the first is read.
-pub fn read_particles(path: &Path, format: Option<InputFormat>) -> crate::Result<Particles> {
+pub fn read_particles(path: &Path, format: Option<InputFormat>) -> Result<Particles> {
     let format = match format {
         Some(format) => format,
         None => InputFormat::from_path(path)?,
@@ -90,7 +91,7 @@ const INPUT_FORMATS: &str = "ply, csv, raw, vtk, vtu (or vtp), bgeo, xyz";
 impl InputFormat {
     /// The format implied by the file's extension, case-insensitively: `.ply`; `.csv` and `.txt`
     /// (text tables, whatever their separator); `.bin` and `.raw` (raw `f32` triples).
-    pub fn from_path(path: &Path) -> crate::Result<Self> {
+    pub fn from_path(path: &Path) -> Result<Self> {
         let extension = path
             .extension()
             .and_then(|e| e.to_str())
@@ -113,7 +114,7 @@ impl InputFormat {
     }
 
     /// Parses a format name as given on the command line: `ply`, `csv` or `raw`.
-    pub fn parse(name: &str) -> crate::Result<Self> {
+    pub fn parse(name: &str) -> Result<Self> {
         match name.trim().to_ascii_lowercase().as_str() {
             "ply" => Ok(Self::Ply),
             "csv" => Ok(Self::Csv),
