@@ -53,7 +53,7 @@ pub(super) fn read(path: &Path) -> Result<Particles> {
 }
 
 /// Reads the header up to `end_header`, returning it with its length in bytes and lines
-/// (`ply_mesh` reads meshes' headers with it too).
+/// (`mesh/ply_read` reads meshes' headers with it too).
 pub(in crate::io) fn read_header(reader: &mut impl BufRead) -> Result<(Header, u64, usize)> {
     let mut bytes = Vec::new();
     let mut limited = (&mut *reader).take(MAX_HEADER_BYTES);
