@@ -9,7 +9,7 @@ use std::collections::BTreeMap;
 
 use glam::Vec3;
 
-use crate::io::Attribute;
+use crate::data::Attribute;
 
 /// Canonical name, then the spellings that mean it. The canonical name is the one written to
 /// meshes.

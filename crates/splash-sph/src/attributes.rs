@@ -8,9 +8,9 @@
 //! divided by the sum of the weights (Shepard normalisation), so a constant attribute is
 //! reproduced exactly and a linear one closely away from the fluid's edge.
 
+use crate::data::Attribute;
 use crate::error::Result;
 use crate::field::radial_kernel::RadialKernel;
-use crate::io::Attribute;
 use glam::Vec3;
 use rayon::prelude::*;
 

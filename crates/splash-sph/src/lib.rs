@@ -30,6 +30,7 @@ mod error;
 pub mod attribute_names;
 mod attributes;
 mod config;
+mod data;
 mod length;
 mod neighbours;
 mod overrides;
@@ -54,11 +55,11 @@ pub use config::{
     ATTRIBUTES, BandConfig, Baseline, Config, Engine, Normals, OutputConfig, SlicesConfig,
     SurfaceParticles, parse_aabb,
 };
+pub use data::{Attribute, MeshFormat, Particles, TriMesh, UpAxis};
 pub use error::{Error, Result};
 pub use glam::Vec3;
-pub use io::{Attribute, InputFormat, MeshFormat, Particles, UpAxis, read_particles};
+pub use io::{InputFormat, read_particles};
 pub use length::Length;
-pub use mesh::TriMesh;
 pub use overrides::Overrides;
 pub use recon::Reconstruction;
 pub use reconstructor::Reconstructor;

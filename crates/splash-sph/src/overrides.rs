@@ -1,11 +1,12 @@
 //! Values put on top of a configuration: the command line's flags over `--config`, the Python
 //! keyword arguments over `config=`, through this one rule.
 
+use crate::bytes::Bytes;
 use crate::config::{Config, Engine, Normals};
+use crate::data::{MeshFormat, UpAxis};
 use crate::error::Result;
 use crate::field::FieldConfig;
-use crate::io::{MeshFormat, UpAxis};
-use crate::{Bytes, Length};
+use crate::length::Length;
 
 /// Settings that replace a configuration's; None (or an empty `attributes`) keeps its value.
 /// The callers parse them, so that their errors name the flag or argument.

@@ -14,9 +14,9 @@ use std::sync::Arc;
 use serde::{Deserialize, Serialize};
 
 use crate::bytes::{Bytes, default_limit};
+use crate::data::{MeshFormat, UpAxis};
 use crate::error::{Error, Result};
 use crate::field::{FieldConfig, ScalarField, Scattering};
-use crate::io::{MeshFormat, UpAxis};
 use crate::length::{Length, positive};
 
 /// Everything that decides a run: the mesh of a frame, the engine and its resources, and how

@@ -18,7 +18,7 @@ static NEXT_TEMPORARY: AtomicU64 = AtomicU64::new(0);
 pub(crate) fn write_file(
     path: &Path,
     write: impl FnOnce(&mut Writeback) -> io::Result<()>,
-) -> crate::Result<()> {
+) -> crate::error::Result<()> {
     replace(path, write)
         .map_err(|e| e.into_error(path, format_args!("cannot write '{}'", path.display())))
 }

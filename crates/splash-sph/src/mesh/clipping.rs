@@ -11,7 +11,7 @@
 
 use super::TriMesh;
 use super::stars::{compact, validate};
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 use glam::{DVec3, Vec3};
 use rustc_hash::FxHashMap;
 use spade::handles::FixedVertexHandle;

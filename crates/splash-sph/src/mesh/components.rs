@@ -4,7 +4,7 @@
 use super::TriMesh;
 use super::stars::{compact, validate};
 use super::topology::UnionFind;
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 
 /// The connected component of each triangle (vertex connectivity, as in
 /// [`super::topology::Topology::components`]), numbered by first triangle, and their count.

@@ -29,7 +29,7 @@
 
 use super::TriMesh;
 use super::stars::{DEAD, Stars, area_weighted_normals, compact, validate};
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 

@@ -22,30 +22,5 @@ pub use decimation::decimate;
 pub use signed_distance::SignedDistance;
 pub(crate) use stars::area_weighted_normals;
 
-use glam::Vec3;
-
-/// An indexed triangle mesh with one normal per vertex; triangles wind counter-clockwise seen
-/// from outside the fluid.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub struct TriMesh {
-    /// Vertex positions.
-    pub vertices: Vec<Vec3>,
-    /// One unit normal per vertex, pointing out of the fluid; empty when none were asked for.
-    pub normals: Vec<Vec3>,
-    /// Indices into `vertices`, counter-clockwise seen from outside.
-    pub triangles: Vec<[u32; 3]>,
-}
-
-impl TriMesh {
-    /// Whether the mesh has no triangles.
-    pub fn is_empty(&self) -> bool {
-        self.triangles.is_empty()
-    }
-
-    /// Bytes held by the mesh's arrays.
-    pub fn heap_bytes(&self) -> usize {
-        self.vertices.capacity() * size_of::<Vec3>()
-            + self.normals.capacity() * size_of::<Vec3>()
-            + self.triangles.capacity() * size_of::<[u32; 3]>()
-    }
-}
+#[doc(no_inline)]
+pub use crate::data::TriMesh;

@@ -3,7 +3,7 @@
 
 use super::TriMesh;
 use super::adjacency::vertex_rows;
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 use glam::Vec3;
 
 /// Triangle marked removed in a working triangle array: [`Stars::rebuild`] skips it.

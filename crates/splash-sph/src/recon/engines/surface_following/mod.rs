@@ -109,7 +109,7 @@ pub fn reconstruct(
         in_flight: &in_flight,
     };
     let (meshes, figures): (Vec<_>, Vec<Figures>) = stages.run(Stage::ScalarField, || {
-        Ok::<_, crate::Error>(match baseline {
+        Ok::<_, crate::error::Error>(match baseline {
             Baseline::BlockedCubes => blocks
                 .par_iter()
                 .map(|b| blocked::march(&set, b))

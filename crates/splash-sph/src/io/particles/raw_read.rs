@@ -6,8 +6,8 @@ use std::path::Path;
 use glam::Vec3;
 
 use super::failure::Result;
-use super::particles::Particles;
 use super::records::{self, Records};
+use crate::data::Particles;
 
 const RECORD_BYTES: usize = 12;
 

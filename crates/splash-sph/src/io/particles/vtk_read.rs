@@ -7,8 +7,8 @@
 
 use super::failure::Result;
 use super::failure::short;
-use super::particles::Particles;
 use super::point_arrays::{self, Num, PointArray};
+use crate::data::Particles;
 
 pub(super) fn read(path: &std::path::Path) -> Result<Particles> {
     parse(&point_arrays::read_all(path)?)
@@ -35,7 +35,7 @@ pub(super) fn parse(data: &[u8]) -> Result<Particles> {
 
 /// A `POLYDATA` mesh: its points, point data (the normals are still the array `Normals`) and
 /// `POLYGONS`, which must be triangles; other cells are refused.
-pub(super) fn parse_mesh(data: &[u8]) -> Result<(Particles, Vec<[u32; 3]>)> {
+pub(in crate::io) fn parse_mesh(data: &[u8]) -> Result<(Particles, Vec<[u32; 3]>)> {
     parse_any(data, true)
 }
 

@@ -1,12 +1,13 @@
 //! The layout a PLY header declares: its elements, their properties and scalar types, and
-//! where the vertex coordinates are; what `ply_binary` and `ply_ascii` read the payload by.
+//! where the vertex coordinates are; what `ply_binary_read` and `ply_ascii_read` read the
+//! payload by.
 
 use ply_rs_bw::ply::{ElementDef, Header, PropertyType, ScalarType};
 
 use super::failure::Result;
 
 /// What the payload readers need from the header.
-pub(super) struct Layout {
+pub(in crate::io) struct Layout {
     /// The elements before `vertex`, to skip. Those after it are never read, so neither is
     /// their layout checked.
     pub before: Vec<Element>,
@@ -49,7 +50,7 @@ impl Layout {
 }
 
 #[derive(Clone, Copy, Debug)]
-pub(super) enum Scalar {
+pub(in crate::io) enum Scalar {
     I8,
     U8,
     I16,
@@ -128,7 +129,7 @@ impl Scalar {
 }
 
 #[derive(Clone, Copy, Debug)]
-pub(super) enum Kind {
+pub(in crate::io) enum Kind {
     Scalar(Scalar),
     List { len: Scalar, item: Scalar },
 }
@@ -142,20 +143,20 @@ impl Kind {
     }
 }
 
-pub(super) struct Property {
+pub(in crate::io) struct Property {
     pub name: String,
     pub kind: Kind,
 }
 
 /// An element's layout, as needed to read or skip its records.
-pub(super) struct Element {
+pub(in crate::io) struct Element {
     pub name: String,
     pub count: usize,
     pub props: Vec<Property>,
 }
 
 impl Element {
-    pub(super) fn new(def: &ElementDef) -> Result<Self> {
+    pub(in crate::io) fn new(def: &ElementDef) -> Result<Self> {
         let props = def
             .properties
             .values()

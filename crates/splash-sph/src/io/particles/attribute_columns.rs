@@ -7,7 +7,7 @@ use std::collections::BTreeMap;
 
 use glam::Vec3;
 
-use super::particles::Attribute;
+use crate::data::Attribute;
 
 /// What one column of the file holds.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -20,7 +20,7 @@ enum Role {
     Vector(usize, usize),
 }
 
-pub(super) struct AttributeColumns {
+pub(in crate::io) struct AttributeColumns {
     /// One per column of the file.
     roles: Vec<Role>,
     scalars: Vec<(String, Vec<f32>)>,

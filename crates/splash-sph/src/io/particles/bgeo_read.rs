@@ -12,8 +12,8 @@ use std::io::Read;
 use std::path::Path;
 
 use super::failure::{Failure, Result};
-use super::particles::Particles;
 use super::point_arrays::{self, Num, PointArray};
+use crate::data::Particles;
 
 /// A decompressed `.bgeo.gz` may be at most this large (and, before that, what its header
 /// declares): the points of a 1 G-particle frame of position and a few attributes.

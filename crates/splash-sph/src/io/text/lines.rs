@@ -2,13 +2,13 @@
 
 use std::io::{BufRead, Read};
 
-use super::failure::{Failure, Result};
+use crate::io::failure::{Failure, Result};
 
 /// Longest line read: particle tables have lines of a few hundred bytes; a file without line
 /// breaks (all zeros, CR-only) must not be read whole into memory as one line.
 const MAX_LINE_BYTES: u64 = 1 << 20;
 
-pub(super) struct Lines<R> {
+pub(in crate::io) struct Lines<R> {
     reader: R,
     buf: Vec<u8>,
     line: usize,

@@ -11,9 +11,9 @@ use std::io::{self, Write};
 
 use glam::Vec3;
 
-use super::float_text::{F32Text, IntText};
-use super::text_records::{each_record, write_chunks};
-use crate::mesh::TriMesh;
+use crate::data::TriMesh;
+use crate::io::text::float_text::{F32Text, IntText};
+use crate::io::text::text_records::{each_record, write_chunks};
 
 /// The name a `--format pov` file declares its mesh under: `object { SplashMesh … }`.
 pub const POV_OBJECT: &str = "SplashMesh";

@@ -4,9 +4,9 @@ use std::io::{self, Write};
 
 use glam::Vec3;
 
-use super::float_text::{F32Text, IntText};
-use super::text_records::{each_record, write_chunks};
-use crate::mesh::TriMesh;
+use crate::data::TriMesh;
+use crate::io::text::float_text::{F32Text, IntText};
+use crate::io::text::text_records::{each_record, write_chunks};
 
 /// Writes `v`, then `vn` lines, then 1-based `f` lines (`a//a` when there are normals), each
 /// kind formatted on all threads. Coordinates are printed as `{}` prints them: the shortest text

@@ -16,8 +16,8 @@ use quick_xml::events::{BytesStart, Event};
 
 use super::failure::Result;
 use super::failure::short;
-use super::particles::Particles;
 use super::point_arrays::{self, Num, PointArray};
+use crate::data::Particles;
 
 /// Deflate inflates at most about 1032:1; more in a header is a lie.
 const MAX_DEFLATE_RATIO: usize = 1032;
@@ -83,7 +83,7 @@ pub(super) fn parse(data: &[u8]) -> Result<Particles> {
 
 /// A mesh's one piece: its points and point data (the normals are still the array `Normals`)
 /// and its triangles: `.vtu` cells of type 5 (triangle), `.vtp` polygons of 3 corners.
-pub(super) fn parse_mesh(data: &[u8]) -> Result<(Particles, Vec<[u32; 3]>)> {
+pub(in crate::io) fn parse_mesh(data: &[u8]) -> Result<(Particles, Vec<[u32; 3]>)> {
     let (file, mut pieces) = parse_pieces(data, true)?;
     if pieces.len() != 1 {
         bail_format!("expected one Piece, found {}", pieces.len());

@@ -8,8 +8,8 @@ use glam::Vec3;
 
 use super::attribute_columns::AttributeColumns;
 use super::failure::Result;
-use super::lines::Lines;
-use super::particles::Particles;
+use crate::data::Particles;
+use crate::io::text::lines::Lines;
 
 #[derive(Clone, Copy)]
 enum Separator {

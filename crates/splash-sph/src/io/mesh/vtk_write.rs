@@ -7,7 +7,7 @@ use std::io::{self, Write};
 
 use super::failure::invalid_input;
 use super::vertex_attributes::{AttributeValues, VertexAttributes};
-use crate::mesh::TriMesh;
+use crate::data::TriMesh;
 
 /// Payload bytes gathered before each write.
 const BLOCK_BYTES: usize = 1 << 16;

@@ -1,11 +1,12 @@
-//! Wavefront OBJ mesh input: the `v`, `vn` and triangular `f` lines of a file as `obj::write`
-//! writes it (`f a b c`, `a//n`, `a/t/n`; negative indices count back from the last vertex),
-//! every other line skipped. Normals are per vertex, so `vn` lines must be none or one per `v`.
+//! Wavefront OBJ mesh input: the `v`, `vn` and triangular `f` lines of a file as
+//! `obj_write::write` writes it (`f a b c`, `a//n`, `a/t/n`; negative indices count back from
+//! the last vertex), every other line skipped. Normals are per vertex, so `vn` lines must be
+//! none or one per `v`.
 
 use glam::Vec3;
 
 use super::failure::Result;
-use crate::mesh::TriMesh;
+use crate::data::TriMesh;
 
 /// Parses the whole file's bytes.
 pub(super) fn parse(data: &[u8]) -> Result<TriMesh> {

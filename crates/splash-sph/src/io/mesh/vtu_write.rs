@@ -19,7 +19,7 @@ use rayon::prelude::*;
 
 use super::failure::invalid_input;
 use super::vertex_attributes::{AttributeValues, VertexAttributes};
-use crate::mesh::TriMesh;
+use crate::data::TriMesh;
 
 /// Uncompressed bytes per block (VTK's default).
 const BLOCK: usize = 1 << 15;
@@ -197,8 +197,8 @@ mod tests {
 
     use glam::Vec3;
 
-    use super::super::{Attribute, MeshFormat, Particles, VertexAttributes, write_mesh_with};
-    use crate::mesh::TriMesh;
+    use crate::data::TriMesh;
+    use crate::io::{Attribute, MeshFormat, Particles, VertexAttributes, write_mesh_with};
 
     fn triangle() -> TriMesh {
         TriMesh {

@@ -7,8 +7,8 @@ use glam::Vec3;
 
 use super::attribute_columns::AttributeColumns;
 use super::failure::Result;
-use super::lines::Lines;
 use super::ply_layout::{Element, Kind, Layout, Property};
+use crate::io::text::lines::Lines;
 
 /// Reads the payload, `remaining_bytes` long, skipping blank lines.
 pub(super) fn read(

@@ -17,12 +17,12 @@ use std::ops::Range;
 
 use glam::Vec3;
 
-use super::UpAxis;
 use super::failure::invalid_input;
-use super::float_text::{F32Text, IntText, push_f32, push_f32_row};
-use super::text_records::{each_record, write_chunks, write_records};
 use super::vertex_attributes::{AttributeValues, VertexAttributes};
-use crate::mesh::TriMesh;
+use crate::data::TriMesh;
+use crate::data::UpAxis;
+use crate::io::text::float_text::{F32Text, IntText, push_f32, push_f32_row};
+use crate::io::text::text_records::{each_record, write_chunks, write_records};
 
 /// The path of the mesh prim in every layer splash writes: `/Surface`, the default prim.
 pub const USD_PRIM: &str = "Surface";

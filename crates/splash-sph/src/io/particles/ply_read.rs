@@ -3,8 +3,8 @@
 //! ply_rs_bw parses the header; the payload is decoded here, because its payload reader builds a
 //! map per element (far too slow for millions of particles) and preallocates from the untrusted
 //! header count. Only the elements up to `vertex` are read: those before it are skipped, those
-//! after it ignored. This module reads the header and the layout it declares; `ply_binary` and
-//! `ply_ascii` read the payload.
+//! after it ignored. This module reads the header and the layout it declares; `ply_binary_read`
+//! and `ply_ascii_read` read the payload.
 
 use std::io::{BufRead, BufReader, Read};
 use std::path::Path;
@@ -14,10 +14,10 @@ use ply_rs_bw::ply::{DefaultElement, Encoding, Header};
 
 use super::attribute_columns::AttributeColumns;
 use super::failure::{Failure, Result};
-use super::lines::Lines;
-use super::particles::Particles;
 use super::ply_layout::{Kind, Layout};
-use super::{ply_ascii, ply_binary};
+use super::{ply_ascii_read, ply_binary_read};
+use crate::data::Particles;
+use crate::io::text::lines::Lines;
 
 /// Headers are a few hundred bytes; the cap keeps a non-PLY file from being read whole.
 const MAX_HEADER_BYTES: u64 = 1 << 20;
@@ -37,13 +37,13 @@ pub(super) fn read(path: &Path) -> Result<Particles> {
     let positions = match header.encoding {
         Encoding::Ascii => {
             let lines = Lines::new(reader, header_lines);
-            ply_ascii::read(lines, &layout, columns, file_len.saturating_sub(header_len))
+            ply_ascii_read::read(lines, &layout, columns, file_len.saturating_sub(header_len))
         }
         Encoding::BinaryLittleEndian => {
-            ply_binary::read(&mut reader, &layout, columns, false, header_len, file_len)
+            ply_binary_read::read(&mut reader, &layout, columns, false, header_len, file_len)
         }
         Encoding::BinaryBigEndian => {
-            ply_binary::read(&mut reader, &layout, columns, true, header_len, file_len)
+            ply_binary_read::read(&mut reader, &layout, columns, true, header_len, file_len)
         }
     }?;
     Ok(Particles {
@@ -53,8 +53,8 @@ pub(super) fn read(path: &Path) -> Result<Particles> {
 }
 
 /// Reads the header up to `end_header`, returning it with its length in bytes and lines
-/// (`ply_mesh` reads meshes' headers with it too).
-pub(super) fn read_header(reader: &mut impl BufRead) -> Result<(Header, u64, usize)> {
+/// (`mesh/ply_read` reads meshes' headers with it too).
+pub(in crate::io) fn read_header(reader: &mut impl BufRead) -> Result<(Header, u64, usize)> {
     let mut bytes = Vec::new();
     let mut limited = (&mut *reader).take(MAX_HEADER_BYTES);
     limited

@@ -8,15 +8,15 @@ use std::collections::BTreeMap;
 use glam::Vec3;
 use ply_rs_bw::ply::Encoding;
 
-use super::Attribute;
-use super::attribute_columns::AttributeColumns;
 use super::failure::Result;
-use super::ply_layout::{Element, Kind, Layout, Scalar};
-use crate::mesh::TriMesh;
+use crate::data::{Attribute, TriMesh};
+use crate::io::particles::attribute_columns::AttributeColumns;
+use crate::io::particles::ply_layout::{Element, Kind, Layout, Scalar};
+use crate::io::particles::ply_read::read_header;
 
 /// Parses the whole file's bytes; the normals are still the attribute `normal`.
 pub(super) fn parse(data: &[u8]) -> Result<(TriMesh, BTreeMap<String, Attribute>)> {
-    let (header, header_len, header_lines) = super::ply::read_header(&mut &data[..])?;
+    let (header, header_len, header_lines) = read_header(&mut &data[..])?;
     let names: Vec<&str> = header.elements.keys().map(String::as_str).collect();
     if names != ["vertex", "face"] && names != ["vertex"] {
         bail_format!(

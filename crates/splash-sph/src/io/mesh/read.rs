@@ -6,10 +6,9 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use super::failure::Result;
-use super::{
-    Attribute, MeshFormat, Particles, obj_read, ply_mesh, point_arrays, vtk_legacy, vtk_xml,
-};
-use crate::mesh::TriMesh;
+use super::{obj_read, ply_read};
+use crate::data::{Attribute, MeshFormat, Particles, TriMesh};
+use crate::io::particles::{point_arrays, vtk_read, vtu_read};
 
 /// A mesh read from a file: its triangles, vertex normals (empty when the file has none) and
 /// per-vertex attributes by name.
@@ -30,7 +29,7 @@ pub struct MeshFile {
 /// vertex; a triangle's corners must be vertices of the file, and vertices finite. Errors name
 /// the file and what is wrong: [`Error::MeshFormat`](crate::Error::MeshFormat) for the
 /// content, [`Error::Io`](crate::Error::Io) when it cannot be read.
-pub fn read_mesh(path: &Path) -> crate::Result<MeshFile> {
+pub fn read_mesh(path: &Path) -> crate::error::Result<MeshFile> {
     read(path).map_err(|e| e.into_mesh_error(path))
 }
 
@@ -44,11 +43,11 @@ fn read(path: &Path) -> Result<MeshFile> {
             })
         },
         Some(MeshFormat::PlyBinary | MeshFormat::PlyAscii) => |data| {
-            let (mesh, attributes) = ply_mesh::parse(data)?;
+            let (mesh, attributes) = ply_read::parse(data)?;
             Ok(with_normals(mesh, attributes, "normal"))
         },
-        Some(MeshFormat::Vtu | MeshFormat::Vtp) => |data| Ok(vtk_mesh(vtk_xml::parse_mesh(data)?)),
-        Some(MeshFormat::Vtk) => |data| Ok(vtk_mesh(vtk_legacy::parse_mesh(data)?)),
+        Some(MeshFormat::Vtu | MeshFormat::Vtp) => |data| Ok(vtk_mesh(vtu_read::parse_mesh(data)?)),
+        Some(MeshFormat::Vtk) => |data| Ok(vtk_mesh(vtk_read::parse_mesh(data)?)),
         Some(MeshFormat::Pov | MeshFormat::Usd) | None => bail_format!(
             "cannot tell the mesh format from the extension: meshes are read from .obj, .ply, \
              .vtk, .vtu and .vtp files"

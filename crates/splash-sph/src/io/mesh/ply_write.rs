@@ -11,10 +11,10 @@ use ply_rs_bw::ply::{
 };
 use ply_rs_bw::writer::Writer;
 
-use super::float_text::{F32Text, IntText, push_f32};
-use super::text_records::{each_record, write_chunks};
 use super::vertex_attributes::{AttributeValues, VertexAttributes};
-use crate::mesh::TriMesh;
+use crate::data::TriMesh;
+use crate::io::text::float_text::{F32Text, IntText, push_f32};
+use crate::io::text::text_records::{each_record, write_chunks};
 
 /// Binary payload is gathered into blocks of about this size before each write.
 const BLOCK_BYTES: usize = 1 << 16;

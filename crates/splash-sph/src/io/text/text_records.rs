@@ -19,7 +19,7 @@ const CHUNKS_PER_THREAD: usize = 2;
 /// Writes records `0..count` in order, record `i` appended to a buffer by `record(i, buffer)`.
 /// Each wave is written while the next one is formatted; the two waves' buffers take about
 /// `2 × 2 × threads × 4096` records' bytes.
-pub(super) fn write_records(
+pub(in crate::io) fn write_records(
     out: &mut impl Write,
     count: usize,
     record: impl Fn(usize, &mut Vec<u8>) + Sync,
@@ -32,7 +32,7 @@ pub(super) fn write_records(
 /// Appends records `records` to `buffer` by `record(i, buffer)`, with room for them all made
 /// after the first: at the first record's length and a quarter more (growing from empty would
 /// copy the chunk about once more).
-pub(super) fn each_record(
+pub(in crate::io) fn each_record(
     mut records: Range<usize>,
     buffer: &mut Vec<u8>,
     mut record: impl FnMut(usize, &mut Vec<u8>),
@@ -47,7 +47,7 @@ pub(super) fn each_record(
 /// [`write_records`] a chunk at a time: `chunk(records, buffer)` appends records `records`
 /// to the empty `buffer` (a chunk's records are formatted in order on one thread, so that
 /// they can share work, as [`super::float_text::F32Text`] does).
-pub(super) fn write_chunks(
+pub(in crate::io) fn write_chunks(
     out: &mut impl Write,
     count: usize,
     chunk: impl Fn(Range<usize>, &mut Vec<u8>) + Sync,

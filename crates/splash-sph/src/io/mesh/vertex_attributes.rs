@@ -3,7 +3,7 @@
 
 use glam::Vec3;
 
-use super::particles::Attribute;
+use crate::data::Attribute;
 
 /// Per-vertex data written beside the mesh, where the format has room for it (PLY, VTK; OBJ
 /// and POV-Ray files refuse it).

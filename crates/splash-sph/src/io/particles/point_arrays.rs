@@ -6,7 +6,7 @@ use std::collections::BTreeMap;
 use glam::Vec3;
 
 use super::failure::Result;
-use super::particles::{Attribute, Particles};
+use crate::data::{Attribute, Particles};
 
 /// A numeric type of a binary or text array.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -146,7 +146,7 @@ pub(super) fn particles(positions: &[f32], arrays: Vec<PointArray>) -> Result<Pa
 }
 
 /// Reads the whole file (bounded by its size, which the caller checked by opening it).
-pub(super) fn read_all(path: &std::path::Path) -> Result<Vec<u8>> {
+pub(in crate::io) fn read_all(path: &std::path::Path) -> Result<Vec<u8>> {
     use std::io::Read;
     let (mut file, len) = super::failure::open_input(path)?;
     let mut data = Vec::with_capacity(usize::try_from(len).unwrap_or(0).min(1 << 30));

@@ -14,9 +14,9 @@ use std::fs::File;
 use std::io::{self, BufReader, Write};
 use std::path::{Path, PathBuf};
 
-use super::UpAxis;
-use super::atomic;
-use super::usd::{USD_PRIM, declarations, up_axis_token};
+use super::usd_write::{USD_PRIM, declarations, up_axis_token};
+use crate::data::UpAxis;
+use crate::io::atomic;
 
 /// The frame rate of the stages splash writes (USD's default): time codes per second, by
 /// which renderers scale the velocities (units per second) for motion blur. A simulation saved
@@ -80,7 +80,7 @@ pub fn write_usd_stage(
     clips: &[UsdClip],
     frames_per_second: f64,
     up_axis: Option<UpAxis>,
-) -> crate::Result<()> {
+) -> crate::error::Result<()> {
     let (Some(first), Some(last)) = (clips.first(), clips.last()) else {
         bail_config!(
             "a USD stage needs at least one frame: '{}'",
@@ -101,7 +101,7 @@ pub fn write_usd_stage(
                 stage.display()
             ),
             Err(e) => {
-                return Err(crate::Error::Io {
+                return Err(crate::error::Error::Io {
                     path: clip.layer.clone(),
                     message: format!(
                         "cannot read the frame layer '{}' for the stage '{}': {e}",
@@ -232,8 +232,8 @@ fn asset(path: &Path, stage_dir: &Path) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::data::TriMesh;
     use crate::io::{Attribute, VertexAttributes, write_usd_file};
-    use crate::mesh::TriMesh;
     use glam::Vec3;
 
     #[test]

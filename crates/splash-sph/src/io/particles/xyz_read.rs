@@ -6,16 +6,16 @@ use std::io::Read;
 use std::path::Path;
 
 use super::failure::{Failure, Result};
-use super::particles::Particles;
+use crate::data::Particles;
 
 /// Bytes looked at to tell text from binary.
 const SNIFF_BYTES: usize = 4096;
 
 pub(super) fn read(path: &Path) -> Result<Particles> {
     if is_text(path)? {
-        super::csv::read(path)
+        super::csv_read::read(path)
     } else {
-        super::raw::read(path)
+        super::raw_read::read(path)
     }
 }
 
