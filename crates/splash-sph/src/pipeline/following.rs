@@ -8,13 +8,13 @@
 //! particles, particles that cannot be matched) is post-processed alone, with a warning.
 
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 
 use super::frame::{Made, Prepared, Ready};
-use super::{FrameOutcome, FramePipeline, Plan, Progress, RunReport};
+use super::run::record;
+use super::{FramePipeline, Plan, Progress, RunReport};
 use crate::error::{Error, Result};
 use crate::frames::path_frame_number;
-use crate::report::FrameStats;
 use crate::temporal::{Neighbour, follow_fluid};
 
 /// Runs the plan's frames of the selection `inputs`, each following the fluid from its
@@ -65,7 +65,7 @@ pub(super) fn run_following(
         };
         held.insert(at, own.map_err(|e| Error::input(e.to_string())));
         let result = result.and_then(|made: Made| writer.write(output, made));
-        let failed = report(&mut outcomes, input, output, result, k, total, progress);
+        let failed = record(&mut outcomes, input, output, result, (k, total), progress);
         if failed && fail_fast {
             not_attempted = total - k - 1;
             break;
@@ -179,26 +179,4 @@ impl Gaps {
             _ => false,
         }
     }
-}
-
-/// Adds frame `k`'s outcome and tells the caller; returns whether it failed.
-fn report(
-    outcomes: &mut Vec<FrameOutcome>,
-    input: &Path,
-    output: &Path,
-    result: Result<FrameStats>,
-    k: usize,
-    total: usize,
-    progress: &mut dyn Progress,
-) -> bool {
-    let outcome = FrameOutcome {
-        input: input.to_path_buf(),
-        output: output.to_path_buf(),
-        frame: path_frame_number(input),
-        result,
-    };
-    progress.frame_done(&outcome, k + 1, total);
-    let failed = outcome.result.is_err();
-    outcomes.push(outcome);
-    failed
 }

@@ -14,6 +14,7 @@ use crate::error::Result;
 use crate::mesh::{SignedDistance, TriMesh, area_weighted_normals};
 
 /// Sums of squares over the vertices of inner frames, in spacings r; add frames with `+=`.
+/// Vertices without an area around them or with a non-finite figure count as left out.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct Jitter {
     /// Vertices measured.
@@ -102,7 +103,9 @@ pub fn frame_jitter(window: &Window<'_>, spacing: f32) -> Result<Jitter> {
         .map(|(i, &x)| {
             let mut out = Jitter::default();
             let n = normals[i];
-            if n == Vec3::ZERO {
+            if n == Vec3::ZERO || !n.is_finite() {
+                // No area around it, or a non-finite vertex nearby (a peer's mesh may have one).
+                out.left_out = 1;
                 return out;
             }
             let (Some(d_next), Some(d_prev)) = (to_next.at(x), to_prev.at(x)) else {
@@ -110,6 +113,10 @@ pub fn frame_jitter(window: &Window<'_>, spacing: f32) -> Result<Jitter> {
                 return out;
             };
             let (m_next, m_prev) = (n.dot(ahead[i]), n.dot(behind[i]));
+            if !(d_next + d_prev + m_next + m_prev).is_finite() {
+                out.left_out = 1;
+                return out;
+            }
             let e_next = f64::from(d_next + m_next) / r;
             let e_prev = f64::from(d_prev - m_prev) / r;
             let surface = f64::from(d_next + d_prev) / (2.0 * r);
