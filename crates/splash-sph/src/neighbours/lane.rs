@@ -75,12 +75,6 @@ mod avx2 {
     pub struct F8(__m256);
 
     impl F8 {
-        /// `v` eight floats at a time (a shorter rest is left out).
-        #[inline(always)]
-        pub fn chunks(v: &[f32]) -> impl Iterator<Item = F8> + '_ {
-            v.chunks_exact(8).map(F8::load)
-        }
-
         #[inline(always)]
         pub fn to_array(self) -> [f32; 8] {
             let mut out = [0.0f32; 8];

@@ -150,12 +150,22 @@ macro_rules! lane_sums {
         use $crate::neighbours::lane::{F8, Lane};
         let at = [F8::splat($x.x), F8::splat($x.y), F8::splat($x.z)];
         let mut acc = [F8::splat(0.0); $n];
-        let xyz = F8::chunks(&$near.x).zip(F8::chunks(&$near.y)).zip(F8::chunks(&$near.z));
         // Channel 0 where the term takes it (else x again, unused).
         let _first: &[f32] = &$near.x;
         $( let _first: &[f32] = &$near.channels[0]; stringify!($v); )?
-        let channel = F8::chunks(_first);
-        for (((cx, cy), cz), _channel) in xyz.zip(channel) {
+        // An index loop whose loads are F8::load inlined here, not zipped iterators: their
+        // next() is generic code compiled without AVX, which LLVM may leave out of line
+        // (it did once F8::chunks mapped through F8::load); then every step called it and
+        // the load intrinsic, and the call spilled the accumulators, as the calling
+        // convention keeps no vector register.
+        let len = $near.x.len().min($near.y.len()).min($near.z.len()).min(_first.len());
+        let (xs, ys, zs) = (&$near.x[..len], &$near.y[..len], &$near.z[..len]);
+        let channel = &_first[..len];
+        let mut i = 0;
+        while i + 8 <= len {
+            let (cx, cy, cz) = (F8::load(&xs[i..]), F8::load(&ys[i..]), F8::load(&zs[i..]));
+            let _channel = F8::load(&channel[i..]);
+            i += 8;
             let ($dx, $dy, $dz) = (cx - at[0], cy - at[1], cz - at[2]);
             $( let $v = _channel; )?
             let lane: [F8; $n] = $term;
