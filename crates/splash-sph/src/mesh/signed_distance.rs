@@ -64,64 +64,42 @@ impl<'a> SignedDistance<'a> {
         };
         let shells = (reach / cell).ceil() as i32 + 1;
         let cell_of = |p: Vec3| (p / cell).floor().as_ivec3();
-        let mut pairs: Vec<(u64, u32)> = Vec::new();
-        let low = vertices.iter().fold(IVec3::MAX, |m, &v| m.min(cell_of(v)));
-        let key = |c: IVec3| {
-            let c = (c - low).as_uvec3();
-            (u64::from(c.z) << 42) | (u64::from(c.y) << 21) | u64::from(c.x)
-        };
-        pairs.par_extend(triangles.par_iter().enumerate().flat_map_iter(|(t, tri)| {
-            let [a, b, c] = tri.map(|i| vertices[i as usize]);
-            let (lo, hi) = (cell_of(a.min(b).min(c)), cell_of(a.max(b).max(c)));
-            (lo.z..=hi.z).flat_map(move |z| {
-                (lo.y..=hi.y).flat_map(move |y| {
-                    (lo.x..=hi.x).map(move |x| (key(IVec3::new(x, y, z)), t as u32))
+        // (cell, triangle) for every cell a triangle's box meets, sorted by cell.
+        let mut pairs: Vec<([i32; 3], u32)> = triangles
+            .par_iter()
+            .enumerate()
+            .flat_map_iter(|(t, tri)| {
+                let [a, b, c] = tri.map(|i| vertices[i as usize]);
+                let (lo, hi) = (cell_of(a.min(b).min(c)), cell_of(a.max(b).max(c)));
+                (lo.z..=hi.z).flat_map(move |z| {
+                    (lo.y..=hi.y)
+                        .flat_map(move |y| (lo.x..=hi.x).map(move |x| ([x, y, z], t as u32)))
                 })
             })
-        }));
-        // Extents beyond 2^21 bins would overlap in the key: such meshes are binned by the
-        // coordinates themselves.
+            .collect();
+        let low = vertices.iter().fold(IVec3::MAX, |m, &v| m.min(cell_of(v)));
         let span = vertices.iter().fold(IVec3::MIN, |m, &v| m.max(cell_of(v))) - low;
-        let mut cells = FxHashMap::default();
-        let mut binned = Vec::with_capacity(pairs.len());
         if span.max_element() < 1 << 21 {
-            radsort::sort_by_key(&mut pairs, |&(k, t)| (k, t));
-            let unkey = |k: u64| {
-                let m = (1u64 << 21) - 1;
-                (low + IVec3::new((k & m) as i32, ((k >> 21) & m) as i32, (k >> 42) as i32))
-                    .to_array()
-            };
-            let mut start = 0;
-            for (i, &(k, t)) in pairs.iter().enumerate() {
-                binned.push(t);
-                if i + 1 == pairs.len() || pairs[i + 1].0 != k {
-                    cells.insert(unkey(k), (start as u32, i as u32 + 1));
-                    start = i + 1;
-                }
-            }
+            // Cells packed into 63 bits: a radix sort.
+            radsort::sort_by_key(&mut pairs, |&(c, t)| {
+                let c = (IVec3::from_array(c) - low).as_uvec3();
+                (
+                    (u64::from(c.z) << 42) | (u64::from(c.y) << 21) | u64::from(c.x),
+                    t,
+                )
+            });
         } else {
-            let mut wide: Vec<([i32; 3], u32)> = triangles
-                .iter()
-                .enumerate()
-                .flat_map(|(t, tri)| {
-                    let [a, b, c] = tri.map(|i| vertices[i as usize]);
-                    let (lo, hi) = (cell_of(a.min(b).min(c)), cell_of(a.max(b).max(c)));
-                    (lo.z..=hi.z).flat_map(move |z| {
-                        (lo.y..=hi.y)
-                            .flat_map(move |y| (lo.x..=hi.x).map(move |x| ([x, y, z], t as u32)))
-                    })
-                })
-                .collect();
-            wide.par_sort_unstable();
-            let mut start = 0;
-            for (i, &(k, t)) in wide.iter().enumerate() {
-                binned.push(t);
-                if i + 1 == wide.len() || wide[i + 1].0 != k {
-                    cells.insert(k, (start as u32, i as u32 + 1));
-                    start = i + 1;
-                }
+            pairs.par_sort_unstable();
+        }
+        let mut cells = FxHashMap::default();
+        let mut start = 0;
+        for (i, &(c, _)) in pairs.iter().enumerate() {
+            if i + 1 == pairs.len() || pairs[i + 1].0 != c {
+                cells.insert(c, (start as u32, i as u32 + 1));
+                start = i + 1;
             }
         }
+        let binned = pairs.into_iter().map(|(_, t)| t).collect();
         SignedDistance {
             vertices,
             triangles,

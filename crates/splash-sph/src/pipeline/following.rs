@@ -8,11 +8,11 @@
 //! particles, particles that cannot be matched) is post-processed alone, with a warning.
 
 use std::collections::BTreeMap;
+use std::collections::btree_map::Entry;
 use std::path::PathBuf;
 
-use super::frame::{Made, Prepared, Ready};
-use super::run::record;
-use super::{FramePipeline, Plan, Progress, RunReport};
+use super::frame::{Prepared, Ready};
+use super::{FramePipeline, Plan, Progress, RunReport, run_plan};
 use crate::error::{Error, Result};
 use crate::frames::path_frame_number;
 use crate::temporal::{Neighbour, follow_fluid};
@@ -26,56 +26,44 @@ pub(super) fn run_following(
     progress: &mut dyn Progress,
     pipeline: &mut FramePipeline,
 ) -> RunReport {
-    let total = plan.frames.len();
-    let mut outcomes = Vec::with_capacity(total);
-    let mut not_attempted = 0;
     let gaps = Gaps::new(inputs);
     let (loader, writer) = (pipeline.loader(), pipeline.writer());
+    // The frames' positions in the selection, in the order run_plan takes them.
+    let mut positions = plan.positions.clone().into_iter();
     // Frames prepared, by position in the selection.
     let mut held: BTreeMap<usize, Result<Ready>> = BTreeMap::new();
-    for (k, ((input, output), &at)) in plan.frames.iter().zip(&plan.positions).enumerate() {
-        if progress.cancelled() {
-            not_attempted = total - k;
-            break;
-        }
+    run_plan(plan, fail_fast, progress, |_, output, progress| {
+        let at = positions.next().expect("one position per frame to do");
         held.retain(|&j, _| j + 1 >= at);
-        let end = (at + 2).min(inputs.len());
-        for (j, path) in inputs
-            .iter()
-            .enumerate()
-            .take(end)
-            .skip(at.saturating_sub(1))
-        {
-            if let std::collections::btree_map::Entry::Vacant(slot) = held.entry(j) {
+        let near = at.saturating_sub(1)..(at + 2).min(inputs.len());
+        for (j, path) in near.clone().zip(&inputs[near]) {
+            if let Entry::Vacant(slot) = held.entry(j) {
                 let prepared = loader
                     .load(path)
                     .and_then(|loaded| pipeline.prepare(path, loaded, progress));
                 slot.insert(prepared);
             }
         }
-        let own = held.remove(&at).expect("prepared above");
-        let result = match &own {
+        // The frame's own error stays its outcome; its neighbours keep only its message.
+        let made = match held.remove(&at).expect("prepared above") {
             Ok(Ready::Surface(p)) => {
-                let mesh = follow(pipeline, inputs, &gaps, at, p, &held, progress);
-                pipeline.finish(p, mesh)
+                let mesh = follow(pipeline, inputs, &gaps, at, &p, &held, progress);
+                let made = pipeline.finish(&p, mesh);
+                held.insert(at, Ok(Ready::Surface(p)));
+                made
             }
-            // Only frames without particles are made whole before their attributes.
-            Ok(Ready::Made(m)) => Ok(m.clone()),
-            Err(e) => Err(Error::input(e.to_string())),
+            Ok(Ready::Made(made)) => {
+                let why = format!("'{}' has no particles", inputs[at].display());
+                held.insert(at, Err(Error::input(why)));
+                Ok(made)
+            }
+            Err(e) => {
+                held.insert(at, Err(Error::input(e.to_string())));
+                Err(e)
+            }
         };
-        held.insert(at, own.map_err(|e| Error::input(e.to_string())));
-        let result = result.and_then(|made: Made| writer.write(output, made));
-        let failed = record(&mut outcomes, input, output, result, (k, total), progress);
-        if failed && fail_fast {
-            not_attempted = total - k - 1;
-            break;
-        }
-    }
-    RunReport {
-        plan,
-        outcomes,
-        not_attempted,
-    }
+        made.and_then(|made| writer.write(output, made))
+    })
 }
 
 /// Frame `at`'s surface moved towards its neighbours', or its own where it cannot follow them

@@ -419,7 +419,7 @@ impl Prepared {
 }
 
 /// A frame's mesh and vertex attributes, waiting to be written, with its figures.
-#[derive(Debug, Clone)]
+#[derive(Debug)]
 pub(super) struct Made {
     mesh: TriMesh,
     named: Vec<(String, Attribute)>,

@@ -85,7 +85,15 @@ pub fn run_plan<S>(
             break;
         }
         let result = work(input, output, progress);
-        let failed = record(&mut outcomes, input, output, result, (k, total), progress);
+        let outcome = FrameOutcome {
+            input: input.clone(),
+            output: output.clone(),
+            frame: path_frame_number(input),
+            result,
+        };
+        progress.frame_done(&outcome, k + 1, total);
+        let failed = outcome.result.is_err();
+        outcomes.push(outcome);
         if failed && fail_fast {
             not_attempted = total - k - 1;
             break;
@@ -96,26 +104,4 @@ pub fn run_plan<S>(
         outcomes,
         not_attempted,
     }
-}
-
-/// Adds the outcome of frame `done.0` (of `done.1`) to `outcomes` and tells the caller; returns
-/// whether it failed.
-pub(super) fn record<S>(
-    outcomes: &mut Vec<FrameOutcome<S>>,
-    input: &Path,
-    output: &Path,
-    result: Result<S>,
-    (k, total): (usize, usize),
-    progress: &mut dyn Progress<S>,
-) -> bool {
-    let outcome = FrameOutcome {
-        input: input.to_path_buf(),
-        output: output.to_path_buf(),
-        frame: path_frame_number(input),
-        result,
-    };
-    progress.frame_done(&outcome, k + 1, total);
-    let failed = outcome.result.is_err();
-    outcomes.push(outcome);
-    failed
 }

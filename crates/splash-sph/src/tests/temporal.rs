@@ -60,12 +60,9 @@ impl Progress for Record {
     }
 }
 
-fn run(inputs: &[PathBuf], out: &Path, temporal: bool, shard: Option<Shard>) -> Record {
-    let mut config = Config {
-        spacing: Some(R),
-        ..Config::default()
-    };
-    config.post.temporal = temporal;
+/// The sequence's meshes in `out`, as binary PLY, with `config` at spacing R.
+fn run_with(inputs: &[PathBuf], out: &Path, mut config: Config, shard: Option<Shard>) -> Record {
+    config.spacing = Some(R);
     let batch = Batch {
         inputs: inputs.to_vec(),
         input_format: None,
@@ -80,6 +77,13 @@ fn run(inputs: &[PathBuf], out: &Path, temporal: bool, shard: Option<Shard>) -> 
     let mut record = Record::default();
     batch.run(&mut record).unwrap();
     record
+}
+
+/// The default post-processing, following the fluid or not.
+fn run(inputs: &[PathBuf], out: &Path, temporal: bool, shard: Option<Shard>) -> Record {
+    let mut config = Config::default();
+    config.post.temporal = temporal;
+    run_with(inputs, out, config, shard)
 }
 
 fn bytes(dir: &Path, f: u32) -> Vec<u8> {
@@ -153,23 +157,9 @@ fn uniform_motion_is_followed_and_shards_agree() {
     let inputs = frames(&dir.join("sim"), 6, |f| {
         Vec3::new(0.37 * 0.05 * f as f32, 0.0, 0.0)
     });
-    let mut raw = Config {
-        spacing: Some(R),
-        ..Config::default()
-    };
+    let mut raw = Config::default();
     raw.post.raw = true;
-    let batch = Batch {
-        inputs: inputs.clone(),
-        input_format: None,
-        output: Output::Directory(dir.join("r")),
-        format: MeshFormat::PlyBinary,
-        config: raw,
-        shard: None,
-        skip_existing: false,
-        fail_fast: false,
-        iso: None,
-    };
-    batch.run(&mut Record::default()).unwrap();
+    run_with(&inputs, &dir.join("r"), raw, None);
     run(&inputs, &dir.join("s"), false, None);
     run(&inputs, &dir.join("t"), true, None);
     let [r, s, t] = ["r", "s", "t"].map(|name| jitter(&inputs, &dir.join(name)));
