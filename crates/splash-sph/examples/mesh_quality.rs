@@ -4,9 +4,10 @@
 //!   cargo run --release --example mesh_quality -- --spacing 0.014 PARTICLES_DIR MESH_DIR [SLIVER_FRAME]
 //!
 //! Prints one row per mesh (volume error V/(N·r³) − 1, bumpiness, slivers, faces,
-//! closed/manifold, components of ≤ 20 faces; see `splash_sph::mesh::quality`), then the
-//! summary row of the table: volume error min … max (mean abs), mean bumpiness,
-//! slivers of SLIVER_FRAME (a file name; the first mesh when absent), mean faces.
+//! closed/manifold, components of ≤ 20 faces, self-intersecting faces; see
+//! `splash_sph::mesh::quality`), then the summary row of the table: volume error
+//! min … max (mean abs), mean bumpiness, slivers of SLIVER_FRAME (a file name; the first mesh
+//! when absent), mean faces; and the self-intersecting faces of all meshes.
 
 use std::path::{Path, PathBuf};
 
@@ -34,10 +35,11 @@ fn main() -> Result<(), String> {
         .collect();
     files.sort();
     println!(
-        "mesh\tvolume_error_%\tbumpiness_deg\tslivers_%\tfaces\tclosed_manifold\tcomponents\tsmall_components"
+        "mesh\tvolume_error_%\tbumpiness_deg\tslivers_%\tfaces\tclosed_manifold\tcomponents\tsmall_components\tself_intersecting_faces"
     );
     let (mut errors, mut bumps, mut faces) = (Vec::new(), Vec::new(), Vec::new());
     let mut sliver_row = None;
+    let (mut crossing, mut crossed) = (0, 0);
     for file in &files {
         let name = file.file_name().unwrap().to_string_lossy().into_owned();
         let frame = Path::new(particles).join(&name);
@@ -48,15 +50,18 @@ fn main() -> Result<(), String> {
         let q = quality(&read_mesh(file).map_err(|e| e.to_string())?.mesh);
         let error = volume_error(q.volume, n, spacing);
         println!(
-            "{name}\t{:+.2}\t{:.3}\t{:.3}\t{}\t{}\t{}\t{}",
+            "{name}\t{:+.2}\t{:.3}\t{:.3}\t{}\t{}\t{}\t{}\t{}",
             100.0 * error,
             q.bumpiness,
             100.0 * q.slivers,
             q.faces,
             q.closed_manifold,
             q.components,
-            q.small_components
+            q.small_components,
+            q.self_intersecting_faces
         );
+        crossing += q.self_intersecting_faces;
+        crossed += usize::from(q.self_intersecting_faces > 0);
         if sliver_row.is_none() || sliver_frame.first() == Some(&name) {
             sliver_row = Some((name.clone(), q.slivers));
         }
@@ -85,6 +90,10 @@ fn main() -> Result<(), String> {
         mean(&bumps),
         100.0 * slivers,
         mean(&faces) / 1000.0
+    );
+    println!(
+        "self-intersecting faces: {crossing} in {crossed} of {} meshes",
+        files.len()
     );
     Ok(())
 }

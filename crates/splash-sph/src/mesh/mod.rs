@@ -10,6 +10,7 @@ pub(crate) mod marching_cubes;
 pub mod post;
 pub mod quality;
 pub mod refinement;
+pub mod self_intersections;
 pub mod signed_distance;
 pub mod smoothing;
 mod stars;
@@ -19,6 +20,7 @@ pub mod volume;
 pub use clipping::clip_to_box;
 pub use components::drop_small_components;
 pub use decimation::decimate;
+pub use self_intersections::self_intersecting_faces;
 pub use signed_distance::SignedDistance;
 pub(crate) use stars::area_weighted_normals;
 

@@ -12,12 +12,15 @@
 //!   surface is sampled more finely and rises with every ripple.
 //! - **slivers** = share of the triangles whose smallest interior angle is under 10°
 //!   (degenerate triangles, with a repeated vertex or no area, count as slivers).
+//! - **self-intersecting faces** = faces that cross, touch or overlap another face of the mesh
+//!   beyond the corners they share, by the exact test of [`self_intersecting_faces`]: 0 for a
+//!   surface that is the boundary of a solid.
 
 use glam::DVec3;
 use rayon::prelude::*;
 
-use super::TriMesh;
 use super::topology::{component_volumes, signed_volume, topology};
+use super::{TriMesh, self_intersecting_faces};
 
 /// A triangle whose smallest angle is below this many degrees is a sliver.
 pub const SLIVER_DEGREES: f64 = 10.0;
@@ -43,6 +46,8 @@ pub struct Quality {
     pub components: usize,
     /// Components of at most [`SMALL_COMPONENT_FACES`] triangles.
     pub small_components: usize,
+    /// Faces crossing another face of the mesh ([`self_intersecting_faces`]).
+    pub self_intersecting_faces: usize,
 }
 
 /// V / (N·r³) − 1: the volume's error against `particles` of spacing `spacing`.
@@ -66,6 +71,7 @@ pub fn quality(mesh: &TriMesh) -> Quality {
         closed_manifold: top.is_closed_manifold(),
         components: top.components,
         small_components,
+        self_intersecting_faces: self_intersecting_faces(&mesh.vertices, &mesh.triangles).len(),
     }
 }
 
