@@ -13,6 +13,7 @@ use clap::Args;
 
 use splash_sph::frames::{Output, select};
 use splash_sph::io::read_mesh;
+use splash_sph::mesh::self_intersecting_faces;
 use splash_sph::mesh::quality::{quality, volume_error};
 use splash_sph::pipeline::{Batch, FrameOutcome, Progress};
 use splash_sph::temporal::{FrameMotion, Jitter, Window, frame_jitter};
@@ -207,9 +208,9 @@ pub fn run(args: BenchTemporalArgs) -> Result<ExitCode> {
         args.threads.map_or_else(|| "all".into(), |t| t.to_string())
     );
     println!(
-        "| mesh | jitter r | e+ RMS r | surface r | left out | triangles | volume err max | bumpiness ° | slivers % | wall s | peak MiB |"
+        "| mesh | jitter r | e+ RMS r | surface r | left out | triangles | volume err max | bumpiness ° | slivers % | crossing faces (frames) | wall s | peak MiB |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
     for (v, row) in variants.iter().zip(&table) {
         let (wall, peak) = match v.cost {
             Some((s, bytes)) => (
@@ -220,7 +221,7 @@ pub fn run(args: BenchTemporalArgs) -> Result<ExitCode> {
         };
         let j = &row.jitter;
         println!(
-            "| {} | {:.4} | {:.4} | {:.4} | {:.2} % | {:.0} | {:+.2} % | {:.2} | {:.2} | {wall} | {peak} |",
+            "| {} | {:.4} | {:.4} | {:.4} | {:.2} % | {:.0} | {:+.2} % | {:.2} | {:.2} | {} ({}) | {wall} | {peak} |",
             v.name,
             j.rms(),
             j.forward_rms(),
@@ -230,6 +231,8 @@ pub fn run(args: BenchTemporalArgs) -> Result<ExitCode> {
             100.0 * row.worst_volume,
             row.bumpiness,
             100.0 * row.slivers,
+            row.crossing_faces,
+            row.crossing_frames,
         );
     }
     Ok(ExitCode::SUCCESS)
@@ -244,6 +247,10 @@ struct Row {
     slivers: f64,
     /// The volume error farthest from 0, against N·r³.
     worst_volume: f64,
+    /// Faces that cross another face of the same mesh (the exact test), and the frames with
+    /// any.
+    crossing_faces: usize,
+    crossing_frames: usize,
 }
 
 /// Measures every variant on the inner frames, three frames of particles and meshes at a time.
@@ -261,6 +268,8 @@ fn measure(
             bumpiness: 0.0,
             slivers: 0.0,
             worst_volume: 0.0,
+            crossing_faces: 0,
+            crossing_frames: 0,
         })
         .collect();
     let load = |path: &Path| -> Result<FrameMotion> {
@@ -292,6 +301,9 @@ fn measure(
             row.triangles += q.faces as f64;
             row.bumpiness += q.bumpiness;
             row.slivers += q.slivers;
+            let crossing = self_intersecting_faces(&m[at].vertices, &m[at].triangles).len();
+            row.crossing_faces += crossing;
+            row.crossing_frames += usize::from(crossing > 0);
             let e = volume_error(q.volume, particles, spacing);
             if e.abs() > row.worst_volume.abs() {
                 row.worst_volume = e;

@@ -9,6 +9,7 @@ use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 use splash_sph::TriMesh;
+use splash_sph::mesh::VolumeScope;
 use splash_sph::mesh::post::{Volumes, postprocess_mesh};
 
 use crate::arrays;
@@ -45,7 +46,9 @@ use crate::settings::{self, Overrides};
 /// The post-processing settings (``[post]`` of the config; None keeps the config's, the
 /// defaults by default): ``raw=True`` skips smoothing and volume restoration;
 /// ``smoothing_iterations`` (6), ``lambda_`` (0.6) and ``mu`` (−0.64): Taubin's λ|μ pairs;
-/// ``volume_rounds`` (8), ``max_offset`` (0.25 r per step), ``refine_angle`` (16; 0: off; in
+/// ``volume_rounds`` (8), ``volume_scope`` (``"frame"``: one offset for the whole mesh;
+/// ``"component"``: each closed component to its own particles' volume), ``max_offset``
+/// (0.25 r per step), ``refine_angle`` (0: off; in
 /// degrees, bisects the edges where the surface bends more), ``relax_iterations`` (12),
 /// ``volume_steps`` (1); ``mesh_aabb``, ``min_component`` and ``decimate`` as in
 /// ``reconstruct``. ``config``: a TOML file's path or a dict, as ``reconstruct`` takes it.
@@ -60,7 +63,8 @@ use crate::settings::{self, Overrides};
 #[allow(clippy::too_many_arguments)]
 #[pyfunction]
 #[pyo3(signature = (mesh, *, particles=None, spacing=None, cell=None, config=None, raw=None,
-    smoothing_iterations=None, lambda_=None, mu=None, volume_rounds=None, max_offset=None,
+    smoothing_iterations=None, lambda_=None, mu=None, volume_rounds=None, volume_scope=None,
+    max_offset=None,
     refine_angle=None, relax_iterations=None, volume_steps=None, mesh_aabb=None, min_component=None,
     decimate=None, threads=None))]
 pub fn postprocess<'py>(
@@ -75,6 +79,7 @@ pub fn postprocess<'py>(
     lambda_: Option<f32>,
     mu: Option<f32>,
     volume_rounds: Option<i64>,
+    volume_scope: Option<&str>,
     max_offset: Option<f32>,
     refine_angle: Option<f32>,
     relax_iterations: Option<i64>,
@@ -122,6 +127,16 @@ pub fn postprocess<'py>(
     post.mu = mu.unwrap_or(post.mu);
     post.max_offset = max_offset.unwrap_or(post.max_offset);
     post.refine_angle = refine_angle.unwrap_or(post.refine_angle);
+    post.volume_scope = match volume_scope {
+        None => post.volume_scope,
+        Some("frame") => VolumeScope::Frame,
+        Some("component") => VolumeScope::Component,
+        Some(other) => {
+            return Err(PyValueError::new_err(format!(
+                "volume_scope must be \"frame\" or \"component\", got {other:?}"
+            )));
+        }
+    };
     post.validate().map_err(to_py)?;
 
     let input = MeshInput::of(mesh)?;

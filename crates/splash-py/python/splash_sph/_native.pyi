@@ -1,7 +1,7 @@
 """Type stubs of the native extension; the ``splash_sph`` package re-exports all of it."""
 
 import os
-from typing import Any, Callable, Dict, List, Mapping, NamedTuple, Optional, Sequence, Tuple, TypedDict, Union, final, type_check_only
+from typing import Any, Callable, Dict, List, Literal, Mapping, NamedTuple, Optional, Sequence, Tuple, TypedDict, Union, final, type_check_only
 
 import numpy as np
 import numpy.typing as npt
@@ -231,6 +231,7 @@ def postprocess(
     lambda_: Optional[float] = None,
     mu: Optional[float] = None,
     volume_rounds: Optional[int] = None,
+    volume_scope: Optional[Literal["frame", "component"]] = None,
     max_offset: Optional[float] = None,
     refine_angle: Optional[float] = None,
     relax_iterations: Optional[int] = None,
@@ -266,7 +267,9 @@ def postprocess(
     The post-processing settings (``[post]`` of the config; None keeps the config's, the
     defaults by default): ``raw=True`` skips smoothing and volume restoration;
     ``smoothing_iterations`` (6), ``lambda_`` (0.6) and ``mu`` (-0.64): Taubin's λ|μ pairs;
-    ``volume_rounds`` (8), ``max_offset`` (0.25 r per step), ``refine_angle`` (16; 0: off; in
+    ``volume_rounds`` (8), ``volume_scope`` (``"frame"``: one offset for the whole mesh;
+    ``"component"``: each closed component to its own particles' volume), ``max_offset``
+    (0.25 r per step), ``refine_angle`` (0: off; in
     degrees, bisects the edges where the surface bends more), ``relax_iterations`` (12),
     ``volume_steps`` (1); ``mesh_aabb``, ``min_component`` and ``decimate`` as in
     ``reconstruct``. ``config``: a TOML file's path or a dict, as ``reconstruct`` takes it.

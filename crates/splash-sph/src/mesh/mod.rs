@@ -22,6 +22,7 @@ pub use components::drop_small_components;
 pub use decimation::decimate;
 pub use self_intersections::self_intersecting_faces;
 pub use signed_distance::SignedDistance;
+pub use volume::VolumeScope;
 pub(crate) use stars::area_weighted_normals;
 
 #[doc(no_inline)]

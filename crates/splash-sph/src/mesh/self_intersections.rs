@@ -46,11 +46,6 @@ const MAX_ENTRIES_PER_FACE: usize = 4;
 /// threads. Faces with a repeated vertex or collinear corners are never listed. Vertices must
 /// be finite.
 pub fn self_intersecting_faces(vertices: &[Vec3], triangles: &[[u32; 3]]) -> Vec<u32> {
-    detect(vertices, triangles).0
-}
-
-/// [`self_intersecting_faces`], and what retests the faces near some that move after it.
-pub(crate) fn detect(vertices: &[Vec3], triangles: &[[u32; 3]]) -> (Vec<u32>, Retests) {
     let turns: Vec<Turns> = triangles
         .par_iter()
         .with_min_len(CHUNK)
@@ -75,12 +70,7 @@ pub(crate) fn detect(vertices: &[Vec3], triangles: &[[u32; 3]]) -> (Vec<u32>, Re
             &flags,
         );
     }
-    let retests = Retests {
-        grid,
-        moved: Vec::new(),
-        moved_list: Vec::new(),
-    };
-    (flags.listed(), retests)
+    flags.listed()
 }
 
 /// How a face turns seen along each axis: the exact signs of its cross product's components
@@ -201,86 +191,6 @@ fn flat_star(
     })
 }
 
-/// Retests after some faces move: the grid of the detection, whose boxes still hold for the
-/// faces that have not moved, and the faces that have.
-pub(crate) struct Retests {
-    grid: Option<Grid>,
-    moved: Vec<bool>,
-    moved_list: Vec<u32>,
-}
-
-impl Retests {
-    /// The faces that intersect another face in a pair with at least one face of `candidates`
-    /// (`is_candidate` flags them by face), in increasing order. Every face that moved since
-    /// the detection must have been a candidate, now or in an earlier call.
-    pub(crate) fn intersecting(
-        &mut self,
-        vertices: &[Vec3],
-        triangles: &[[u32; 3]],
-        candidates: &[u32],
-        is_candidate: &[bool],
-    ) -> Vec<u32> {
-        self.moved.resize(triangles.len(), false);
-        for &f in candidates {
-            if !std::mem::replace(&mut self.moved[f as usize], true) {
-                self.moved_list.push(f);
-            }
-        }
-        let flags = Flags::new(triangles.len());
-        let Some(grid) = &self.grid else {
-            return flags.listed();
-        };
-        let face = |f: u32| {
-            let t = &triangles[f as usize];
-            Turns::of(vertices, t)
-                .area()
-                .then(|| (corners(vertices, t), Aabb::of(vertices, t)))
-        };
-        // The faces that moved, in a grid of their own at their boxes now.
-        let moved_list = &self.moved_list;
-        let moved_grid = Grid::new(moved_list.len(), &|i: usize| {
-            face(moved_list[i]).map(|(_, b)| b)
-        });
-        let moved = &self.moved;
-        candidates.par_iter().with_min_len(64).for_each(|&f| {
-            let Some((p, a)) = face(f) else { return };
-            // Each other face once: from the detection's grid if it has not moved, else from
-            // the moved faces' grid; a pair of candidates from its smaller face.
-            let grids = std::iter::once((grid, None))
-                .chain(moved_grid.as_ref().map(|g| (g, Some(moved_list))));
-            for (grid, list) in grids {
-                let (lo, hi) = (grid.cell(a.min), grid.cell(a.max));
-                for z in lo[2]..=hi[2] {
-                    for y in lo[1]..=hi[1] {
-                        for x in lo[0]..=hi[0] {
-                            let cell = grid.index([x, y, z]);
-                            for &e in grid.run(cell) {
-                                let g = list.map_or(e as u32, |l| l[e as u32 as usize]);
-                                if g == f
-                                    || moved[g as usize] != list.is_some()
-                                    || (is_candidate[g as usize] && g < f)
-                                    || flags.both(f, g)
-                                {
-                                    continue;
-                                }
-                                let Some((q, b)) = face(g) else { continue };
-                                // Tested in the lowest cell of the boxes' overlap only.
-                                if a.overlaps(&b)
-                                    && grid.index(grid.cell(a.min.max(b.min))) == cell
-                                    && faces_meet(p, q)
-                                {
-                                    flags.set(f, g);
-                                }
-                            }
-                        }
-                    }
-                }
-            }
-        });
-        flags.listed()
-    }
-}
-
 /// One flag per face, set from any thread.
 struct Flags(Vec<AtomicBool>);
 
@@ -331,10 +241,6 @@ impl Aabb {
             min: self.min.min(other.min),
             max: self.max.max(other.max),
         }
-    }
-
-    fn overlaps(&self, other: &Aabb) -> bool {
-        self.min.cmple(other.max).all() && other.min.cmple(self.max).all()
     }
 }
 
@@ -553,14 +459,6 @@ impl Grid {
 
     fn index(&self, [x, y, z]: [u32; 3]) -> u32 {
         x + self.dims[0] * (y + self.dims[1] * z)
-    }
-
-    /// The entries of `cell`.
-    fn run(&self, cell: u32) -> &[u64] {
-        let key = u64::from(cell) << 32;
-        let lo = self.entries.partition_point(|&e| e < key);
-        let hi = lo + self.entries[lo..].partition_point(|&e| e < key + (1 << 32));
-        &self.entries[lo..hi]
     }
 
     /// `meet(f, g)` for every pair of entered faces whose boxes overlap, once each (in the

@@ -23,7 +23,16 @@ pub struct SignedDistance<'a> {
     shells: i32,
     /// Triangles by cell: a range of `binned` per non-empty cell.
     cells: FxHashMap<[i32; 3], (u32, u32)>,
-    binned: Vec<u32>,
+    binned: Vec<Binned>,
+}
+
+/// A triangle in a bin, with the sphere around it (centroid and radius) that lets a query
+/// pass it by without finding its nearest point.
+#[derive(Debug, Clone, Copy)]
+struct Binned {
+    triangle: u32,
+    centre: Vec3,
+    radius: f32,
 }
 
 /// Which part of a triangle a point is nearest to.
@@ -99,7 +108,23 @@ impl<'a> SignedDistance<'a> {
                 start = i + 1;
             }
         }
-        let binned = pairs.into_iter().map(|(_, t)| t).collect();
+        let binned = pairs
+            .into_par_iter()
+            .map(|(_, t)| {
+                let [a, b, c] = triangles[t as usize].map(|i| vertices[i as usize]);
+                let centre = (a + b + c) / 3.0;
+                let radius = centre
+                    .distance(a)
+                    .max(centre.distance(b))
+                    .max(centre.distance(c));
+                Binned {
+                    triangle: t,
+                    centre,
+                    // A hair more, so that rounding never passes by the nearest triangle.
+                    radius: radius * (1.0 + 1e-5),
+                }
+            })
+            .collect();
         SignedDistance {
             vertices,
             triangles,
@@ -157,11 +182,22 @@ impl<'a> SignedDistance<'a> {
 
     /// Folds `triangles` into `best`: a nearer one replaces it, one as near (a face of the same
     /// edge or vertex, or a duplicate visit) adds its pseudonormal share.
-    fn nearest_in(&self, p: Vec3, triangles: &[u32], best: &mut Option<Nearest>) {
-        for &t in triangles {
+    fn nearest_in(&self, p: Vec3, triangles: &[Binned], best: &mut Option<Nearest>) {
+        for binned in triangles {
+            if let Some(n) = best {
+                let gap = p.distance(binned.centre) - binned.radius;
+                if gap > 0.0 && gap * gap > n.d2 * (1.0 + TIE) + f32::MIN_POSITIVE {
+                    continue;
+                }
+            }
+            let t = binned.triangle;
             let tri = self.triangles[t as usize];
             let (q, feature) = closest_on_triangle(p, tri, self.vertices);
             let d2 = p.distance_squared(q);
+            if best.is_some_and(|n| d2 > n.d2 * (1.0 + TIE) + f32::MIN_POSITIVE) {
+                // Farther than the nearest so far: no pseudonormal to make.
+                continue;
+            }
             let [a, b, c] = tri.map(|i| self.vertices[i as usize]);
             let face = (b - a).cross(c - a).normalize_or_zero();
             // Bærentzen & Aanæs's pseudonormals: an edge's is the sum of its faces' normals, a

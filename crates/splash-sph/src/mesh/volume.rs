@@ -5,8 +5,19 @@
 
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
+use serde::{Deserialize, Serialize};
 
 use super::adjacency::{Neighbours, VertexFaces};
+
+/// What the volume steps of `PostConfig` restore: see `PostConfig::volume_scope`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "lowercase")]
+pub enum VolumeScope {
+    /// The whole mesh: one offset for every vertex.
+    Frame,
+    /// Each closed component: its own offset.
+    Component,
+}
 
 /// The connected components of a mesh (vertex connectivity through triangles).
 #[derive(Debug, Clone)]
@@ -330,7 +341,8 @@ fn crosses_above(q: DVec3, p: [DVec3; 3]) -> bool {
     z > q.z
 }
 
-/// Offsets each component along its unit vertex normals by (target − volume)/area, the
+/// Offsets each component (or, for [`VolumeScope::Frame`], the whole mesh) along its unit
+/// vertex normals by (target − volume)/area, the
 /// first-order change, at most `max_step`, `steps` times; `normals` and `measures` must be
 /// those of `vertices` ([`normals_and_measures`]) and are recomputed between the steps but not
 /// after the last (the caller smooths again, or recomputes them once). The curvature's error of
@@ -344,6 +356,7 @@ pub fn restore(
     rings: &VertexFaces,
     components: &Components,
     targets: &[f64],
+    scope: VolumeScope,
     steps: u32,
     max_step: f32,
 ) {
@@ -354,18 +367,25 @@ pub fn restore(
         if step > 0 {
             normals_and_measures(vertices, triangles, rings, components, normals, measures);
         }
-        let offsets: Vec<f32> = components
-            .sums(measures)
-            .iter()
-            .zip(targets)
-            .map(|(&(v, a), &t)| {
-                if a > 0.0 {
-                    (((t - v) / a) as f32).clamp(-max_step, max_step)
-                } else {
-                    0.0
+        let offset = |(v, a): (f64, f64), t: f64| {
+            if a > 0.0 {
+                (((t - v) / a) as f32).clamp(-max_step, max_step)
+            } else {
+                0.0
+            }
+        };
+        let sums = components.sums(measures).into_iter().zip(targets);
+        let offsets: Vec<f32> = match scope {
+            VolumeScope::Component => sums.map(|(s, &t)| offset(s, t)).collect(),
+            VolumeScope::Frame => {
+                let (mut all, mut target) = ((0.0, 0.0), 0.0);
+                for ((v, a), &t) in sums {
+                    all = (all.0 + v, all.1 + a);
+                    target += t;
                 }
-            })
-            .collect();
+                vec![offset(all, target); components.count]
+            }
+        };
         vertices
             .par_iter_mut()
             .zip(normals.par_iter())

@@ -5,7 +5,7 @@
 use glam::Vec3;
 
 use super::common::{lattice_ball, shared_data, torus};
-use crate::mesh::TriMesh;
+use crate::mesh::{TriMesh, VolumeScope};
 use crate::mesh::post::{PostConfig, Volumes, postprocess_mesh};
 use crate::mesh::topology::{component_volumes, normal_agreement, signed_volume, topology};
 use crate::{Config, Length, Reconstructor};
@@ -137,10 +137,10 @@ fn a_box_keeps_its_volume_its_flat_faces_and_its_corners() {
     }
 }
 
-#[test]
-fn droplets_get_the_volume_of_their_particles() {
-    // A ball and, apart, two lone particles and a pair: the field swells those to spheres of
-    // radius r̄ = r (4.2 r³ each); post-processing brings each to its own particles' volume.
+/// A ball and, apart, two lone particles and a pair, whose components' volumes (in r³,
+/// smallest first) post-processing with `scope` gives, beside those of the raw mesh and the
+/// ball's particle count.
+fn droplets(scope: VolumeScope) -> (Vec<f64>, Vec<f64>, usize) {
     let mut particles = lattice_ball(Vec3::ZERO, 5.0 * R, R);
     let ball = particles.len();
     particles.extend([
@@ -149,15 +149,49 @@ fn droplets_get_the_volume_of_their_particles() {
         Vec3::new(0.0, 0.0, 1.0),
         Vec3::new(R, 0.0, 1.0),
     ]);
-    let post = mesh(&particles, false, 2);
-    let mut volumes: Vec<(usize, f64)> = crate::mesh::topology::component_volumes(&post);
-    volumes.sort_by(|a, b| a.1.total_cmp(&b.1));
-    let r3 = f64::from(R).powi(3);
-    let got: Vec<f64> = volumes.iter().map(|v| v.1 / r3).collect();
+    let volumes = |raw| {
+        let post = PostConfig {
+            raw,
+            volume_scope: scope,
+            ..PostConfig::default()
+        };
+        let mut v: Vec<f64> = component_volumes(&configured(&particles, Some(2), post))
+            .iter()
+            .map(|v| v.1 / f64::from(R).powi(3))
+            .collect();
+        v.sort_by(f64::total_cmp);
+        v
+    };
+    (volumes(false), volumes(true), ball)
+}
+
+#[test]
+fn droplets_get_the_volume_of_their_particles_each() {
+    // The field swells the droplets to spheres of radius r̄ = r (4.2 r³ each); post-processing
+    // by component brings each to its own particles' volume.
+    let (got, _, ball) = droplets(VolumeScope::Component);
     assert_eq!(got.len(), 4, "{got:?}");
     for (g, want) in got.iter().zip([1.0, 1.0, 2.0, ball as f64]) {
         assert!((g / want - 1.0).abs() < 0.01, "{got:?}");
     }
+}
+
+#[test]
+fn one_offset_brings_the_frame_to_its_particles_volume() {
+    // By frame, the whole mesh holds its particles' volume, and every droplet moves with the
+    // ball's offset: the raw lattice ball holds less than its particles' volume, so the ball
+    // and the droplets grow (a lone particle from its raw sphere's 4.2 r³ to 6.4 r³), the lone
+    // two alike, the pair more.
+    let (got, raw, ball) = droplets(VolumeScope::Frame);
+    assert_eq!(got.len(), 4, "{got:?}");
+    let total: f64 = got.iter().sum();
+    assert!((total / (ball + 4) as f64 - 1.0).abs() < 0.01, "{got:?}");
+    assert!(raw[3] < ball as f64, "{raw:?}");
+    assert!((got[0] - got[1]).abs() < 0.02 * got[0], "{got:?}");
+    for (g, r) in got.iter().zip(&raw) {
+        assert!(*g > 1.1 * r, "{got:?} from {raw:?}");
+    }
+    assert!(got[2] > got[1], "{got:?}");
 }
 
 #[test]
@@ -206,14 +240,20 @@ fn min_component_drops_a_lone_particle_and_keeps_a_ball_of_fifty() {
     ball.truncate(50);
     let mut particles = ball.clone();
     particles.push(Vec3::new(2.0, 0.0, 0.0));
-    let kept = configured(&particles, None, PostConfig::default());
+    // By component, so that the lone particle holds r³ and the ball its 50 (by frame, the
+    // lone one keeps some of its swelling, and the ball lends it that volume).
+    let post = PostConfig {
+        volume_scope: VolumeScope::Component,
+        ..PostConfig::default()
+    };
+    let kept = configured(&particles, None, post.clone());
     assert_eq!(topology(&kept).components, 2);
     let dropped = configured(
         &particles,
         None,
         PostConfig {
             min_component: Some(2.0),
-            ..PostConfig::default()
+            ..post
         },
     );
     let t = topology(&dropped);
