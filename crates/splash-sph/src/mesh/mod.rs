@@ -1,6 +1,7 @@
 //! Triangle meshes: the output of every engine.
 
 pub mod adjacency;
+pub mod clearance;
 pub mod clipping;
 pub mod components;
 pub mod correction;
@@ -22,8 +23,8 @@ pub use components::drop_small_components;
 pub use decimation::decimate;
 pub use self_intersections::self_intersecting_faces;
 pub use signed_distance::SignedDistance;
-pub use volume::VolumeScope;
 pub(crate) use stars::area_weighted_normals;
+pub use volume::VolumeScope;
 
 #[doc(no_inline)]
 pub use crate::data::TriMesh;

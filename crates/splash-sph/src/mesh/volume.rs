@@ -8,6 +8,7 @@ use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 use super::adjacency::{Neighbours, VertexFaces};
+use super::clearance::Clearance;
 
 /// What the volume steps of `PostConfig` restore: see `PostConfig::volume_scope`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -342,8 +343,8 @@ fn crosses_above(q: DVec3, p: [DVec3; 3]) -> bool {
 }
 
 /// Offsets each component (or, for [`VolumeScope::Frame`], the whole mesh) along its unit
-/// vertex normals by (target − volume)/area, the
-/// first-order change, at most `max_step`, `steps` times; `normals` and `measures` must be
+/// vertex normals by (target − volume)/area, the first-order change, at most `max_step` and
+/// as far as each vertex's `clearance` lets it, `steps` times; `normals` and `measures` must be
 /// those of `vertices` ([`normals_and_measures`]) and are recomputed between the steps but not
 /// after the last (the caller smooths again, or recomputes them once). The curvature's error of
 /// one step falls to a fraction of a percent after three. No targets: nothing to do.
@@ -357,6 +358,7 @@ pub fn restore(
     components: &Components,
     targets: &[f64],
     scope: VolumeScope,
+    clearance: &mut Clearance,
     steps: u32,
     max_step: f32,
 ) {
@@ -386,14 +388,6 @@ pub fn restore(
                 vec![offset(all, target); components.count]
             }
         };
-        vertices
-            .par_iter_mut()
-            .zip(normals.par_iter())
-            .zip(components.of_vertex.par_iter())
-            .for_each(|((p, n), &c)| {
-                if c != u32::MAX {
-                    *p += offsets[c as usize] * *n;
-                }
-            });
+        clearance.offset(vertices, normals, &components.of_vertex, &offsets);
     }
 }

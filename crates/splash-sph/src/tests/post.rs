@@ -5,9 +5,9 @@
 use glam::Vec3;
 
 use super::common::{lattice_ball, shared_data, torus};
-use crate::mesh::{TriMesh, VolumeScope};
 use crate::mesh::post::{PostConfig, Volumes, postprocess_mesh};
 use crate::mesh::topology::{component_volumes, normal_agreement, signed_volume, topology};
+use crate::mesh::{TriMesh, VolumeScope, self_intersecting_faces};
 use crate::{Config, Length, Reconstructor};
 
 const R: f32 = 0.1;
@@ -167,13 +167,19 @@ fn droplets(scope: VolumeScope) -> (Vec<f64>, Vec<f64>, usize) {
 
 #[test]
 fn droplets_get_the_volume_of_their_particles_each() {
-    // The field swells the droplets to spheres of radius r̄ = r (4.2 r³ each); post-processing
-    // by component brings each to its own particles' volume.
-    let (got, _, ball) = droplets(VolumeScope::Component);
+    // The field swells the droplets to spheres (3.6 r³ a lone particle's at r/2); post-processing
+    // by component brings the pair and the ball to their particles' volume, and the lone
+    // particles as far as their clearance lets them shrink (their focal distance, less the
+    // margin): to about 2 r³.
+    let (got, raw, ball) = droplets(VolumeScope::Component);
     assert_eq!(got.len(), 4, "{got:?}");
-    for (g, want) in got.iter().zip([1.0, 1.0, 2.0, ball as f64]) {
-        assert!((g / want - 1.0).abs() < 0.01, "{got:?}");
+    for (g, r) in got.iter().zip(&raw).take(2) {
+        assert!(*g > 1.0 && *g < 0.6 * r, "{got:?} from {raw:?}");
     }
+    // The pair holds its two particles' volume (the lone ones may end near it too).
+    let pair = got.iter().find(|g| (**g / 2.0 - 1.0).abs() < 0.01);
+    assert!(pair.is_some(), "{got:?}");
+    assert!((got[3] / ball as f64 - 1.0).abs() < 0.01, "{got:?}");
 }
 
 #[test]
@@ -229,6 +235,35 @@ fn a_real_splashing_frame_stays_closed_manifold_and_outward() {
     assert_topology_kept(&raw, &post);
     let error = signed_volume(&post) / (particles.len() as f64 * 0.014f64.powi(3)) - 1.0;
     assert!(error.abs() < 0.02, "{error}");
+}
+
+#[test]
+fn real_frames_whose_sheets_the_volume_steps_crossed_no_longer_cross() {
+    // cbd-small frames 31, 34 and 37: before the clearance, the default post-processing (by
+    // frame, without refinement) crossed 27, 118 and 113 faces of them; raw, none.
+    for frame in [31, 34, 37] {
+        let Some(path) = shared_data(&format!("cbd-small/frame_{frame:04}.ply")) else {
+            return;
+        };
+        let particles = crate::read_particles(&path, None).unwrap().positions;
+        let config = Config {
+            spacing: Some(0.014),
+            threads: Some(2),
+            ..Config::default()
+        };
+        let mesh = Reconstructor::new(config)
+            .unwrap()
+            .reconstruct(&particles)
+            .unwrap()
+            .mesh;
+        let crossing = self_intersecting_faces(&mesh.vertices, &mesh.triangles);
+        assert!(
+            crossing.is_empty(),
+            "frame {frame}: {} faces cross",
+            crossing.len()
+        );
+        assert!(topology(&mesh).is_closed_manifold());
+    }
 }
 
 #[test]
