@@ -115,6 +115,12 @@ impl<'a> SignedDistance<'a> {
     /// lies within the reach. The triangles are visited in a fixed order, so that the answer
     /// does not depend on the thread.
     pub fn at(&self, p: Vec3) -> Option<f32> {
+        self.nearest(p).map(|(d, _)| d)
+    }
+
+    /// [`at`](Self::at), with a triangle at that distance: a seed for the neighbours of `p`
+    /// (see [`distance_to`](Self::distance_to)).
+    pub fn nearest(&self, p: Vec3) -> Option<(f32, u32)> {
         let home = (p / self.cell).floor().as_ivec3();
         let mut best: Option<Nearest> = None;
         for shell in 0..=self.shells {
@@ -148,11 +154,18 @@ impl<'a> SignedDistance<'a> {
         if d > self.reach {
             return None;
         }
-        Some(if (p - b.point).dot(b.normal) < 0.0 {
+        let signed = if (p - b.point).dot(b.normal) < 0.0 {
             -d
         } else {
             d
-        })
+        };
+        Some((signed, b.faces[0]))
+    }
+
+    /// The unsigned distance from `p` to triangle `t`.
+    pub fn distance_to(&self, p: Vec3, t: u32) -> f32 {
+        let (q, _) = closest_on_triangle(p, self.triangles[t as usize], self.vertices);
+        p.distance(q)
     }
 
     /// Folds `triangles` into `best`: a nearer one replaces it, one as near (a face of the same

@@ -1,0 +1,387 @@
+//! A mesh's narrow-band level set, for OpenVDB output (`--format vdb`): the signed distance to
+//! the mesh (negative inside) at voxel centres `ijk · voxel`, active within a band of
+//! [`HALF_WIDTH_VOXELS`] voxels on either side, stored as OpenVDB stores it ([`VdbTree`]):
+//! 8³ leaves only where the band is, so that memory follows the surface, not the volume.
+//!
+//! The distances are the mesh's own: the nearest point of the nearest triangle (Ericson), signed
+//! by angle-weighted pseudonormals ([`SignedDistance`]), queried at the voxels within about a
+//! voxel of a triangle. Farther out, as in OpenVDB's `meshToVolume`, each voxel measures its
+//! distance to the triangles nearest to its six neighbours, layer after layer, and takes its
+//! sign from them: a voxel more than a voxel from the surface has the sign of its neighbours, as
+//! the surface cannot pass between them. Inactive voxels and tiles carry ±background by the sign
+//! of the region they lie in (see `tiles.rs`).
+
+mod tiles;
+
+use glam::{IVec3, Vec3};
+use rayon::prelude::*;
+use rustc_hash::{FxHashMap, FxHashSet};
+
+use std::path::Path;
+
+use crate::data::{Attribute, TriMesh};
+use crate::error::Result;
+use crate::io::{self, VdbGrid, VdbLeaf, VdbTree, VdbValues};
+use crate::mesh::SignedDistance;
+
+/// The level set's grid in a `.vdb` file.
+pub const SURFACE_GRID: &str = "surface";
+
+/// The narrow band's half width in voxels (OpenVDB's `LEVEL_SET_HALF_WIDTH`).
+pub const HALF_WIDTH_VOXELS: f32 = 3.0;
+
+/// Seeds are queried within this many voxels of a triangle: more than one, so that a voxel
+/// left to its neighbours lies more than a voxel from the surface and shares their sign.
+const SEED_VOXELS: f32 = 1.05;
+
+/// Layers of neighbours after the seeds: enough to cross the band's remaining
+/// `HALF_WIDTH_VOXELS − SEED_VOXELS` voxels along the axes' staircase (√3 times longer).
+const LAYERS: usize = 4;
+
+/// A mesh's narrow-band signed distance on a voxel grid.
+#[derive(Debug, Clone)]
+pub struct LevelSet {
+    /// The voxels' edge, in world units; voxel `ijk` is centred at `ijk · voxel`.
+    pub voxel: f32,
+    /// The band's half width in world units: the background of inactive voxels.
+    pub half_width: f32,
+    /// The active voxels.
+    pub tree: VdbTree,
+    /// The signed distance of each active voxel, in the tree's order.
+    pub values: Vec<f32>,
+}
+
+/// A leaf being computed: each voxel's distance (NaN until known) and nearest triangle.
+struct Work {
+    distance: [f32; 512],
+    nearest: [u32; 512],
+}
+
+impl LevelSet {
+    /// The level set of `mesh` (closed, wound counter-clockwise from outside) on voxels of
+    /// edge `voxel` (positive).
+    pub fn of_mesh(mesh: &TriMesh, voxel: f32) -> LevelSet {
+        let half_width = HALF_WIDTH_VOXELS * voxel;
+        let sd = SignedDistance::new(&mesh.vertices, &mesh.triangles, SEED_VOXELS * voxel);
+        let (origins, seeds) = seed_voxels(mesh, voxel, half_width);
+        let index: FxHashMap<[i32; 3], usize> =
+            origins.iter().enumerate().map(|(i, &o)| (o, i)).collect();
+        let mut work: Vec<Work> = origins
+            .par_iter()
+            .zip(&seeds)
+            .map(|(&origin, seeds)| {
+                let mut w = Work {
+                    distance: [f32::NAN; 512],
+                    nearest: [u32::MAX; 512],
+                };
+                for n in ones(seeds) {
+                    if let Some((d, t)) = sd.nearest(position(origin, n, voxel)) {
+                        w.distance[n] = d;
+                        w.nearest[n] = t;
+                    }
+                }
+                w
+            })
+            .collect();
+        for _ in 0..LAYERS {
+            let found: Vec<Vec<(usize, f32, u32)>> = origins
+                .par_iter()
+                .enumerate()
+                .map(|(i, &origin)| grow(i, origin, &origins, &index, &work, &sd, voxel))
+                .collect();
+            if found.iter().all(Vec::is_empty) {
+                break;
+            }
+            for (w, found) in work.iter_mut().zip(found) {
+                for (n, d, t) in found {
+                    w.distance[n] = d;
+                    w.nearest[n] = t;
+                }
+            }
+        }
+        let leaves: Vec<(VdbLeaf, Vec<f32>)> = origins
+            .par_iter()
+            .zip(work)
+            .filter_map(|(&origin, w)| leaf(origin, &w.distance, half_width))
+            .collect();
+        let mut values_of: FxHashMap<[i32; 3], Vec<f32>> = FxHashMap::default();
+        let mut plain = Vec::with_capacity(leaves.len());
+        for (l, v) in leaves {
+            values_of.insert(l.origin, v);
+            plain.push(l);
+        }
+        let mut tree = VdbTree::new(plain);
+        tiles::fill_signs(&mut tree);
+        let values = tree
+            .leaves
+            .iter()
+            .flat_map(|l| values_of.remove(&l.origin).unwrap_or_default())
+            .collect();
+        LevelSet {
+            voxel,
+            half_width,
+            tree,
+            values,
+        }
+    }
+
+    /// The grid a per-voxel attribute is written as: `v` for `velocity` (the name Blender's
+    /// and Houdini's motion blur read), else the attribute's own name.
+    pub fn grid_name(attribute: &str) -> &str {
+        if attribute == "velocity" {
+            "v"
+        } else {
+            attribute
+        }
+    }
+
+    /// Writes the level set as the float grid `surface` (class `level set`) and each of
+    /// `attributes` (one value per active voxel, in the tree's order) as a grid named by
+    /// [`grid_name`](Self::grid_name), to `path`, whole or not at all.
+    pub fn write_file(&self, path: &Path, attributes: &[(String, Attribute)]) -> Result<()> {
+        let mut grids = vec![VdbGrid {
+            name: SURFACE_GRID,
+            values: VdbValues::LevelSet {
+                values: &self.values,
+                half_width: self.half_width,
+            },
+        }];
+        for (name, values) in attributes {
+            grids.push(VdbGrid {
+                name: Self::grid_name(name),
+                values: match values {
+                    Attribute::Scalar(s) => VdbValues::Scalar(s),
+                    Attribute::Vector(v) => VdbValues::Vector(v),
+                },
+            });
+        }
+        io::write_vdb_file(path, &self.tree, self.voxel, &grids)
+    }
+
+    /// The centres of the active voxels, in the tree's order.
+    pub fn positions(&self) -> Vec<Vec3> {
+        self.tree
+            .leaves
+            .iter()
+            .flat_map(|l| ones(&l.active).map(move |n| position(l.origin, n, self.voxel)))
+            .collect()
+    }
+
+    /// The index coordinates of the active voxels, in the tree's order.
+    pub fn coordinates(&self) -> Vec<[i32; 3]> {
+        self.tree
+            .leaves
+            .iter()
+            .flat_map(|l| ones(&l.active).map(move |n| (IVec3::from(l.origin) + offset(n)).into()))
+            .collect()
+    }
+}
+
+/// The leaves within the band of some triangle (every triangle's box grown by `half_width`),
+/// sorted, and in each the voxels within [`SEED_VOXELS`] of a triangle's box.
+fn seed_voxels(mesh: &TriMesh, voxel: f32, half_width: f32) -> (Vec<[i32; 3]>, Vec<[u64; 8]>) {
+    let boxes = |grow: f32| {
+        mesh.triangles.par_iter().filter_map(move |t| {
+            let [a, b, c] = t.map(|i| mesh.vertices[i as usize]);
+            let lo = ((a.min(b).min(c) - grow) / voxel).ceil();
+            let hi = ((a.max(b).max(c) + grow) / voxel).floor();
+            // Voxel indices are i32 (OpenVDB's Coord); farther triangles have no voxels.
+            let fits = |v: Vec3| v.abs().max_element() < (i32::MAX - 16) as f32;
+            (fits(lo) && fits(hi)).then(|| (lo.as_ivec3(), hi.as_ivec3()))
+        })
+    };
+    let leaves: FxHashSet<[i32; 3]> = boxes(half_width)
+        .fold(FxHashSet::default, |mut set, (lo, hi): (IVec3, IVec3)| {
+            let (lo, hi): (IVec3, IVec3) = (lo >> 3i32, hi >> 3i32);
+            for x in lo.x..=hi.x {
+                for y in lo.y..=hi.y {
+                    for z in lo.z..=hi.z {
+                        set.insert([x << 3, y << 3, z << 3]);
+                    }
+                }
+            }
+            set
+        })
+        .reduce(FxHashSet::default, |mut a, b| {
+            let (small, mut large) = if a.len() < b.len() { (a, b) } else { (b, a) };
+            large.extend(small);
+            a = large;
+            a
+        });
+    let mut origins: Vec<[i32; 3]> = leaves.into_iter().collect();
+    origins.par_sort_unstable();
+    let index: FxHashMap<[i32; 3], usize> =
+        origins.iter().enumerate().map(|(i, &o)| (o, i)).collect();
+    let mut seeds = vec![[0u64; 8]; origins.len()];
+    let marks: Vec<(usize, usize)> = boxes(SEED_VOXELS * voxel)
+        .flat_map_iter(|(lo, hi)| {
+            let index = &index;
+            (lo.x..=hi.x).flat_map(move |x| {
+                (lo.y..=hi.y).flat_map(move |y| {
+                    (lo.z..=hi.z).filter_map(move |z| {
+                        let v = IVec3::new(x, y, z);
+                        let leaf = index.get(&(v & !7).to_array())?;
+                        Some((*leaf, voxel_bit(v)))
+                    })
+                })
+            })
+        })
+        .collect();
+    for (leaf, n) in marks {
+        seeds[leaf][n >> 6] |= 1 << (n & 63);
+    }
+    (origins, seeds)
+}
+
+/// The unknown voxels of leaf `i` next to a known one: each the nearest of its known
+/// neighbours' nearest triangles, with their sign.
+fn grow(
+    i: usize,
+    origin: [i32; 3],
+    origins: &[[i32; 3]],
+    index: &FxHashMap<[i32; 3], usize>,
+    work: &[Work],
+    sd: &SignedDistance,
+    voxel: f32,
+) -> Vec<(usize, f32, u32)> {
+    debug_assert_eq!(origins[i], origin);
+    let mut found = Vec::new();
+    let here = &work[i];
+    for n in 0..512 {
+        if !here.distance[n].is_nan() {
+            continue;
+        }
+        let v = IVec3::from(origin) + offset(n);
+        let p = position(origin, n, voxel);
+        let mut best: Option<(f32, u32, bool)> = None;
+        let mut tried = [u32::MAX; 6];
+        for (k, step) in [
+            IVec3::X,
+            IVec3::NEG_X,
+            IVec3::Y,
+            IVec3::NEG_Y,
+            IVec3::Z,
+            IVec3::NEG_Z,
+        ]
+        .into_iter()
+        .enumerate()
+        {
+            let u = v + step;
+            let leaf = if (u & !7) == IVec3::from(origin) {
+                here
+            } else {
+                match index.get(&(u & !7).to_array()) {
+                    Some(&j) => &work[j],
+                    None => continue,
+                }
+            };
+            let m = voxel_bit(u);
+            let (d, t) = (leaf.distance[m], leaf.nearest[m]);
+            if d.is_nan() || tried[..k].contains(&t) {
+                continue;
+            }
+            tried[k] = t;
+            let e = sd.distance_to(p, t);
+            if best.is_none_or(|(b, bt, _)| e < b || (e == b && t < bt)) {
+                best = Some((e, t, d < 0.0));
+            }
+        }
+        if let Some((e, t, inside)) = best {
+            found.push((n, if inside { -e } else { e }, t));
+        }
+    }
+    found
+}
+
+/// The leaf at `origin` from its voxels' distances (NaN: unknown, beyond the band): active
+/// where within the band, the others signed by their known neighbours within the leaf; None
+/// when no voxel is active.
+fn leaf(origin: [i32; 3], distance: &[f32; 512], half_width: f32) -> Option<(VdbLeaf, Vec<f32>)> {
+    let mut active = [0u64; 8];
+    let mut values = Vec::new();
+    // Signs: 1 outside, -1 inside, 0 unknown.
+    let mut sign = [0i8; 512];
+    for (n, &d) in distance.iter().enumerate() {
+        if d.is_nan() {
+            continue;
+        }
+        sign[n] = if d < 0.0 { -1 } else { 1 };
+        if d.abs() < half_width {
+            active[n >> 6] |= 1 << (n & 63);
+            values.push(d);
+        }
+    }
+    if values.is_empty() {
+        return None;
+    }
+    // Unknown voxels lie beyond the band, as do their known neighbours (by more than a voxel):
+    // a flood from the known ones within the leaf signs them all (the leaf is connected, so
+    // every unknown region borders a known voxel).
+    let mut queue: Vec<usize> = (0..512).filter(|&n| sign[n] != 0).collect();
+    while let Some(n) = queue.pop() {
+        let v = offset(n);
+        for step in [
+            IVec3::X,
+            IVec3::NEG_X,
+            IVec3::Y,
+            IVec3::NEG_Y,
+            IVec3::Z,
+            IVec3::NEG_Z,
+        ] {
+            let u = v + step;
+            if u.min_element() < 0 || u.max_element() > 7 {
+                continue;
+            }
+            let m = voxel_bit(u);
+            if sign[m] == 0 {
+                sign[m] = sign[n];
+                queue.push(m);
+            }
+        }
+    }
+    let mut outside = [0u64; 8];
+    for (n, &s) in sign.iter().enumerate() {
+        if s > 0 {
+            outside[n >> 6] |= 1 << (n & 63);
+        }
+    }
+    Some((
+        VdbLeaf {
+            origin,
+            active,
+            outside,
+        },
+        values,
+    ))
+}
+
+/// Bit `n` of a leaf's mask is voxel `(n >> 6, (n >> 3) & 7, n & 7)` from its origin.
+fn offset(n: usize) -> IVec3 {
+    let n = n as i32;
+    IVec3::new(n >> 6, (n >> 3) & 7, n & 7)
+}
+
+/// The bit of voxel `v` in its leaf's masks.
+fn voxel_bit(v: IVec3) -> usize {
+    let l = v & 7;
+    ((l.x << 6) | (l.y << 3) | l.z) as usize
+}
+
+/// The centre of voxel `n` of the leaf at `origin`.
+fn position(origin: [i32; 3], n: usize, voxel: f32) -> Vec3 {
+    (IVec3::from(origin) + offset(n)).as_vec3() * voxel
+}
+
+/// The set bits of a mask.
+pub(crate) fn ones(mask: &[u64]) -> impl Iterator<Item = usize> + '_ {
+    mask.iter().enumerate().flat_map(|(w, &word)| {
+        let mut bits = word;
+        std::iter::from_fn(move || {
+            (bits != 0).then(|| {
+                let b = bits.trailing_zeros() as usize;
+                bits &= bits - 1;
+                (w << 6) | b
+            })
+        })
+    })
+}
