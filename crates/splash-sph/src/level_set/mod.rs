@@ -18,6 +18,7 @@ use rayon::prelude::*;
 use rustc_hash::{FxHashMap, FxHashSet};
 
 use std::path::Path;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 use crate::data::{Attribute, TriMesh};
 use crate::error::Result;
@@ -37,6 +38,41 @@ const SEED_VOXELS: f32 = 1.05;
 /// Layers of neighbours after the seeds: enough to cross the band's remaining
 /// `HALF_WIDTH_VOXELS − SEED_VOXELS` voxels along the axes' staircase (√3 times longer).
 const LAYERS: usize = 4;
+
+/// Steps at most from a neighbour's nearest triangle to a nearer one around its corners: the
+/// nearest triangle moves along the surface from voxel to voxel, a triangle or two per voxel.
+const DESCENT: usize = 8;
+
+/// The triangles around each vertex (compressed rows).
+struct Fans {
+    start: Vec<u32>,
+    triangles: Vec<u32>,
+}
+
+impl Fans {
+    fn new(mesh: &TriMesh) -> Fans {
+        let mut start = vec![0u32; mesh.vertices.len() + 1];
+        for t in &mesh.triangles {
+            t.iter().for_each(|&v| start[v as usize + 1] += 1);
+        }
+        for v in 0..mesh.vertices.len() {
+            start[v + 1] += start[v];
+        }
+        let mut next = start.clone();
+        let mut triangles = vec![0u32; 3 * mesh.triangles.len()];
+        for (i, t) in mesh.triangles.iter().enumerate() {
+            for &v in t {
+                triangles[next[v as usize] as usize] = i as u32;
+                next[v as usize] += 1;
+            }
+        }
+        Fans { start, triangles }
+    }
+
+    fn around(&self, v: u32) -> &[u32] {
+        &self.triangles[self.start[v as usize] as usize..self.start[v as usize + 1] as usize]
+    }
+}
 
 /// A mesh's narrow-band signed distance on a voxel grid.
 #[derive(Debug, Clone)]
@@ -83,11 +119,17 @@ impl LevelSet {
                 w
             })
             .collect();
+        let fans = Fans::new(mesh);
+        let near = Near {
+            mesh,
+            sd: &sd,
+            fans: &fans,
+        };
         for _ in 0..LAYERS {
             let found: Vec<Vec<(usize, f32, u32)>> = origins
                 .par_iter()
                 .enumerate()
-                .map(|(i, &origin)| grow(i, origin, &origins, &index, &work, &sd, voxel))
+                .map(|(i, &origin)| grow(i, origin, &index, &work, &near, voxel))
                 .collect();
             if found.iter().all(Vec::is_empty) {
                 break;
@@ -212,39 +254,68 @@ fn seed_voxels(mesh: &TriMesh, voxel: f32, half_width: f32) -> (Vec<[i32; 3]>, V
     origins.par_sort_unstable();
     let index: FxHashMap<[i32; 3], usize> =
         origins.iter().enumerate().map(|(i, &o)| (o, i)).collect();
-    let mut seeds = vec![[0u64; 8]; origins.len()];
-    let marks: Vec<(usize, usize)> = boxes(SEED_VOXELS * voxel)
-        .flat_map_iter(|(lo, hi)| {
-            let index = &index;
-            (lo.x..=hi.x).flat_map(move |x| {
-                (lo.y..=hi.y).flat_map(move |y| {
-                    (lo.z..=hi.z).filter_map(move |z| {
-                        let v = IVec3::new(x, y, z);
-                        let leaf = index.get(&(v & !7).to_array())?;
-                        Some((*leaf, voxel_bit(v)))
-                    })
-                })
-            })
-        })
+    let seeds: Vec<[AtomicU64; 8]> = (0..origins.len()).map(|_| Default::default()).collect();
+    boxes(SEED_VOXELS * voxel).for_each(|(lo, hi): (IVec3, IVec3)| {
+        // Leaf by leaf (a box meets one or two), the box's voxels in each.
+        let (first, last): (IVec3, IVec3) = (lo >> 3i32, hi >> 3i32);
+        for leaf in cells_between(first, last) {
+            let origin = leaf << 3i32;
+            let Some(&i) = index.get(&origin.to_array()) else {
+                continue;
+            };
+            let (a, b) = (lo.max(origin), hi.min(origin + 7));
+            for v in cells_between(a, b) {
+                let n = voxel_bit(v);
+                seeds[i][n >> 6].fetch_or(1 << (n & 63), Ordering::Relaxed);
+            }
+        }
+    });
+    let seeds = seeds
+        .into_iter()
+        .map(|s| s.map(AtomicU64::into_inner))
         .collect();
-    for (leaf, n) in marks {
-        seeds[leaf][n >> 6] |= 1 << (n & 63);
-    }
     (origins, seeds)
 }
 
-/// The unknown voxels of leaf `i` next to a known one: each the nearest of its known
-/// neighbours' nearest triangles, with their sign.
+/// What finds a voxel's nearest triangle from its neighbours'.
+struct Near<'a> {
+    mesh: &'a TriMesh,
+    sd: &'a SignedDistance<'a>,
+    fans: &'a Fans,
+}
+
+impl Near<'_> {
+    /// From triangle `t` at distance `d` from `p`, the nearest triangle reached by stepping to
+    /// a nearer one around a corner, and its distance.
+    fn descend(&self, p: Vec3, mut t: u32, mut d: f32) -> (f32, u32) {
+        for _ in 0..DESCENT {
+            let mut moved = false;
+            for v in self.mesh.triangles[t as usize] {
+                for &u in self.fans.around(v) {
+                    let e = self.sd.distance_to(p, u);
+                    if e < d || (e == d && u < t) {
+                        (d, t, moved) = (e, u, u != t);
+                    }
+                }
+            }
+            if !moved {
+                break;
+            }
+        }
+        (d, t)
+    }
+}
+
+/// The unknown voxels of leaf `i` next to a known one: each the nearest triangle reached from
+/// its known neighbours' nearest ones, with their sign.
 fn grow(
     i: usize,
     origin: [i32; 3],
-    origins: &[[i32; 3]],
     index: &FxHashMap<[i32; 3], usize>,
     work: &[Work],
-    sd: &SignedDistance,
+    near: &Near,
     voxel: f32,
 ) -> Vec<(usize, f32, u32)> {
-    debug_assert_eq!(origins[i], origin);
     let mut found = Vec::new();
     let here = &work[i];
     for n in 0..512 {
@@ -281,12 +352,13 @@ fn grow(
                 continue;
             }
             tried[k] = t;
-            let e = sd.distance_to(p, t);
+            let e = near.sd.distance_to(p, t);
             if best.is_none_or(|(b, bt, _)| e < b || (e == b && t < bt)) {
                 best = Some((e, t, d < 0.0));
             }
         }
         if let Some((e, t, inside)) = best {
+            let (e, t) = near.descend(p, t, e);
             found.push((n, if inside { -e } else { e }, t));
         }
     }
@@ -355,6 +427,13 @@ fn leaf(origin: [i32; 3], distance: &[f32; 512], half_width: f32) -> Option<(Vdb
     ))
 }
 
+/// The points of the box from `lo` to `hi`, both included.
+fn cells_between(lo: IVec3, hi: IVec3) -> impl Iterator<Item = IVec3> {
+    (lo.x..=hi.x).flat_map(move |x| {
+        (lo.y..=hi.y).flat_map(move |y| (lo.z..=hi.z).map(move |z| IVec3::new(x, y, z)))
+    })
+}
+
 /// Bit `n` of a leaf's mask is voxel `(n >> 6, (n >> 3) & 7, n & 7)` from its origin.
 fn offset(n: usize) -> IVec3 {
     let n = n as i32;
@@ -385,3 +464,6 @@ pub(crate) fn ones(mask: &[u64]) -> impl Iterator<Item = usize> + '_ {
         })
     })
 }
+
+#[cfg(test)]
+mod tests;
