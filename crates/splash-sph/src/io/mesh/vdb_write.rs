@@ -313,13 +313,14 @@ impl Grid<'_> {
         }
     }
 
-    /// The background's bytes, and (for a level set) −background's.
-    fn background(&self) -> ([u8; 4], [u8; 4]) {
+    /// The background's bytes (a value's: 12 for a vector), and −background's.
+    fn background(&self) -> (Vec<u8>, Vec<u8>) {
         match self.grid.values {
-            VdbValues::LevelSet { half_width, .. } => {
-                (half_width.to_le_bytes(), (-half_width).to_le_bytes())
-            }
-            _ => ([0; 4], [0; 4]),
+            VdbValues::LevelSet { half_width, .. } => (
+                half_width.to_le_bytes().into(),
+                (-half_width).to_le_bytes().into(),
+            ),
+            _ => (vec![0; self.value_bytes()], vec![0; self.value_bytes()]),
         }
     }
 
@@ -443,7 +444,6 @@ impl Grid<'_> {
             for c in tile {
                 put(out, &c.to_le_bytes())?;
             }
-            // A vec3 grid has no tiles: the value is a float.
             put(out, &minus)?;
             put(out, &[0])?;
         }
