@@ -4,12 +4,14 @@
 //! 8³ leaves only where the band is, so that memory follows the surface, not the volume.
 //!
 //! The distances are the mesh's own: the nearest point of the nearest triangle (Ericson), signed
-//! by angle-weighted pseudonormals ([`SignedDistance`]), queried at the voxels within about a
-//! voxel of a triangle. Farther out, as in OpenVDB's `meshToVolume`, each voxel measures its
-//! distance to the triangles nearest to its six neighbours, layer after layer, and takes its
-//! sign from them: a voxel more than a voxel from the surface has the sign of its neighbours, as
-//! the surface cannot pass between them. Inactive voxels and tiles carry ±background by the sign
-//! of the region they lie in (see `tiles.rs`).
+//! by angle-weighted pseudonormals (as [`SignedDistance`](crate::mesh::SignedDistance) signs
+//! them). Each triangle offers its distance to the voxels within about a voxel of it, which
+//! keep the least, and are signed by the triangles around their nearest one. Farther out, as in
+//! OpenVDB's `meshToVolume`, each voxel starts from the triangles nearest to its six neighbours,
+//! layer after layer, steps to nearer ones across edges and corners, and takes its sign from
+//! them: a voxel more than a voxel from the surface has the sign of its neighbours, as the
+//! surface cannot pass between them. Inactive voxels and tiles carry ±background by the sign of
+//! the region they lie in (see `tiles.rs`).
 
 mod tiles;
 
@@ -23,7 +25,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use crate::data::{Attribute, TriMesh};
 use crate::error::Result;
 use crate::io::{self, VdbGrid, VdbLeaf, VdbTree, VdbValues};
-use crate::mesh::SignedDistance;
+use crate::mesh::signed_distance::{signed_distance_among, triangle_distance};
 
 /// The level set's grid in a `.vdb` file.
 pub const SURFACE_GRID: &str = "surface";
@@ -87,10 +89,38 @@ pub struct LevelSet {
     pub values: Vec<f32>,
 }
 
-/// A leaf being computed: each voxel's distance (NaN until known) and nearest triangle.
-struct Work {
-    distance: [f32; 512],
-    nearest: [u32; 512],
+/// A leaf being computed: each voxel's distance and nearest triangle, packed as the distance's
+/// bits over the triangle's index (so that, while distances are unsigned, the least is the
+/// nearest); `u64::MAX` until known.
+struct Work([AtomicU64; 512]);
+
+impl Work {
+    fn new() -> Work {
+        Work([const { AtomicU64::new(u64::MAX) }; 512])
+    }
+
+    fn get(&self, n: usize) -> Option<(f32, u32)> {
+        let packed = self.0[n].load(Ordering::Relaxed);
+        (packed != u64::MAX).then(|| (f32::from_bits((packed >> 32) as u32), packed as u32))
+    }
+
+    fn set(&self, n: usize, d: f32, t: u32) {
+        self.0[n].store(pack(d, t), Ordering::Relaxed);
+    }
+
+    /// Keeps the nearer of what voxel `n` has and `d` (unsigned) to triangle `t`.
+    fn offer(&self, n: usize, d: f32, t: u32) {
+        self.0[n].fetch_min(pack(d, t), Ordering::Relaxed);
+    }
+
+    /// Each voxel's signed distance, NaN where unknown.
+    fn distances(&self) -> [f32; 512] {
+        std::array::from_fn(|n| self.get(n).map_or(f32::NAN, |(d, _)| d))
+    }
+}
+
+fn pack(d: f32, t: u32) -> u64 {
+    (u64::from(d.to_bits()) << 32) | u64::from(t)
 }
 
 impl LevelSet {
@@ -98,33 +128,26 @@ impl LevelSet {
     /// edge `voxel` (positive).
     pub fn of_mesh(mesh: &TriMesh, voxel: f32) -> LevelSet {
         let half_width = HALF_WIDTH_VOXELS * voxel;
-        let sd = SignedDistance::new(&mesh.vertices, &mesh.triangles, SEED_VOXELS * voxel);
-        let (origins, seeds) = seed_voxels(mesh, voxel, half_width);
+        let (origins, work) = seeds(mesh, voxel, half_width);
         let index: FxHashMap<[i32; 3], usize> =
             origins.iter().enumerate().map(|(i, &o)| (o, i)).collect();
-        let mut work: Vec<Work> = origins
-            .par_iter()
-            .zip(&seeds)
-            .map(|(&origin, seeds)| {
-                let mut w = Work {
-                    distance: [f32::NAN; 512],
-                    nearest: [u32::MAX; 512],
-                };
-                for n in ones(seeds) {
-                    if let Some((d, t)) = sd.nearest(position(origin, n, voxel)) {
-                        w.distance[n] = d;
-                        w.nearest[n] = t;
-                    }
-                }
-                w
-            })
-            .collect();
         let fans = Fans::new(mesh);
-        let near = Near {
-            mesh,
-            sd: &sd,
-            fans: &fans,
-        };
+        let near = Near { mesh, fans: &fans };
+        // The seeds' signs, from the pseudonormals of the triangles around their nearest one.
+        origins.par_iter().zip(&work).for_each(|(&origin, w)| {
+            for n in 0..512 {
+                if let Some((_, t)) = w.get(n) {
+                    let p = position(origin, n, voxel);
+                    let around = mesh.triangles[t as usize]
+                        .into_iter()
+                        .flat_map(|v| fans.around(v));
+                    let d =
+                        signed_distance_among(p, around.copied(), &mesh.vertices, &mesh.triangles)
+                            .expect("a triangle around its own corners");
+                    w.set(n, d, t);
+                }
+            }
+        });
         for _ in 0..LAYERS {
             let found: Vec<Vec<(usize, f32, u32)>> = origins
                 .par_iter()
@@ -134,17 +157,16 @@ impl LevelSet {
             if found.iter().all(Vec::is_empty) {
                 break;
             }
-            for (w, found) in work.iter_mut().zip(found) {
+            for (w, found) in work.iter().zip(found) {
                 for (n, d, t) in found {
-                    w.distance[n] = d;
-                    w.nearest[n] = t;
+                    w.set(n, d, t);
                 }
             }
         }
         let leaves: Vec<(VdbLeaf, Vec<f32>)> = origins
             .par_iter()
             .zip(work)
-            .filter_map(|(&origin, w)| leaf(origin, &w.distance, half_width))
+            .filter_map(|(&origin, w)| leaf(origin, &w.distances(), half_width))
             .collect();
         let mut values_of: FxHashMap<[i32; 3], Vec<f32>> = FxHashMap::default();
         let mut plain = Vec::with_capacity(leaves.len());
@@ -220,87 +242,113 @@ impl LevelSet {
 }
 
 /// The leaves within the band of some triangle (every triangle's box grown by `half_width`),
-/// sorted, and in each the voxels within [`SEED_VOXELS`] of a triangle's box.
-fn seed_voxels(mesh: &TriMesh, voxel: f32, half_width: f32) -> (Vec<[i32; 3]>, Vec<[u64; 8]>) {
+/// sorted, with the unsigned distance to the nearest triangle and that triangle at every voxel
+/// within [`SEED_VOXELS`] of one: each triangle offers its distance to the voxels of its box
+/// grown by that much, and each voxel keeps the least.
+fn seeds(mesh: &TriMesh, voxel: f32, half_width: f32) -> (Vec<[i32; 3]>, Vec<Work>) {
     let boxes = |grow: f32| {
-        mesh.triangles.par_iter().filter_map(move |t| {
-            let [a, b, c] = t.map(|i| mesh.vertices[i as usize]);
-            let lo = ((a.min(b).min(c) - grow) / voxel).ceil();
-            let hi = ((a.max(b).max(c) + grow) / voxel).floor();
-            // Voxel indices are i32 (OpenVDB's Coord); farther triangles have no voxels.
-            let fits = |v: Vec3| v.abs().max_element() < (i32::MAX - 16) as f32;
-            (fits(lo) && fits(hi)).then(|| (lo.as_ivec3(), hi.as_ivec3()))
-        })
+        mesh.triangles
+            .par_iter()
+            .enumerate()
+            .filter_map(move |(i, t)| {
+                let [a, b, c] = t.map(|i| mesh.vertices[i as usize]);
+                let lo = ((a.min(b).min(c) - grow) / voxel).ceil();
+                let hi = ((a.max(b).max(c) + grow) / voxel).floor();
+                // Voxel indices are i32 (OpenVDB's Coord); farther triangles have no voxels.
+                let fits = |v: Vec3| v.abs().max_element() < (i32::MAX - 16) as f32;
+                (fits(lo) && fits(hi)).then(|| (i as u32, lo.as_ivec3(), hi.as_ivec3()))
+            })
     };
     let leaves: FxHashSet<[i32; 3]> = boxes(half_width)
-        .fold(FxHashSet::default, |mut set, (lo, hi): (IVec3, IVec3)| {
-            let (lo, hi): (IVec3, IVec3) = (lo >> 3i32, hi >> 3i32);
-            for x in lo.x..=hi.x {
-                for y in lo.y..=hi.y {
-                    for z in lo.z..=hi.z {
-                        set.insert([x << 3, y << 3, z << 3]);
-                    }
-                }
-            }
-            set
-        })
-        .reduce(FxHashSet::default, |mut a, b| {
+        .fold(
+            FxHashSet::default,
+            |mut set, (_, lo, hi): (u32, IVec3, IVec3)| {
+                set.extend(cells_between(lo >> 3i32, hi >> 3i32).map(|l| (l << 3i32).to_array()));
+                set
+            },
+        )
+        .reduce(FxHashSet::default, |a, b| {
             let (small, mut large) = if a.len() < b.len() { (a, b) } else { (b, a) };
             large.extend(small);
-            a = large;
-            a
+            large
         });
     let mut origins: Vec<[i32; 3]> = leaves.into_iter().collect();
     origins.par_sort_unstable();
     let index: FxHashMap<[i32; 3], usize> =
         origins.iter().enumerate().map(|(i, &o)| (o, i)).collect();
-    let seeds: Vec<[AtomicU64; 8]> = (0..origins.len()).map(|_| Default::default()).collect();
-    boxes(SEED_VOXELS * voxel).for_each(|(lo, hi): (IVec3, IVec3)| {
+    let work: Vec<Work> = (0..origins.len()).map(|_| Work::new()).collect();
+    let reach = SEED_VOXELS * voxel;
+    boxes(reach).for_each(|(t, lo, hi): (u32, IVec3, IVec3)| {
+        let tri = mesh.triangles[t as usize];
+        let [a, b, c] = tri.map(|i| mesh.vertices[i as usize]);
+        // Only voxels near the triangle's plane can be near the triangle.
+        let normal = (b - a).cross(c - a).normalize_or_zero();
         // Leaf by leaf (a box meets one or two), the box's voxels in each.
-        let (first, last): (IVec3, IVec3) = (lo >> 3i32, hi >> 3i32);
-        for leaf in cells_between(first, last) {
+        for leaf in cells_between(lo >> 3i32, hi >> 3i32) {
             let origin = leaf << 3i32;
             let Some(&i) = index.get(&origin.to_array()) else {
                 continue;
             };
-            let (a, b) = (lo.max(origin), hi.min(origin + 7));
-            for v in cells_between(a, b) {
-                let n = voxel_bit(v);
-                seeds[i][n >> 6].fetch_or(1 << (n & 63), Ordering::Relaxed);
+            for v in cells_between(lo.max(origin), hi.min(origin + 7)) {
+                let p = v.as_vec3() * voxel;
+                if (p - a).dot(normal).abs() > reach {
+                    continue;
+                }
+                let d = triangle_distance(p, tri, &mesh.vertices);
+                if d <= reach {
+                    work[i].offer(voxel_bit(v), d, t);
+                }
             }
         }
     });
-    let seeds = seeds
-        .into_iter()
-        .map(|s| s.map(AtomicU64::into_inner))
-        .collect();
-    (origins, seeds)
+    (origins, work)
 }
 
 /// What finds a voxel's nearest triangle from its neighbours'.
 struct Near<'a> {
     mesh: &'a TriMesh,
-    sd: &'a SignedDistance<'a>,
     fans: &'a Fans,
 }
 
 impl Near<'_> {
     /// From triangle `t` at distance `d` from `p`, the nearest triangle reached by stepping to
-    /// a nearer one around a corner, and its distance.
+    /// a nearer one across an edge, then (where the nearest point is a corner, which edges can
+    /// walk around without getting nearer) to one around a corner; and its distance.
     fn descend(&self, p: Vec3, mut t: u32, mut d: f32) -> (f32, u32) {
+        let triangles = &self.mesh.triangles;
+        let mut corners = true;
         for _ in 0..DESCENT {
-            let mut moved = false;
-            for v in self.mesh.triangles[t as usize] {
-                for &u in self.fans.around(v) {
-                    let e = self.sd.distance_to(p, u);
-                    if e < d || (e == d && u < t) {
-                        (d, t, moved) = (e, u, u != t);
-                    }
+            let tri = triangles[t as usize];
+            let mut best = (d, t);
+            let offer = |u: u32, best: &mut (f32, u32)| {
+                let e = triangle_distance(p, triangles[u as usize], &self.mesh.vertices);
+                if e < best.0 || (e == best.0 && u < best.1) {
+                    *best = (e, u);
+                }
+            };
+            for k in 0..3 {
+                let (a, b) = (tri[k], tri[(k + 1) % 3]);
+                // The triangles across edge ab: those around a that also have b.
+                let across = self
+                    .fans
+                    .around(a)
+                    .iter()
+                    .filter(|&&u| u != t && triangles[u as usize].contains(&b));
+                across.for_each(|&u| offer(u, &mut best));
+            }
+            if best.1 == t && corners {
+                corners = false;
+                for &v in &tri {
+                    self.fans
+                        .around(v)
+                        .iter()
+                        .for_each(|&u| offer(u, &mut best));
                 }
             }
-            if !moved {
+            if best.1 == t {
                 break;
             }
+            (d, t) = best;
         }
         (d, t)
     }
@@ -319,7 +367,7 @@ fn grow(
     let mut found = Vec::new();
     let here = &work[i];
     for n in 0..512 {
-        if !here.distance[n].is_nan() {
+        if here.get(n).is_some() {
             continue;
         }
         let v = IVec3::from(origin) + offset(n);
@@ -346,13 +394,14 @@ fn grow(
                     None => continue,
                 }
             };
-            let m = voxel_bit(u);
-            let (d, t) = (leaf.distance[m], leaf.nearest[m]);
-            if d.is_nan() || tried[..k].contains(&t) {
+            let Some((d, t)) = leaf.get(voxel_bit(u)) else {
+                continue;
+            };
+            if tried[..k].contains(&t) {
                 continue;
             }
             tried[k] = t;
-            let e = near.sd.distance_to(p, t);
+            let e = triangle_distance(p, near.mesh.triangles[t as usize], &near.mesh.vertices);
             if best.is_none_or(|(b, bt, _)| e < b || (e == b && t < bt)) {
                 best = Some((e, t, d < 0.0));
             }
