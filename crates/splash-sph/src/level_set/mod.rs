@@ -125,8 +125,23 @@ fn pack(d: f32, t: u32) -> u64 {
 
 impl LevelSet {
     /// The level set of `mesh` (closed, wound counter-clockwise from outside) on voxels of
-    /// edge `voxel` (positive).
-    pub fn of_mesh(mesh: &TriMesh, voxel: f32) -> LevelSet {
+    /// edge `voxel`. Errors for a voxel that is not a positive number, a triangle naming a
+    /// missing vertex, and a vertex that is not finite.
+    pub fn of_mesh(mesh: &TriMesh, voxel: f32) -> Result<LevelSet> {
+        if !(voxel.is_finite() && voxel > 0.0) {
+            bail_config!("a level set's voxel size must be a positive number, not {voxel}");
+        }
+        let n = mesh.vertices.len();
+        if let Some(t) = mesh
+            .triangles
+            .iter()
+            .position(|t| t.iter().any(|&i| i as usize >= n))
+        {
+            bail_input!("mesh triangle {t} names a vertex beyond its {n} vertices");
+        }
+        if let Some(v) = mesh.vertices.iter().position(|v| !v.is_finite()) {
+            bail_input!("mesh vertex {v} is not finite: {}", mesh.vertices[v]);
+        }
         let half_width = HALF_WIDTH_VOXELS * voxel;
         let (origins, work) = seeds(mesh, voxel, half_width);
         let index: FxHashMap<[i32; 3], usize> =
@@ -181,12 +196,12 @@ impl LevelSet {
             .iter()
             .flat_map(|l| values_of.remove(&l.origin).unwrap_or_default())
             .collect();
-        LevelSet {
+        Ok(LevelSet {
             voxel,
             half_width,
             tree,
             values,
-        }
+        })
     }
 
     /// The grid a per-voxel attribute is written as: `v` for `velocity` (the name Blender's

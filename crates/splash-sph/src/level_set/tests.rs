@@ -58,7 +58,7 @@ fn a_ball_has_its_distance_in_the_band() {
     let (mesh, centre, radius) = ball();
     // A voxel of 3r puts the centre (radius ≈ 7.75r) inside the band of 3 voxels.
     let voxel = 3.0 * R;
-    let ls = LevelSet::of_mesh(&mesh, voxel);
+    let ls = LevelSet::of_mesh(&mesh, voxel).unwrap();
     let phi = voxels(&ls);
     let at_centre = trilinear(&phi, centre, voxel).expect("the centre is in the band");
     assert!(
@@ -77,7 +77,7 @@ fn a_ball_has_its_distance_in_the_band() {
 fn a_ball_level_set_is_the_meshs_signed_distance() {
     let (mesh, _, _) = ball();
     let voxel = R / 2.0;
-    let ls = LevelSet::of_mesh(&mesh, voxel);
+    let ls = LevelSet::of_mesh(&mesh, voxel).unwrap();
     let band = HALF_WIDTH_VOXELS * voxel;
     assert_eq!(ls.half_width, band);
     let phi = voxels(&ls);
@@ -138,4 +138,25 @@ fn a_ball_level_set_is_the_meshs_signed_distance() {
         phi.len()
     );
     assert!(ls.tree.leaves.len() * 512 < 4 * phi.len());
+}
+
+#[test]
+fn bad_meshes_and_voxels_are_errors() {
+    let (mut mesh, _, _) = ball();
+    assert!(LevelSet::of_mesh(&mesh, 0.0).is_err());
+    assert!(LevelSet::of_mesh(&mesh, f32::NAN).is_err());
+    mesh.vertices[0].x = f32::INFINITY;
+    assert!(
+        LevelSet::of_mesh(&mesh, R)
+            .unwrap_err()
+            .to_string()
+            .contains("vertex 0")
+    );
+    mesh.triangles[3][1] = mesh.vertices.len() as u32;
+    assert!(
+        LevelSet::of_mesh(&mesh, R)
+            .unwrap_err()
+            .to_string()
+            .contains("triangle 3")
+    );
 }

@@ -291,7 +291,7 @@ impl FramePipeline {
         if let Some(axis) = up_axis {
             axis.rotate_mesh(&mut mesh, &mut []);
         }
-        let level_set = reconstructor.install(|| LevelSet::of_mesh(&mesh, prepared.stats.cell));
+        let level_set = reconstructor.install(|| LevelSet::of_mesh(&mesh, prepared.stats.cell))?;
         let mut named = Vec::new();
         if !prepared.wanted.is_empty() {
             // The voxels where the particles are, before the turn upright.
@@ -512,7 +512,7 @@ impl Writer {
                 );
             }
             let voxel = if stats.cell > 0.0 { stats.cell } else { 1.0 };
-            let level_set = LevelSet::of_mesh(&mesh, voxel);
+            let level_set = LevelSet::of_mesh(&mesh, voxel)?;
             level_set.write_file(output, &named)?;
             stats.timings.write = start.elapsed();
             return Ok(stats);
