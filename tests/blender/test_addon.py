@@ -241,7 +241,8 @@ def test_vdb(particles, seqs):
     bpy.context.scene.collection.objects.link(host)
     mod = host.modifiers.new("level set", "VOLUME_TO_MESH")
     mod.object, mod.grid_name, mod.threshold, mod.resolution_mode = vol, "surface", 0.0, "GRID"
-    mesh = host.evaluated_get(bpy.context.evaluated_depsgraph_get()).to_mesh()
+    evaluated = host.evaluated_get(bpy.context.evaluated_depsgraph_get())
+    mesh = evaluated.to_mesh()
     lv = np.empty(3 * len(mesh.vertices), np.float32)
     mesh.vertices.foreach_get("co", lv)
     lv = lv.reshape(-1, 3).astype(np.float64)
@@ -256,6 +257,10 @@ def test_vdb(particles, seqs):
 
     ours, theirs = volume(v.astype(np.float64), f), volume(lv, lt)
     check(abs(theirs / ours - 1) < 0.02, f"vdb frame 3: volume {theirs} against the mesh's {ours}")
+    evaluated.to_mesh_clear()
+    # Out of the way of the renders.
+    for obj in (host, vol):
+        bpy.data.objects.remove(obj)
 
 
 def test_live(live, splash_sph, command, ui):
