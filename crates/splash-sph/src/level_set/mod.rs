@@ -369,8 +369,8 @@ impl Near<'_> {
     }
 }
 
-/// The unknown voxels of leaf `i` next to a known one: each the nearest triangle reached from
-/// its known neighbours' nearest ones, with their sign.
+/// The unknown voxels of leaf `i` next to a known one within the band: each the nearest
+/// triangle reached from its known neighbours' nearest ones, with their sign.
 fn grow(
     i: usize,
     origin: [i32; 3],
@@ -379,6 +379,7 @@ fn grow(
     near: &Near,
     voxel: f32,
 ) -> Vec<(usize, f32, u32)> {
+    let band = HALF_WIDTH_VOXELS * voxel;
     let mut found = Vec::new();
     let here = &work[i];
     for n in 0..512 {
@@ -409,7 +410,8 @@ fn grow(
                     None => continue,
                 }
             };
-            let Some((d, t)) = leaf.get(voxel_bit(u)) else {
+            // A voxel beyond the band leads nowhere the band's nearer voxels do not.
+            let Some((d, t)) = leaf.get(voxel_bit(u)).filter(|(d, _)| d.abs() < band) else {
                 continue;
             };
             if tried[..k].contains(&t) {
