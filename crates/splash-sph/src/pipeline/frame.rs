@@ -59,8 +59,9 @@ impl FramePipeline {
         config.validate()?;
         if !config.output.attributes.is_empty() && !format.holds_attributes() {
             bail_config!(
-                "--attributes {} needs PLY, VTK, VTU, VTP or USD output (--format ply, \
-                 ply-ascii, vtk, vtu, vtp or usd): .{} files have no place for vertex attributes",
+                "--attributes {} needs PLY, VTK, VTU, VTP, USD or VDB output (--format ply, \
+                 ply-ascii, vtk, vtu, vtp, usd or vdb): .{} files have no place for vertex \
+                 attributes",
                 config.output.attributes.join(","),
                 format.extension()
             );
