@@ -135,8 +135,10 @@ struct ConfigArgs {
     /// Mesh format: obj, ply (binary little-endian), ply-ascii, pov (POV-Ray mesh2 include,
     /// .inc), vtk (legacy binary), vtu or vtp (VTK XML, zlib-compressed), usd (a .usda layer
     /// per frame, with the particles' velocities, and for a sequence a stage that plays them
-    /// as one mesh: <name>.usda beside them). Default: from the output file's extension, else
-    /// obj.
+    /// as one mesh: <name>.usda beside them), vdb (an OpenVDB level set per frame: float grid
+    /// `surface`, signed distance to the mesh within 3 voxels of the cell, negative inside;
+    /// --attributes as grids, velocity as `v`). Default: from the output file's extension,
+    /// else obj.
     #[arg(long)]
     format: Option<String>,
 
@@ -147,7 +149,8 @@ struct ConfigArgs {
 
     /// Per-vertex attributes to write (PLY, VTK, VTU, VTP, USD): particle attributes by name
     /// (velocity, density, …; v, vel and vx vy vz all find velocity), interpolated onto the
-    /// vertices with the kernel-weighted mean of the particles around each.
+    /// vertices with the kernel-weighted mean of the particles around each; for VDB, onto the
+    /// level set's active voxels, a grid each.
     #[arg(long, value_name = "LIST")]
     attributes: Option<String>,
 

@@ -581,7 +581,7 @@ fn meshes_read_back_equal_with_velocities_and_axes() {
         &[],
     )
     .failed()
-    .has("needs PLY, VTK, VTU, VTP or USD output");
+    .has("needs PLY, VTK, VTU, VTP, USD or VDB output");
     // The output directory is made (and checked) before the frames; nothing is written in it.
     assert!(!dir.path("o").exists());
     assert_eq!(std::fs::read_dir(dir.path("p")).unwrap().count(), 0);

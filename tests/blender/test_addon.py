@@ -211,6 +211,58 @@ def test_sequences(sequence, particles):
     return seqs
 
 
+def test_vdb(particles, seqs):
+    """The VDB sequence splash writes, imported as Blender's own Volume object (no add-on
+    involved): its grids, its frames, a bounding box around the PLY mesh of the same frame,
+    and the Volume to Mesh modifier's mesh of the level set enclosing the PLY mesh's volume."""
+    directory = recon(particles, "vdb")
+    names = sorted(os.listdir(directory))
+    check(names == [f"frame_{k:04d}.vdb" for k in (1, 2, 3)], f"vdb: three files ({names})")
+    bpy.context.scene.frame_set(2)
+    bpy.ops.object.volume_import(
+        filepath=os.path.join(directory, names[0]), directory=directory,
+        files=[{"name": n} for n in names], use_sequence_detection=True,
+    )  # fmt: skip
+    vol = bpy.context.selected_objects[0]
+    check(vol.type == "VOLUME" and vol.data.is_sequence, "vdb: a Volume sequence")
+    check(vol.data.frame_duration == 3, "vdb: three frames")
+    vol.data.grids.load()
+    grids = {g.name: g.data_type for g in vol.data.grids}
+    check(grids == {"surface": "FLOAT", "v": "VECTOR_FLOAT"}, f"vdb: grids {grids}")
+    bpy.context.scene.frame_set(3)
+    v, f = mesh_arrays(seqs["ply"])  # stepped to frame 3 too
+    corners = np.array([list(c) for c in vol.bound_box])
+    lo, hi = corners.min(0), corners.max(0)
+    cell = SPACING
+    inside = np.all(v.min(0) >= lo) and np.all(v.max(0) <= hi)
+    check(inside and np.all(v.min(0) - lo < 12 * cell) and np.all(hi - v.max(0) < 12 * cell),
+          f"vdb frame 3: bounds {lo} {hi} around the mesh's {v.min(0)} {v.max(0)}")  # fmt: skip
+    host = bpy.data.objects.new("vdb_mesh", bpy.data.meshes.new("vdb_mesh"))
+    bpy.context.scene.collection.objects.link(host)
+    mod = host.modifiers.new("level set", "VOLUME_TO_MESH")
+    mod.object, mod.grid_name, mod.threshold, mod.resolution_mode = vol, "surface", 0.0, "GRID"
+    evaluated = host.evaluated_get(bpy.context.evaluated_depsgraph_get())
+    mesh = evaluated.to_mesh()
+    lv = np.empty(3 * len(mesh.vertices), np.float32)
+    mesh.vertices.foreach_get("co", lv)
+    lv = lv.reshape(-1, 3).astype(np.float64)
+    mesh.calc_loop_triangles()
+    lt = np.empty(3 * len(mesh.loop_triangles), np.int32)
+    mesh.loop_triangles.foreach_get("vertices", lt)
+    lt = lt.reshape(-1, 3)
+
+    def volume(p, t):
+        a, b, c = p[t[:, 0]], p[t[:, 1]], p[t[:, 2]]
+        return abs(np.einsum("ij,ij->i", a, np.cross(b, c)).sum() / 6)
+
+    ours, theirs = volume(v.astype(np.float64), f), volume(lv, lt)
+    check(abs(theirs / ours - 1) < 0.02, f"vdb frame 3: volume {theirs} against the mesh's {ours}")
+    evaluated.to_mesh_clear()
+    # Out of the way of the renders.
+    for obj in (host, vol):
+        bpy.data.objects.remove(obj)
+
+
 def test_live(live, splash_sph, command, ui):
     scene = bpy.context.scene
     p = splash_sph.read_particles(os.path.join(REPO, "fixtures/frame_0040.ply"))
@@ -707,6 +759,7 @@ def main():
     check(splash_sph.__file__.startswith(origin), f"the bundled package ({splash_sph.__file__})")
     particles = make_particles()
     seqs = test_sequences(sequence, particles)
+    test_vdb(particles, seqs)
     test_errors(sequence)
     test_live(live, splash_sph, command, ui)
     test_post(live, splash_sph, command, ui)

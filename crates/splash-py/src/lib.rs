@@ -5,6 +5,7 @@
 mod arrays;
 mod errors;
 mod iso;
+mod level_set;
 mod mesh;
 mod particles;
 mod pools;
@@ -69,7 +70,10 @@ fn native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(preview::preview, m)?)?;
     m.add_function(wrap_pyfunction!(particles::read_particles, m)?)?;
     m.add_function(wrap_pyfunction!(read_mesh::read_mesh, m)?)?;
+    m.add_function(wrap_pyfunction!(level_set::level_set, m)?)?;
+    m.add_function(wrap_pyfunction!(level_set::write_vdb, m)?)?;
     read_mesh::add_type(m)?;
+    level_set::add_type(m)?;
     m.add_function(wrap_pyfunction!(estimate_spacing, m)?)?;
     m.add_function(wrap_pyfunction!(mesh::mesh_edges, m)?)?;
     m.add_function(wrap_pyfunction!(default_config, m)?)?;

@@ -209,8 +209,8 @@ pub fn postprocess<'py>(
 }
 
 /// The mesh argument, copied into a `TriMesh`, with what a `Mesh` carries besides.
-struct MeshInput<'py> {
-    mesh: TriMesh,
+pub(crate) struct MeshInput<'py> {
+    pub(crate) mesh: TriMesh,
     report: Option<Bound<'py, PyDict>>,
     attributes: Option<Bound<'py, PyDict>>,
     format: Option<splash_sph::MeshFormat>,
@@ -218,7 +218,7 @@ struct MeshInput<'py> {
 }
 
 impl<'py> MeshInput<'py> {
-    fn of(mesh: &Bound<'py, PyAny>) -> PyResult<MeshInput<'py>> {
+    pub(crate) fn of(mesh: &Bound<'py, PyAny>) -> PyResult<MeshInput<'py>> {
         let py = mesh.py();
         if let Ok(m) = mesh.cast::<Mesh>() {
             let m = m.get();

@@ -98,7 +98,7 @@ def test_a_bad_frame_is_reported_and_bad_settings_raise(sim, tmp_path):
         splash_sph.recon_sequence(str(sim / "nothing_*.ply"), f"{tmp_path}/x/")
     with pytest.raises(ValueError, match="no input has one of these frame numbers"):
         splash_sph.recon_sequence(sim, f"{tmp_path}/x/", frames="7-9")
-    with pytest.raises(ValueError, match="needs PLY, VTK, VTU, VTP or USD output"):
+    with pytest.raises(ValueError, match="needs PLY, VTK, VTU, VTP, USD or VDB output"):
         splash_sph.recon_sequence(sim, f"{tmp_path}/x/", attributes="velocity")
 
 

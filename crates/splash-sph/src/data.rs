@@ -118,6 +118,9 @@ pub enum MeshFormat {
     Vtp,
     /// A USD text layer (`.usda`) holding one `UsdGeomMesh`.
     Usd,
+    /// An OpenVDB file (`.vdb`): the mesh's narrow-band level set, a float grid `surface`
+    /// (see [`LevelSet`](crate::level_set::LevelSet)), and a grid per attribute.
+    Vdb,
 }
 
 impl MeshFormat {
@@ -131,11 +134,12 @@ impl MeshFormat {
             Self::Vtu => "vtu",
             Self::Vtp => "vtp",
             Self::Usd => "usda",
+            Self::Vdb => "vdb",
         }
     }
 
     /// Whether the format can carry per-vertex attributes (PLY properties, VTK point data, USD
-    /// primvars).
+    /// primvars), or for VDB per-voxel ones (a grid each).
     pub fn holds_attributes(self) -> bool {
         !matches!(self, Self::Obj | Self::Pov)
     }
@@ -148,7 +152,7 @@ impl MeshFormat {
 
     /// Parses a format name as given on the command line: `obj`, `ply` (binary little-endian),
     /// `ply-ascii`, `pov` (POV-Ray `mesh2` include, `.inc`), `vtk` (legacy binary), `vtu` or
-    /// `vtp` (XML, compressed), `usd` (USD text layer, `.usda`).
+    /// `vtp` (XML, compressed), `usd` (USD text layer, `.usda`), `vdb` (OpenVDB level set).
     pub fn parse(name: &str) -> Result<Self> {
         match name.trim().to_ascii_lowercase().as_str() {
             "obj" => Ok(Self::Obj),
@@ -159,15 +163,16 @@ impl MeshFormat {
             "vtu" => Ok(Self::Vtu),
             "vtp" => Ok(Self::Vtp),
             "usd" | "usda" => Ok(Self::Usd),
+            "vdb" => Ok(Self::Vdb),
             _ => bail_config!(
-                "unknown mesh format '{name}': expected obj, ply, ply-ascii, pov, vtk, vtu, vtp \
-                 or usd"
+                "unknown mesh format '{name}': expected obj, ply, ply-ascii, pov, vtk, vtu, vtp, \
+                 usd or vdb"
             ),
         }
     }
 
     /// The format implied by the extension (`.obj`, `.ply` as binary, `.inc` as POV-Ray,
-    /// `.vtk`, `.vtu`, `.vtp`, `.usda` and `.usd` as USD text), case-insensitively.
+    /// `.vtk`, `.vtu`, `.vtp`, `.usda` and `.usd` as USD text, `.vdb`), case-insensitively.
     pub fn from_path(path: &Path) -> Option<Self> {
         let extension = path.extension()?.to_str()?.to_ascii_lowercase();
         match extension.as_str() {
@@ -178,6 +183,7 @@ impl MeshFormat {
             "vtu" => Some(Self::Vtu),
             "vtp" => Some(Self::Vtp),
             "usda" | "usd" => Some(Self::Usd),
+            "vdb" => Some(Self::Vdb),
             _ => None,
         }
     }
@@ -200,6 +206,14 @@ impl UpAxis {
             "z" => Ok(Self::Z),
             "y" => Ok(Self::Y),
             _ => bail_config!("unknown up axis '{name}': expected y or z"),
+        }
+    }
+
+    /// The turn that undoes this one.
+    pub fn inverse(self) -> Self {
+        match self {
+            Self::Z => Self::Y,
+            Self::Y => Self::Z,
         }
     }
 

@@ -43,6 +43,7 @@ pub mod field;
 pub mod frames;
 pub mod io;
 pub mod iso;
+pub mod level_set;
 pub mod mesh;
 pub mod pipeline;
 pub mod preview;

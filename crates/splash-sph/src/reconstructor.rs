@@ -216,9 +216,19 @@ impl Reconstructor {
         positions: &[Vec3],
         values: &[&Attribute],
     ) -> Result<Vec<Attribute>> {
+        self.interpolate_at(&mesh.vertices, positions, values)
+    }
+
+    /// [`interpolate_all`](Self::interpolate_all) at any `points` (a level set's voxels).
+    pub fn interpolate_at(
+        &self,
+        points: &[Vec3],
+        positions: &[Vec3],
+        values: &[&Attribute],
+    ) -> Result<Vec<Attribute>> {
         self.install(|| {
             let kernel = self.params.field.radial_kernel();
-            attributes::interpolate(&mesh.vertices, positions, values, &kernel, self.params.cell)
+            attributes::interpolate(points, positions, values, &kernel, self.params.cell)
         })
     }
 

@@ -19,6 +19,7 @@ with the message the command line prints.
 """
 
 from ._native import (
+    LevelSetArrays,
     Mesh,
     MeshArrays,
     Particles,
@@ -27,6 +28,7 @@ from ._native import (
     estimate_spacing,
     frame_number,
     iso,
+    level_set,
     mesh_edges,
     postprocess,
     preview,
@@ -34,9 +36,11 @@ from ._native import (
     read_particles,
     recon_sequence,
     reconstruct,
+    write_vdb,
 )
 
 __all__ = [
+    "LevelSetArrays",
     "Mesh",
     "MeshArrays",
     "Particles",
@@ -45,6 +49,7 @@ __all__ = [
     "estimate_spacing",
     "frame_number",
     "iso",
+    "level_set",
     "mesh_edges",
     "postprocess",
     "preview",
@@ -52,4 +57,5 @@ __all__ = [
     "read_mesh",
     "recon_sequence",
     "reconstruct",
+    "write_vdb",
 ]

@@ -421,8 +421,8 @@ impl Config {
             && !format.holds_attributes()
         {
             bail_config!(
-                "output.attributes needs PLY, VTK, VTU, VTP or USD output: .{} files have no \
-                 place for vertex attributes",
+                "output.attributes needs PLY, VTK, VTU, VTP, USD or VDB output: .{} files have \
+                 no place for vertex attributes",
                 format.extension()
             );
         }

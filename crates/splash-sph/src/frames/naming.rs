@@ -67,7 +67,7 @@ impl Output {
             (None, None) => match self.extension() {
                 Some(ext) => bail_config!(
                     "the output name's .{ext} extension is not a mesh format splash writes \
-                     (.obj, .ply, .inc, .vtk, .vtu, .vtp, .usda); rename the output or give \
+                     (.obj, .ply, .inc, .vtk, .vtu, .vtp, .usda, .vdb); rename the output or give \
                      --format"
                 ),
                 None => MeshFormat::Obj,

@@ -23,7 +23,8 @@
 //! valid and reads as empty `Vec`s.
 //!
 //! Meshes are written as OBJ, PLY (binary little-endian or ascii), POV-Ray `mesh2`, VTK legacy
-//! binary, VTK XML (`.vtu`, `.vtp`) or USD text layers (`.usda`), atomically when written to a
+//! binary, VTK XML (`.vtu`, `.vtp`) or USD text layers (`.usda`), and as OpenVDB level sets
+//! (`.vdb`, [`write_vdb_file`], of a [`crate::level_set::LevelSet`]), atomically when written to a
 //! file with [`write_mesh_file`]. PLY, VTK and USD files can carry per-vertex attributes
 //! ([`VertexAttributes`]). [`read_mesh`] reads them back, but for POV-Ray's and USD's. A
 //! sequence of USD layers plays as one animated mesh through a stage of value clips
@@ -38,7 +39,8 @@
 //   `.vtu` and `.vtp`).
 // - mesh/: meshes out, and back in. mod.rs holds `write_mesh` and its kin, read.rs `read_mesh`;
 //   obj_write.rs, ply_write.rs, pov_write.rs, vtk_write.rs, vtu_write.rs (`.vtu` and `.vtp`),
-//   usd_write.rs (one layer), usd_stage_write.rs (a sequence's stage); obj_read.rs, ply_read.rs.
+//   usd_write.rs (one layer), usd_stage_write.rs (a sequence's stage), vdb_write.rs (OpenVDB
+//   grids: the level set that level_set/ computes, and attribute grids); obj_read.rs, ply_read.rs.
 //   VTK meshes are read by particles/vtk_read.rs and vtu_read.rs, which read triangles too.
 // - text/: text in and out. lines.rs reads the lines of text inputs; float_text.rs (with
 //   decimal_lanes.rs, its AVX-512 path) and text_records.rs format the numbers of text outputs.
@@ -61,8 +63,10 @@ mod text;
 #[doc(no_inline)]
 pub use crate::data::{Attribute, MeshFormat, Particles, UpAxis};
 pub use mesh::{
-    MeshFile, POV_OBJECT, USD_FRAMES_PER_SECOND, USD_PRIM, UsdClip, UsdFrame, VertexAttributes,
-    read_mesh, usd_stage_path, usd_topology_path, write_mesh, write_mesh_file,
-    write_mesh_file_with, write_mesh_with, write_usd_file, write_usd_stage,
+    MeshFile, POV_OBJECT, USD_FRAMES_PER_SECOND, USD_PRIM, UsdClip, UsdFrame, VDB_LEAF_DIM,
+    VdbGrid, VdbLeaf, VdbNode, VdbTree, VdbValues, VertexAttributes, read_mesh, usd_stage_path,
+    usd_topology_path, vdb_node_origin, vdb_slot, write_mesh, write_mesh_file,
+    write_mesh_file_with, write_mesh_with, write_usd_file, write_usd_stage, write_vdb,
+    write_vdb_file,
 };
 pub use particles::{InputFormat, read_particles};

@@ -157,7 +157,18 @@ impl<'a> SignedDistance<'a> {
                             continue;
                         }
                         if let Some(&(s, e)) = self.cells.get(&key.to_array()) {
-                            self.nearest_in(p, &self.binned[s as usize..e as usize], &mut best);
+                            for b in &self.binned[s as usize..e as usize] {
+                                if let Some(n) = &best {
+                                    let gap = p.distance(b.centre) - b.radius;
+                                    if gap > 0.0
+                                        && gap * gap > n.d2 * (1.0 + TIE) + f32::MIN_POSITIVE
+                                    {
+                                        continue;
+                                    }
+                                }
+                                let t = std::iter::once(b.triangle);
+                                nearest_in(p, t, self.vertices, self.triangles, &mut best);
+                            }
                         }
                     }
                 }
@@ -169,72 +180,92 @@ impl<'a> SignedDistance<'a> {
             }
         }
         let b = best?;
-        let d = b.d2.sqrt();
-        if d > self.reach {
-            return None;
-        }
-        Some(if (p - b.point).dot(b.normal) < 0.0 {
-            -d
-        } else {
-            d
-        })
+        (b.d2.sqrt() <= self.reach).then(|| signed(p, &b))
     }
+}
 
-    /// Folds `triangles` into `best`: a nearer one replaces it, one as near (a face of the same
-    /// edge or vertex, or a duplicate visit) adds its pseudonormal share.
-    fn nearest_in(&self, p: Vec3, triangles: &[Binned], best: &mut Option<Nearest>) {
-        for binned in triangles {
-            if let Some(n) = best {
-                let gap = p.distance(binned.centre) - binned.radius;
-                if gap > 0.0 && gap * gap > n.d2 * (1.0 + TIE) + f32::MIN_POSITIVE {
+/// The signed distance from `p` to the nearest of `candidates` (triangles of `triangles`),
+/// signed as [`SignedDistance::at`] signs it: for a caller that knows the triangles near `p`,
+/// which must include every triangle that touches the nearest point.
+pub fn signed_distance_among(
+    p: Vec3,
+    candidates: impl IntoIterator<Item = u32>,
+    vertices: &[Vec3],
+    triangles: &[[u32; 3]],
+) -> Option<f32> {
+    let mut best = None;
+    nearest_in(p, candidates, vertices, triangles, &mut best);
+    best.map(|b| signed(p, &b))
+}
+
+/// The unsigned distance from `p` to the triangle `tri` of `vertices`.
+pub fn triangle_distance(p: Vec3, tri: [u32; 3], vertices: &[Vec3]) -> f32 {
+    p.distance(closest_on_triangle(p, tri, vertices).0)
+}
+
+/// The distance of `best`, negative when `p` lies behind its pseudonormal.
+fn signed(p: Vec3, best: &Nearest) -> f32 {
+    let d = best.d2.sqrt();
+    if (p - best.point).dot(best.normal) < 0.0 {
+        -d
+    } else {
+        d
+    }
+}
+
+/// Folds `candidates` into `best`: a nearer one replaces it, one as near (a face of the same
+/// edge or vertex, or a duplicate visit) adds its pseudonormal share.
+fn nearest_in(
+    p: Vec3,
+    candidates: impl IntoIterator<Item = u32>,
+    vertices: &[Vec3],
+    triangles: &[[u32; 3]],
+    best: &mut Option<Nearest>,
+) {
+    for t in candidates {
+        let tri = triangles[t as usize];
+        let (q, feature) = closest_on_triangle(p, tri, vertices);
+        let d2 = p.distance_squared(q);
+        if best.is_some_and(|n| d2 > n.d2 * (1.0 + TIE) + f32::MIN_POSITIVE) {
+            // Farther than the nearest so far: no pseudonormal to make.
+            continue;
+        }
+        let [a, b, c] = tri.map(|i| vertices[i as usize]);
+        let face = (b - a).cross(c - a).normalize_or_zero();
+        // Bærentzen & Aanæs's pseudonormals: an edge's is the sum of its faces' normals, a
+        // vertex's the sum weighted by each face's angle there.
+        let normal = match feature {
+            Feature::Face | Feature::Edge => face,
+            Feature::Vertex(v) => {
+                let k = tri.iter().position(|&i| i == v).unwrap_or(0);
+                let [o, u, w] = [k, (k + 1) % 3, (k + 2) % 3].map(|i| [a, b, c][i]);
+                face * (u - o).angle_between(w - o)
+            }
+        };
+        match best {
+            Some(n) if d2 > n.d2 * (1.0 + TIE) + f32::MIN_POSITIVE => {}
+            Some(n) if d2 >= n.d2 * (1.0 - TIE) => {
+                if n.faces[..n.count].contains(&t) || n.count == n.faces.len() {
                     continue;
                 }
+                n.faces[n.count] = t;
+                n.count += 1;
+                if d2 < n.d2 {
+                    n.d2 = d2;
+                    n.point = q;
+                }
+                n.normal += normal;
             }
-            let t = binned.triangle;
-            let tri = self.triangles[t as usize];
-            let (q, feature) = closest_on_triangle(p, tri, self.vertices);
-            let d2 = p.distance_squared(q);
-            if best.is_some_and(|n| d2 > n.d2 * (1.0 + TIE) + f32::MIN_POSITIVE) {
-                // Farther than the nearest so far: no pseudonormal to make.
-                continue;
-            }
-            let [a, b, c] = tri.map(|i| self.vertices[i as usize]);
-            let face = (b - a).cross(c - a).normalize_or_zero();
-            // Bærentzen & Aanæs's pseudonormals: an edge's is the sum of its faces' normals, a
-            // vertex's the sum weighted by each face's angle there.
-            let normal = match feature {
-                Feature::Face | Feature::Edge => face,
-                Feature::Vertex(v) => {
-                    let k = tri.iter().position(|&i| i == v).unwrap_or(0);
-                    let [o, u, w] = [k, (k + 1) % 3, (k + 2) % 3].map(|i| [a, b, c][i]);
-                    face * (u - o).angle_between(w - o)
-                }
-            };
-            match best {
-                Some(n) if d2 > n.d2 * (1.0 + TIE) + f32::MIN_POSITIVE => {}
-                Some(n) if d2 >= n.d2 * (1.0 - TIE) => {
-                    if n.faces[..n.count].contains(&t) || n.count == n.faces.len() {
-                        continue;
-                    }
-                    n.faces[n.count] = t;
-                    n.count += 1;
-                    if d2 < n.d2 {
-                        n.d2 = d2;
-                        n.point = q;
-                    }
-                    n.normal += normal;
-                }
-                _ => {
-                    let mut faces = [0; 16];
-                    faces[0] = t;
-                    *best = Some(Nearest {
-                        d2,
-                        point: q,
-                        normal,
-                        faces,
-                        count: 1,
-                    })
-                }
+            _ => {
+                let mut faces = [0; 16];
+                faces[0] = t;
+                *best = Some(Nearest {
+                    d2,
+                    point: q,
+                    normal,
+                    faces,
+                    count: 1,
+                })
             }
         }
     }

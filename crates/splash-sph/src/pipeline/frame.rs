@@ -23,6 +23,7 @@ use crate::io::{
     self, Attribute, InputFormat, MeshFormat, Particles, UpAxis, UsdFrame, VertexAttributes,
 };
 use crate::iso::{self, IsoRequest};
+use crate::level_set::LevelSet;
 use crate::mesh::TriMesh;
 use crate::reconstructor::Reconstructor;
 use crate::report::FrameStats;
@@ -58,8 +59,9 @@ impl FramePipeline {
         config.validate()?;
         if !config.output.attributes.is_empty() && !format.holds_attributes() {
             bail_config!(
-                "--attributes {} needs PLY, VTK, VTU, VTP or USD output (--format ply, \
-                 ply-ascii, vtk, vtu, vtp or usd): .{} files have no place for vertex attributes",
+                "--attributes {} needs PLY, VTK, VTU, VTP, USD or VDB output (--format ply, \
+                 ply-ascii, vtk, vtu, vtp, usd or vdb): .{} files have no place for vertex \
+                 attributes",
                 config.output.attributes.join(","),
                 format.extension()
             );
@@ -221,6 +223,7 @@ impl FramePipeline {
                 named,
                 stats,
                 time,
+                level_set: None,
             }));
         }
         let r = self.sequence_spacing(input, &motion.positions, progress)?;
@@ -259,6 +262,9 @@ impl FramePipeline {
     /// A prepared frame made whole with `mesh` (its own surface, or that surface moved): its
     /// attributes carried onto the mesh's vertices.
     pub(super) fn finish(&self, prepared: &Prepared, mesh: TriMesh) -> Result<Made> {
+        if self.format == MeshFormat::Vdb {
+            return self.finish_level_set(prepared, mesh);
+        }
         let columns: Vec<&Attribute> = prepared.wanted.iter().map(|(_, a)| a).collect();
         let values = self.prepared_reconstructor().interpolate_all(
             &mesh,
@@ -274,6 +280,48 @@ impl FramePipeline {
             named: names.zip(values).collect(),
             stats,
             time: prepared.time,
+            level_set: None,
+        })
+    }
+
+    /// [`finish`](Self::finish) for VDB output: the mesh's level set (turned upright first, as
+    /// every output is), its attributes carried onto its active voxels.
+    fn finish_level_set(&self, prepared: &Prepared, mut mesh: TriMesh) -> Result<Made> {
+        let reconstructor = self.prepared_reconstructor();
+        let up_axis = self.config.output.up_axis;
+        if let Some(axis) = up_axis {
+            axis.rotate_mesh(&mut mesh, &mut []);
+        }
+        let level_set = reconstructor.install(|| LevelSet::of_mesh(&mesh, prepared.stats.cell))?;
+        let mut named = Vec::new();
+        if !prepared.wanted.is_empty() {
+            // The voxels where the particles are, before the turn upright.
+            let mut points = level_set.positions();
+            if let Some(axis) = up_axis {
+                axis.inverse().rotate(&mut points);
+            }
+            let columns: Vec<&Attribute> = prepared.wanted.iter().map(|(_, a)| a).collect();
+            let values =
+                reconstructor.interpolate_at(&points, &prepared.motion.positions, &columns)?;
+            named = prepared
+                .wanted
+                .iter()
+                .map(|(n, _)| n.clone())
+                .zip(values)
+                .collect();
+            if let Some(axis) = up_axis {
+                axis.rotate_mesh(&mut TriMesh::default(), &mut named);
+            }
+        }
+        let mut stats = prepared.stats;
+        stats.triangles = mesh.triangles.len();
+        stats.vertices = mesh.vertices.len();
+        Ok(Made {
+            mesh: TriMesh::default(),
+            named,
+            stats,
+            time: prepared.time,
+            level_set: Some(level_set),
         })
     }
 
@@ -324,6 +372,7 @@ impl FramePipeline {
             named: surface.attributes,
             stats,
             time: None,
+            level_set: None,
         })
     }
 
@@ -426,6 +475,8 @@ pub(super) struct Made {
     stats: FrameStats,
     /// The frame's number: a USD layer's time code.
     time: Option<u64>,
+    /// For VDB output, the level set, already upright, whose active voxels `named` are on.
+    level_set: Option<LevelSet>,
 }
 
 /// Writes meshes: turned upright if asked, whole or not at all.
@@ -443,10 +494,29 @@ impl Writer {
             mut named,
             mut stats,
             time,
+            level_set,
         } = made;
         let start = Instant::now();
+        if let Some(level_set) = level_set {
+            level_set.write_file(output, &named)?;
+            stats.timings.write = start.elapsed();
+            return Ok(stats);
+        }
         if let Some(axis) = self.up_axis {
             axis.rotate_mesh(&mut mesh, &mut named);
+        }
+        if self.format == MeshFormat::Vdb {
+            // An isosurface's, or a frame without particles (no voxels: any voxel size will do).
+            if !named.is_empty() && !mesh.is_empty() {
+                bail_config!(
+                    "--format vdb writes the attributes of surfaces only, not of isosurfaces"
+                );
+            }
+            let voxel = if stats.cell > 0.0 { stats.cell } else { 1.0 };
+            let level_set = LevelSet::of_mesh(&mesh, voxel)?;
+            level_set.write_file(output, &named)?;
+            stats.timings.write = start.elapsed();
+            return Ok(stats);
         }
         let attributes = VertexAttributes {
             named: &named,

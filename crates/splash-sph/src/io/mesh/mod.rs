@@ -1,7 +1,8 @@
 //! Writing meshes, and reading back the ones splash writes. [`write_mesh`] and
 //! [`write_mesh_file`] pick a writer by [`MeshFormat`], each `<format>_write.rs` writing one
 //! format, with the per-vertex attributes of [`VertexAttributes`]; [`read_mesh`] (`read.rs`)
-//! picks a reader by the file's extension: `obj_read.rs`, `ply_read.rs`, and for VTK files
+//! picks a reader by the file's extension. `vdb_write.rs` writes OpenVDB grids, which hold a
+//! mesh's level set rather than the mesh (see [`crate::level_set`]); [`read_mesh`]: `obj_read.rs`, `ply_read.rs`, and for VTK files
 //! the particle readers' `vtk_read` and `vtu_read`, which read a mesh's triangles too.
 
 mod obj_read;
@@ -12,6 +13,7 @@ mod pov_write;
 mod read;
 mod usd_stage_write;
 mod usd_write;
+mod vdb_write;
 mod vertex_attributes;
 mod vtk_write;
 mod vtu_write;
@@ -30,6 +32,10 @@ pub use usd_stage_write::{
     USD_FRAMES_PER_SECOND, UsdClip, usd_stage_path, usd_topology_path, write_usd_stage,
 };
 pub use usd_write::{USD_PRIM, UsdFrame};
+pub use vdb_write::{
+    VDB_LEAF_DIM, VdbGrid, VdbLeaf, VdbNode, VdbTree, VdbValues, node_origin as vdb_node_origin,
+    slot as vdb_slot, write_vdb,
+};
 pub use vertex_attributes::VertexAttributes;
 
 /// Writes `mesh` in `format`. `normals` must be empty or have one entry per vertex; without
@@ -71,6 +77,13 @@ pub fn write_mesh_with(
         )?,
         MeshFormat::Vtp => vtu_write::write(mesh, attributes, vtu_write::Kind::PolyData, &mut out)?,
         MeshFormat::Usd => usd_write::write(mesh, attributes, UsdFrame::default(), &mut out)?,
+        MeshFormat::Vdb => {
+            return Err(invalid_input(
+                "a .vdb file holds a level set, not a mesh: make it with \
+                 splash_sph::level_set::LevelSet and write it with write_vdb_file"
+                    .into(),
+            ));
+        }
     }
     out.flush()
 }
@@ -89,6 +102,21 @@ pub fn write_usd_file(
         check_attributes(mesh, attributes)?;
         let mut out = BufWriter::with_capacity(1 << 16, file);
         usd_write::write(mesh, attributes, frame, &mut out)?;
+        out.flush()
+    })
+}
+
+/// Writes `grids` over `tree` (see [`write_vdb`]) to `path`, whole or not at all, as
+/// [`write_mesh_file`] does.
+pub fn write_vdb_file(
+    path: &Path,
+    tree: &VdbTree,
+    voxel_size: f32,
+    grids: &[VdbGrid],
+) -> Result<()> {
+    atomic::write_file(path, |file| {
+        let mut out = BufWriter::with_capacity(1 << 16, file);
+        write_vdb(tree, voxel_size, grids, &mut out)?;
         out.flush()
     })
 }

@@ -48,7 +48,7 @@ fn read(path: &Path) -> Result<MeshFile> {
         },
         Some(MeshFormat::Vtu | MeshFormat::Vtp) => |data| Ok(vtk_mesh(vtu_read::parse_mesh(data)?)),
         Some(MeshFormat::Vtk) => |data| Ok(vtk_mesh(vtk_read::parse_mesh(data)?)),
-        Some(MeshFormat::Pov | MeshFormat::Usd) | None => bail_format!(
+        Some(MeshFormat::Pov | MeshFormat::Usd | MeshFormat::Vdb) | None => bail_format!(
             "cannot tell the mesh format from the extension: meshes are read from .obj, .ply, \
              .vtk, .vtu and .vtp files"
         ),
