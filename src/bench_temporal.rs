@@ -29,8 +29,11 @@ vertex x with outward normal n, d± = signed distance to mesh t±1, m± = n · t
 displacement around x towards frame t±1 (cubic-spline mean over 2r of the particles matched by
 their ids, else velocity x --frame-time), e+ = d+ + m+, e- = d- - m-. jitter = RMS((e+ + e-)/2)
 / r: surface motion the fluid does not explain (a surface moving with the particles scores 0);
-e+ RMS adds smooth drift; surface = RMS((d+ + d-)/2) / r ignores the particles. Vertices more
-than 2r from a neighbouring mesh are left out (the column says how many).
+carried = RMS((c+ + c-)/2) / r with c± the signed distance to mesh t±1 at x + the
+displacement towards it: bumps the flow carries along the surface cancel there even when the
+frame intervals differ; e+ RMS adds smooth drift; surface = RMS((d+ + d-)/2) / r ignores the
+particles. Vertices more than 2r from a neighbouring mesh are left out (the column says how
+many).
 Variants: raw (--raw), single-frame (each frame post-processed alone, the default), temporal
 (--temporal: surfaces that follow the fluid), every --variant NAME=FILE.toml
 (a configuration file laid over the given one), every --meshes NAME=DIR (meshes already
@@ -208,9 +211,9 @@ pub fn run(args: BenchTemporalArgs) -> Result<ExitCode> {
         args.threads.map_or_else(|| "all".into(), |t| t.to_string())
     );
     println!(
-        "| mesh | jitter r | e+ RMS r | surface r | left out | triangles | volume err max | bumpiness ° | slivers % | crossing faces (frames) | wall s | peak MiB |"
+        "| mesh | jitter r | carried r | e+ RMS r | surface r | left out | triangles | volume err max | bumpiness ° | slivers % | crossing faces (frames) | wall s | peak MiB |"
     );
-    println!("|---|---|---|---|---|---|---|---|---|---|---|---|");
+    println!("|---|---|---|---|---|---|---|---|---|---|---|---|---|");
     for (v, row) in variants.iter().zip(&table) {
         let (wall, peak) = match v.cost {
             Some((s, bytes)) => (
@@ -221,9 +224,10 @@ pub fn run(args: BenchTemporalArgs) -> Result<ExitCode> {
         };
         let j = &row.jitter;
         println!(
-            "| {} | {:.4} | {:.4} | {:.4} | {:.2} % | {:.0} | {:+.2} % | {:.2} | {:.2} | {} ({}) | {wall} | {peak} |",
+            "| {} | {:.4} | {:.4} | {:.4} | {:.4} | {:.2} % | {:.0} | {:+.2} % | {:.2} | {:.2} | {} ({}) | {wall} | {peak} |",
             v.name,
             j.rms(),
+            j.carried_rms(),
             j.forward_rms(),
             j.surface_rms(),
             100.0 * j.left_out as f64 / (j.vertices + j.left_out).max(1) as f64,

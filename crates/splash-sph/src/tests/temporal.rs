@@ -165,6 +165,12 @@ fn uniform_motion_is_followed_and_shards_agree() {
     let [r, s, t] = ["r", "s", "t"].map(|name| jitter(&inputs, &dir.join(name)));
     assert!(r.vertices > 1000 && r.left_out == 0);
     assert!(r.rms() < 0.01, "raw: jitter {} r", r.rms());
+    assert!(r.carried_vertices == r.vertices, "{r:?}");
+    assert!(
+        r.carried_rms() < 0.01,
+        "raw: carried jitter {} r",
+        r.carried_rms()
+    );
     assert!(
         t.rms() < 0.8 * s.rms(),
         "{} r against {} r alone",
