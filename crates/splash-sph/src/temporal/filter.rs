@@ -7,13 +7,15 @@
 //! surfaces of Yu, Wojtan, Turk & Yap 2012 follow the fluid in the same sense). A neighbour
 //! farther than `reach` from the carried vertex (a topology change, a droplet that left) weighs
 //! less, smoothly down to nothing at the reach, so that no surface is pulled towards another.
+//! Where faces cross after all, their vertices and a ring around them keep their own frame's
+//! places.
 
 use glam::Vec3;
 use rayon::prelude::*;
 
 use super::motion::mean_motion;
 use crate::error::Result;
-use crate::mesh::{SignedDistance, TriMesh, area_weighted_normals};
+use crate::mesh::{SignedDistance, TriMesh, area_weighted_normals, self_intersecting_faces};
 
 /// Frame t's neighbours for [`follow_fluid`]: a neighbour's mesh and, per particle of frame t,
 /// its displacement to that frame (None where a particle has no match).
@@ -68,19 +70,61 @@ pub fn follow_fluid(
                 }
             });
     }
+    let own = mesh.vertices.clone();
+    for ((x, n), &offset) in mesh.vertices.iter_mut().zip(&normals).zip(&offsets) {
+        if *n != Vec3::ZERO {
+            *x += *n * offset;
+        }
+    }
+    untangle(mesh, &own, &mut offsets);
     let mut followed = Followed::default();
     let mut squares = 0.0f64;
-    for ((x, n), &offset) in mesh.vertices.iter_mut().zip(&normals).zip(&offsets) {
-        if offset != 0.0 && *n != Vec3::ZERO {
-            *x += *n * offset;
-            followed.moved += 1;
-            squares += f64::from(offset) * f64::from(offset);
-            followed.max = followed.max.max(offset.abs());
-        }
+    for &offset in offsets.iter().filter(|&&o| o != 0.0) {
+        followed.moved += 1;
+        squares += f64::from(offset) * f64::from(offset);
+        followed.max = followed.max.max(offset.abs());
     }
     followed.rms = (squares / mesh.vertices.len() as f64).sqrt();
     if !mesh.normals.is_empty() {
         mesh.normals = area_weighted_normals(&mesh.vertices, &mesh.triangles);
     }
     Ok(followed)
+}
+
+/// Where following the neighbours made faces cross (two sheets pulled towards different
+/// neighbours' surfaces), the vertices of those faces and a ring around them go back to their
+/// own frame's places (`own`, with `offsets` zeroed), up to ROUNDS times: a surface that did
+/// not cross before following does not after.
+fn untangle(mesh: &mut TriMesh, own: &[Vec3], offsets: &mut [f32]) {
+    const ROUNDS: usize = 3;
+    for _ in 0..ROUNDS {
+        let crossing = self_intersecting_faces(&mesh.vertices, &mesh.triangles);
+        let mut back = vec![false; own.len()];
+        for &f in &crossing {
+            for v in mesh.triangles[f as usize] {
+                back[v as usize] = true;
+            }
+        }
+        // One ring wider: every face touching a vertex going back takes its others along.
+        let ring: Vec<u32> = mesh
+            .triangles
+            .iter()
+            .filter(|t| t.iter().any(|&v| back[v as usize]))
+            .flatten()
+            .copied()
+            .collect();
+        let mut moved = false;
+        for v in ring {
+            let v = v as usize;
+            if offsets[v] != 0.0 {
+                mesh.vertices[v] = own[v];
+                offsets[v] = 0.0;
+                moved = true;
+            }
+        }
+        if !moved {
+            // Nothing left to put back: what still crosses crossed in the frame's own mesh.
+            return;
+        }
+    }
 }
