@@ -131,3 +131,25 @@ def test_frames_report_their_stage_times_post_among_them(sim, tmp_path):
             )
             # --raw alone runs no post-processing: its stage takes no time.
             assert (t["post"] == 0) == raw, t
+
+
+def test_temporal_follows_the_fluid_where_the_particles_can_be_carried(sim, tmp_path):
+    # The fixture frames have velocities but no ids: without post.frame_time nothing can be
+    # carried, and every frame is post-processed alone, with a warning and the same bytes.
+    alone = splash_sph.recon_sequence(sim, f"{tmp_path}/a/", format="ply")
+    kept = splash_sph.recon_sequence(sim, f"{tmp_path}/k/", format="ply", temporal=True)
+    assert files(tmp_path / "k") == files(tmp_path / "a")
+    assert alone["warnings"] == []
+    assert sum("post-processed alone" in w for w in kept["warnings"]) == 3, kept["warnings"]
+    # Carried by velocity x frame_time, the middle frame follows its neighbours; the ends,
+    # with one neighbour each, stay as they were.
+    config = {"post": {"frame_time": 0.005}}
+    carried = splash_sph.recon_sequence(
+        sim, f"{tmp_path}/c/", format="ply", temporal=True, config=config
+    )
+    a, c = files(tmp_path / "a"), files(tmp_path / "c")
+    assert c["fluid_0001.ply"] == a["fluid_0001.ply"]
+    assert c["fluid_0003.ply"] == a["fluid_0003.ply"]
+    assert c["fluid_0002.ply"] != a["fluid_0002.ply"]
+    assert sum("post-processed alone" in w for w in carried["warnings"]) == 2, carried["warnings"]
+    assert carried["ok"] and carried["written"] == 3
