@@ -14,7 +14,6 @@ use clap::Args;
 use splash_sph::frames::{Output, select};
 use splash_sph::io::read_mesh;
 use splash_sph::mesh::quality::{quality, volume_error};
-use splash_sph::mesh::self_intersecting_faces;
 use splash_sph::pipeline::{Batch, FrameOutcome, Progress};
 use splash_sph::temporal::{FrameMotion, Jitter, Window, frame_jitter};
 use splash_sph::{Config, Length, MeshFormat, TriMesh, estimate_spacing, read_particles};
@@ -305,9 +304,8 @@ fn measure(
             row.triangles += q.faces as f64;
             row.bumpiness += q.bumpiness;
             row.slivers += q.slivers;
-            let crossing = self_intersecting_faces(&m[at].vertices, &m[at].triangles).len();
-            row.crossing_faces += crossing;
-            row.crossing_frames += usize::from(crossing > 0);
+            row.crossing_faces += q.self_intersecting_faces;
+            row.crossing_frames += usize::from(q.self_intersecting_faces > 0);
             let e = volume_error(q.volume, particles, spacing);
             if e.abs() > row.worst_volume.abs() {
                 row.worst_volume = e;

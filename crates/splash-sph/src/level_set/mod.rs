@@ -44,6 +44,15 @@ const LAYERS: usize = 4;
 /// Steps at most from a neighbour's nearest triangle to a nearer one around its corners: the
 /// nearest triangle moves along the surface from voxel to voxel, a triangle or two per voxel.
 const DESCENT: usize = 8;
+/// The six face neighbours of a voxel.
+const STEPS: [IVec3; 6] = [
+    IVec3::X,
+    IVec3::NEG_X,
+    IVec3::Y,
+    IVec3::NEG_Y,
+    IVec3::Z,
+    IVec3::NEG_Z,
+];
 
 /// The triangles around each vertex (compressed rows).
 struct Fans {
@@ -390,17 +399,7 @@ fn grow(
         let p = position(origin, n, voxel);
         let mut best: Option<(f32, u32, bool)> = None;
         let mut tried = [u32::MAX; 6];
-        for (k, step) in [
-            IVec3::X,
-            IVec3::NEG_X,
-            IVec3::Y,
-            IVec3::NEG_Y,
-            IVec3::Z,
-            IVec3::NEG_Z,
-        ]
-        .into_iter()
-        .enumerate()
-        {
+        for (k, step) in STEPS.into_iter().enumerate() {
             let u = v + step;
             let leaf = if (u & !7) == IVec3::from(origin) {
                 here
@@ -458,14 +457,7 @@ fn leaf(origin: [i32; 3], distance: &[f32; 512], half_width: f32) -> Option<(Vdb
     let mut queue: Vec<usize> = (0..512).filter(|&n| sign[n] != 0).collect();
     while let Some(n) = queue.pop() {
         let v = offset(n);
-        for step in [
-            IVec3::X,
-            IVec3::NEG_X,
-            IVec3::Y,
-            IVec3::NEG_Y,
-            IVec3::Z,
-            IVec3::NEG_Z,
-        ] {
+        for step in STEPS {
             let u = v + step;
             if u.min_element() < 0 || u.max_element() > 7 {
                 continue;

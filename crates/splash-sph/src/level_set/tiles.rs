@@ -12,6 +12,7 @@ use std::collections::VecDeque;
 use glam::IVec3;
 use rustc_hash::FxHashMap;
 
+use super::STEPS;
 use crate::io::{VdbNode, VdbTree, vdb_node_origin, vdb_slot};
 
 /// Log2 of the edges, in voxels, of a leaf, a 16³ node and a 32³ node.
@@ -178,15 +179,6 @@ fn flood(
     }
     signs
 }
-
-const STEPS: [IVec3; 6] = [
-    IVec3::X,
-    IVec3::NEG_X,
-    IVec3::Y,
-    IVec3::NEG_Y,
-    IVec3::Z,
-    IVec3::NEG_Z,
-];
 
 fn cells(dims: IVec3) -> impl Iterator<Item = IVec3> {
     (0..dims.x).flat_map(move |x| {

@@ -18,7 +18,8 @@ use super::smoothing::{relax_tangentially, taubin, vertex_normals};
 use super::stars::{area_weighted_normals, validate};
 use super::topology::topology;
 use super::volume::{
-    Components, Measures, VolumeScope, normals_and_measures, particles_inside, restore,
+    Components, Measures, VolumeScope, first_order_offsets, normals_and_measures, particles_inside,
+    restore,
 };
 use super::{TriMesh, clip_to_box, decimate, drop_small_components};
 use crate::error::{Error, Result};
@@ -513,20 +514,10 @@ fn clearance(
     scope: VolumeScope,
     spacing: f32,
 ) -> Clearance {
-    let offset = |v: f64, a: f64, t: f64| if a > 0.0 { ((t - v) / a) as f32 } else { 0.0 };
-    let offsets: Vec<f32> = match scope {
-        _ if targets.is_empty() => vec![0.0; volumes.len()],
-        VolumeScope::Component => volumes
-            .iter()
-            .zip(targets)
-            .map(|(&(v, a), &t)| offset(v, a, t))
-            .collect(),
-        VolumeScope::Frame => {
-            let (v, a) = volumes
-                .iter()
-                .fold((0.0, 0.0), |s, x| (s.0 + x.0, s.1 + x.1));
-            vec![offset(v, a, targets.iter().sum()); volumes.len()]
-        }
+    let offsets = if targets.is_empty() {
+        vec![0.0; volumes.len()]
+    } else {
+        first_order_offsets(volumes, targets, scope)
     };
     let margin = MARGIN * spacing;
     let largest = offsets.iter().fold(0.0f32, |m, o| m.max(o.abs()));

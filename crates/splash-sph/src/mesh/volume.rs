@@ -369,25 +369,32 @@ pub fn restore(
         if step > 0 {
             normals_and_measures(vertices, triangles, rings, components, normals, measures);
         }
-        let offset = |(v, a): (f64, f64), t: f64| {
-            if a > 0.0 {
-                (((t - v) / a) as f32).clamp(-max_step, max_step)
-            } else {
-                0.0
-            }
-        };
-        let sums = components.sums(measures).into_iter().zip(targets);
-        let offsets: Vec<f32> = match scope {
-            VolumeScope::Component => sums.map(|(s, &t)| offset(s, t)).collect(),
-            VolumeScope::Frame => {
-                let (mut all, mut target) = ((0.0, 0.0), 0.0);
-                for ((v, a), &t) in sums {
-                    all = (all.0 + v, all.1 + a);
-                    target += t;
-                }
-                vec![offset(all, target); components.count]
-            }
-        };
+        let offsets: Vec<f32> = first_order_offsets(&components.sums(measures), targets, scope)
+            .into_iter()
+            .map(|o| o.clamp(-max_step, max_step))
+            .collect();
         clearance.offset(vertices, normals, &components.of_vertex, &offsets);
+    }
+}
+
+/// Per component, the offset along the normals that brings it to its target to first order,
+/// (target − volume)/area from its `sums` (volume and area); for [`VolumeScope::Frame`] one
+/// for the whole mesh, repeated. 0 for a component without area.
+pub fn first_order_offsets(sums: &[(f64, f64)], targets: &[f64], scope: VolumeScope) -> Vec<f32> {
+    let offset = |(v, a): (f64, f64), t: f64| if a > 0.0 { ((t - v) / a) as f32 } else { 0.0 };
+    match scope {
+        VolumeScope::Component => sums
+            .iter()
+            .zip(targets)
+            .map(|(&s, &t)| offset(s, t))
+            .collect(),
+        VolumeScope::Frame => {
+            let (mut all, mut target) = ((0.0, 0.0), 0.0);
+            for (&(v, a), &t) in sums.iter().zip(targets) {
+                all = (all.0 + v, all.1 + a);
+                target += t;
+            }
+            vec![offset(all, target); sums.len()]
+        }
     }
 }

@@ -24,8 +24,18 @@ fn mesh(particles: &[Vec3], raw: bool, threads: usize) -> TriMesh {
 }
 
 fn configured(particles: &[Vec3], threads: Option<usize>, post: PostConfig) -> TriMesh {
+    at_spacing(particles, R, threads, post)
+}
+
+/// The mesh of `particles` at spacing `spacing`, cell r/2, post-processed by `post`.
+fn at_spacing(
+    particles: &[Vec3],
+    spacing: f32,
+    threads: Option<usize>,
+    post: PostConfig,
+) -> TriMesh {
     let config = Config {
-        spacing: Some(R),
+        spacing: Some(spacing),
         threads,
         cell: Length::Spacings(0.5),
         post,
@@ -215,21 +225,12 @@ fn a_real_splashing_frame_stays_closed_manifold_and_outward() {
         return;
     };
     let particles = crate::read_particles(&path, None).unwrap().positions;
-    let config = |raw| Config {
-        spacing: Some(0.014),
-        threads: Some(2),
-        post: PostConfig {
+    let run = |raw| {
+        let post = PostConfig {
             raw,
             ..PostConfig::default()
-        },
-        ..Config::default()
-    };
-    let run = |raw| {
-        Reconstructor::new(config(raw))
-            .unwrap()
-            .reconstruct(&particles)
-            .unwrap()
-            .mesh
+        };
+        at_spacing(&particles, 0.014, Some(2), post)
     };
     let (raw, post) = (run(true), run(false));
     assert_topology_kept(&raw, &post);
@@ -246,16 +247,7 @@ fn real_frames_whose_sheets_the_volume_steps_crossed_no_longer_cross() {
             return;
         };
         let particles = crate::read_particles(&path, None).unwrap().positions;
-        let config = Config {
-            spacing: Some(0.014),
-            threads: Some(2),
-            ..Config::default()
-        };
-        let mesh = Reconstructor::new(config)
-            .unwrap()
-            .reconstruct(&particles)
-            .unwrap()
-            .mesh;
+        let mesh = at_spacing(&particles, 0.014, Some(2), PostConfig::default());
         let crossing = self_intersecting_faces(&mesh.vertices, &mesh.triangles);
         assert!(
             crossing.is_empty(),
