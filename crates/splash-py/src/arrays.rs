@@ -165,6 +165,17 @@ pub fn scalars_array(py: Python<'_>, values: Vec<f32>) -> Bound<'_, PyArray1<f32
 
 /// One value or vector per particle of `array`, checked against the number of particles.
 pub fn column(array: &Bound<'_, PyAny>, what: &str, particles: usize) -> PyResult<Attribute> {
+    column_of(array, what, particles, "particles")
+}
+
+/// One value or vector per row of `array`, checked against `rows` (`of` names them in the
+/// error: "particles", "active voxels").
+pub fn column_of(
+    array: &Bound<'_, PyAny>,
+    what: &str,
+    rows: usize,
+    of: &str,
+) -> PyResult<Attribute> {
     let (values, len) = if is_scalar(array)? {
         let v = scalars(array, what)?;
         let len = v.len();
@@ -174,9 +185,9 @@ pub fn column(array: &Bound<'_, PyAny>, what: &str, particles: usize) -> PyResul
         let len = v.len();
         (Attribute::Vector(v), len)
     };
-    if len != particles {
+    if len != rows {
         return Err(PyValueError::new_err(format!(
-            "{what} has {len} values for {particles} particles"
+            "{what} has {len} values for {rows} {of}"
         )));
     }
     Ok(values)

@@ -3,9 +3,8 @@
 
 use std::path::PathBuf;
 
-use numpy::ndarray::{Array1, Array2};
-use numpy::{PyArray1, PyArray2};
-use pyo3::exceptions::PyValueError;
+use numpy::PyArray2;
+use numpy::ndarray::Array2;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use splash_sph::Attribute;
@@ -20,17 +19,14 @@ const FIELDS: [&str; 4] = ["ijk", "values", "voxel", "half_width"];
 
 /// Adds the named tuple type `LevelSetArrays` to the module.
 pub fn add_type(m: &Bound<'_, PyModule>) -> PyResult<()> {
-    let py = m.py();
-    let namedtuple = py.import("collections")?.getattr("namedtuple")?;
-    let kind = namedtuple.call1(("LevelSetArrays", FIELDS))?;
-    kind.setattr("__module__", "splash_sph")?;
-    kind.setattr(
-        "__doc__",
+    crate::add_named_tuple(
+        m,
+        "LevelSetArrays",
+        &FIELDS,
         "A narrow-band level set: ijk (N, 3) int32 indices of the active voxels, voxel ijk \
          centred at ijk * voxel; values (N,) float32 signed distances, negative inside; voxel, \
          the voxels' edge; half_width, the band's half width in world units.",
-    )?;
-    m.add("LevelSetArrays", kind)
+    )
 }
 
 fn compute(py: Python<'_>, mesh: &Bound<'_, PyAny>, voxel: f32) -> PyResult<LevelSet> {
@@ -62,7 +58,7 @@ pub fn level_set<'py>(
     let kind = py.import("splash_sph._native")?.getattr("LevelSetArrays")?;
     kind.call1((
         PyArray2::from_owned_array(py, ijk),
-        PyArray1::from_owned_array(py, Array1::from_vec(ls.values)),
+        arrays::scalars_array(py, ls.values),
         ls.voxel,
         ls.half_width,
     ))
@@ -90,21 +86,7 @@ pub fn write_vdb(
     for (key, value) in grids.into_iter().flat_map(|g| g.iter()) {
         let name: String = key.extract()?;
         let what = format!("grids['{name}']");
-        let attribute = if arrays::is_scalar(&value)? {
-            Attribute::Scalar(arrays::scalars(&value, &what)?)
-        } else {
-            Attribute::Vector(arrays::points(&value, &what)?.into_vec())
-        };
-        let rows = match &attribute {
-            Attribute::Scalar(s) => s.len(),
-            Attribute::Vector(v) => v.len(),
-        };
-        if rows != ls.values.len() {
-            return Err(PyValueError::new_err(format!(
-                "{what} has {rows} values for {} active voxels",
-                ls.values.len()
-            )));
-        }
+        let attribute = arrays::column_of(&value, &what, ls.values.len(), "active voxels")?;
         named.push((name, attribute));
     }
     py.detach(|| ls.write_file(&path, &named)).map_err(to_py)

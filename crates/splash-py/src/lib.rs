@@ -82,3 +82,17 @@ fn native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<particles::Particles>()?;
     Ok(())
 }
+
+/// Adds to the module the named tuple type `name` with `fields` and the docstring `doc`.
+fn add_named_tuple(
+    m: &Bound<'_, PyModule>,
+    name: &str,
+    fields: &[&str],
+    doc: &str,
+) -> PyResult<()> {
+    let namedtuple = m.py().import("collections")?.getattr("namedtuple")?;
+    let kind = namedtuple.call1((name, fields.to_vec()))?;
+    kind.setattr("__module__", "splash_sph")?;
+    kind.setattr("__doc__", doc)?;
+    m.add(name, kind)
+}

@@ -15,17 +15,14 @@ const FIELDS: [&str; 4] = ["vertices", "faces", "normals", "attributes"];
 
 /// Adds the named tuple type `MeshArrays` to the module.
 pub fn add_type(m: &Bound<'_, PyModule>) -> PyResult<()> {
-    let py = m.py();
-    let namedtuple = py.import("collections")?.getattr("namedtuple")?;
-    let kind = namedtuple.call1(("MeshArrays", FIELDS))?;
-    kind.setattr("__module__", "splash_sph")?;
-    kind.setattr(
-        "__doc__",
+    crate::add_named_tuple(
+        m,
+        "MeshArrays",
+        &FIELDS,
         "A triangle mesh read from a file: vertices (V, 3) float32, faces (F, 3) uint32, \
          normals (V, 3) float32 or (0, 3) when the file has none, and attributes, a dict of \
          per-vertex float32 arrays ((V, 3) vectors, (V,) scalars).",
-    )?;
-    m.add("MeshArrays", kind)
+    )
 }
 
 /// Reads a mesh written by ``splash recon`` or ``Mesh.write``, by its extension: ``.obj``,
