@@ -5,10 +5,12 @@
 //! `cargo run --release --example post_stages -- FRAME.ply SPACING [REFINE_DEGREES] [RUNS]`
 
 use splash_sph::mesh::adjacency::{Neighbours, VertexFaces};
+use splash_sph::mesh::post::refinement::refine_bends;
+use splash_sph::mesh::post::smoothing::{relax_tangentially, taubin};
+use splash_sph::mesh::post::volume::{
+    Components, Measures, normals_and_measures, particles_inside,
+};
 use splash_sph::mesh::post::{PostConfig, postprocess};
-use splash_sph::mesh::refinement::refine_bends;
-use splash_sph::mesh::smoothing::{relax_tangentially, taubin};
-use splash_sph::mesh::volume::{Components, Measures, normals_and_measures, particles_inside};
 use splash_sph::{Config, Length, Reconstructor, Vec3, read_particles};
 use std::time::Instant;
 

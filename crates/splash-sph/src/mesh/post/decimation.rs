@@ -27,9 +27,9 @@
 //! Vertices whose star is not a single closed fan (boundaries, non-manifold spots, degenerate
 //! triangles) are never moved, so other meshes pass through with those parts untouched.
 
-use super::TriMesh;
-use super::stars::{DEAD, Stars, area_weighted_normals, compact, validate};
 use crate::error::{Error, Result};
+use crate::mesh::TriMesh;
+use crate::mesh::stars::{DEAD, Stars, area_weighted_normals, compact, validate};
 use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 

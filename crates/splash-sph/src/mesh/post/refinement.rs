@@ -11,7 +11,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicU32, Ordering};
 
-use super::adjacency::VertexFaces;
+use crate::mesh::adjacency::VertexFaces;
 
 /// Triangles per parallel task.
 const CHUNK: usize = 4096;

@@ -9,9 +9,9 @@
 //! are the cap, nesting of holes and islands included. Caps of earlier planes are cut like the
 //! rest, so box corners need nothing special.
 
-use super::TriMesh;
-use super::stars::{compact, validate};
 use crate::error::{Error, Result};
+use crate::mesh::TriMesh;
+use crate::mesh::stars::{compact, validate};
 use glam::{DVec3, Vec3};
 use rustc_hash::FxHashMap;
 use spade::handles::FixedVertexHandle;

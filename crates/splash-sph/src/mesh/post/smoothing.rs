@@ -7,7 +7,7 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::adjacency::{Neighbours, VertexFaces};
+use crate::mesh::adjacency::{Neighbours, VertexFaces};
 
 /// Vertices per parallel task: large enough to amortise the task, small enough to balance.
 const CHUNK: usize = 4096;

@@ -13,7 +13,7 @@ use glam::{IVec3, Vec3};
 use rayon::prelude::*;
 use rustc_hash::FxHashMap;
 
-use super::adjacency::Neighbours;
+use crate::mesh::adjacency::Neighbours;
 
 /// Normals that turn more than this against each other face each other (120°).
 const FACING: f32 = -0.5;

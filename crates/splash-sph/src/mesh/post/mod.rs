@@ -8,22 +8,31 @@
 //! [`postprocess_mesh`] runs the same on any closed mesh, checked first, with each component
 //! keeping its own volume when there are no particles.
 
+pub mod clearance;
+pub mod clipping;
+pub mod decimation;
+pub mod refinement;
+pub mod smoothing;
+pub mod volume;
+
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
 
-use super::adjacency::{Neighbours, VertexFaces};
-use super::clearance::Clearance;
-use super::refinement::refine_bends;
-use super::smoothing::{relax_tangentially, taubin, vertex_normals};
-use super::stars::{area_weighted_normals, validate};
-use super::topology::topology;
-use super::volume::{
+use crate::error::{Error, Result};
+use crate::length::Length;
+use crate::mesh::adjacency::{Neighbours, VertexFaces};
+use crate::mesh::stars::{area_weighted_normals, validate};
+use crate::mesh::topology::topology;
+use crate::mesh::{TriMesh, drop_small_components};
+use clearance::Clearance;
+use clipping::clip_to_box;
+use decimation::decimate;
+use refinement::refine_bends;
+use smoothing::{relax_tangentially, taubin, vertex_normals};
+use volume::{
     Components, Measures, VolumeScope, first_order_offsets, normals_and_measures, particles_inside,
     restore,
 };
-use super::{TriMesh, clip_to_box, decimate, drop_small_components};
-use crate::error::{Error, Result};
-use crate::length::Length;
 
 /// `[post]`: what happens to the mesh after the engine. Defaults measured on cbd-small (21
 /// frames) and cbd-large frame 23 at cell r/2 (issue 25).
@@ -270,7 +279,7 @@ pub fn postprocess_mesh(
         mesh.normals = Vec::new();
     } else if mesh.normals.is_empty() && config.raw {
         // Smoothing would compute them; the raw path's stages keep the ones there are.
-        mesh.normals = super::stars::area_weighted_normals(&mesh.vertices, &mesh.triangles);
+        mesh.normals = crate::mesh::stars::area_weighted_normals(&mesh.vertices, &mesh.triangles);
     }
     run(mesh, spacing, &volumes, config, normals)
 }

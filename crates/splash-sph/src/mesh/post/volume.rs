@@ -7,8 +7,8 @@ use glam::{DVec3, Vec3};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
-use super::adjacency::{Neighbours, VertexFaces};
 use super::clearance::Clearance;
+use crate::mesh::adjacency::{Neighbours, VertexFaces};
 
 /// What the volume steps of `PostConfig` restore: see `PostConfig::volume_scope`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
