@@ -50,8 +50,11 @@ options_function! {
 /// ``field``: ``"ssp07"`` (default), ``"zb05"``, ``"density"``, ``"blobby"``, ``"metaball"`` or
 /// ``"anisotropic"`` with its default parameters (a config's field of the same kind keeps its
 /// own). ``engine``: ``"narrow-band"`` (default), ``"full-gather"``, ``"scatter"`` or
-/// ``"slices"``; all give the same mesh. ``normals``: ``"field"`` (default, the field's
-/// gradient), ``"grid"`` (central differences) or ``"none"``. ``correct``: Newton steps that
+/// ``"slices"``; full-gather, scatter and slices give the same surface, and the narrow band too
+/// but for the blobs of a cell or two beyond its band at small cells, which it misses (1 of 55
+/// components on cbd-small frame 40 at cell r/2; docs/reference/recon.md, Engines).
+/// ``normals``: ``"field"`` (default, the field's gradient), ``"grid"`` (central differences)
+/// or ``"none"``. ``correct``: Newton steps that
 /// move each vertex along its cube edge onto the field's exact isosurface (3 is plenty; 0,
 /// the default, keeps Marching Cubes' linear interpolation). ``threads``: worker threads, all
 /// cores by default; the mesh does not depend on it (each calling thread keeps its workers for
