@@ -87,7 +87,10 @@ fn code_map_paths_exist() {
     for line in map.lines().filter(|l| l.starts_with('|')) {
         let cells: Vec<&str> = line.split('|').map(str::trim).collect();
         let (where_, what) = (cells[1], cells.get(2).copied().unwrap_or(""));
-        let bases: Vec<&str> = code_spans(where_).into_iter().filter(|s| is_path(s)).collect();
+        let bases: Vec<&str> = code_spans(where_)
+            .into_iter()
+            .filter(|s| is_path(s))
+            .collect();
         if bases.is_empty() {
             continue; // the header and its rule
         }
@@ -137,12 +140,23 @@ fn sentences(text: &str) -> Vec<String> {
 
 /// A sentence that says all engines give one mesh, without the narrow band's exception.
 fn unqualified_engine_equality(sentence: &str) -> bool {
-    let same = ["same mesh", "same surface", "same components", "identical mesh"]
-        .iter()
-        .any(|p| sentence.contains(p));
-    let all = ["all ", "every engine", "four engines", "each engine", "the engines"]
-        .iter()
-        .any(|p| sentence.contains(p));
+    let same = [
+        "same mesh",
+        "same surface",
+        "same components",
+        "identical mesh",
+    ]
+    .iter()
+    .any(|p| sentence.contains(p));
+    let all = [
+        "all ",
+        "every engine",
+        "four engines",
+        "each engine",
+        "the engines",
+    ]
+    .iter()
+    .any(|p| sentence.contains(p));
     let excepted = sentence.contains("narrow band")
         && ["miss", "except", "but for", "beyond"]
             .iter()
@@ -225,7 +239,11 @@ fn anchors(markdown: &str) -> Vec<String> {
         }
         let base = slug(&line[hashes..].replace('`', ""));
         let n = seen.entry(base.clone()).or_insert(0);
-        out.push(if *n == 0 { base.clone() } else { format!("{base}-{n}") });
+        out.push(if *n == 0 {
+            base.clone()
+        } else {
+            format!("{base}-{n}")
+        });
         *n += 1;
     }
     out
