@@ -65,7 +65,7 @@ pub use error::{Error, Result};
 pub use glam::Vec3;
 pub use io::{InputFormat, read_particles};
 pub use length::Length;
-pub use overrides::Overrides;
+pub use overrides::{OPTIONS, OptionSpec, OptionValue, Overrides, Spelling, option};
 pub use recon::Reconstruction;
 pub use reconstructor::Reconstructor;
 pub use report::{Clock, CorrectionFigures, FrameStats, Observer, Stage, StageFigures};

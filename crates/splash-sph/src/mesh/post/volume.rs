@@ -20,6 +20,27 @@ pub enum VolumeScope {
     Component,
 }
 
+impl VolumeScope {
+    /// The scope's name in configs and on the command line: `frame` or `component`.
+    pub fn name(self) -> &'static str {
+        match self {
+            VolumeScope::Frame => "frame",
+            VolumeScope::Component => "component",
+        }
+    }
+
+    /// The scope of a [`name`](Self::name).
+    pub fn parse(text: &str) -> crate::error::Result<VolumeScope> {
+        match text.trim() {
+            "frame" => Ok(VolumeScope::Frame),
+            "component" => Ok(VolumeScope::Component),
+            _ => Err(crate::error::Error::config(format!(
+                "unknown volume scope '{text}': expected frame or component"
+            ))),
+        }
+    }
+}
+
 /// The connected components of a mesh (vertex connectivity through triangles).
 #[derive(Debug, Clone)]
 pub struct Components {
