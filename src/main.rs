@@ -22,9 +22,7 @@ mod tables;
 
 use splash_sph::frames::Output;
 use splash_sph::pipeline::Batch;
-use splash_sph::{
-    Bytes, Config, Engine, Length, MeshFormat, Normals, OutputConfig, Overrides, UpAxis,
-};
+use splash_sph::{Config, Overrides};
 
 use farm::FarmArgs;
 use log::{Console, LogFormat, RunArgs};
@@ -71,20 +69,25 @@ enum ConfigCommand {
 }
 
 /// The configuration of a run: built-in defaults, overridden by the config file, overridden by
-/// these flags.
+/// these flags. Each flag is an option of `splash_sph::OPTIONS`: the first paragraph of its help
+/// is the table's help text (the `options_table` test compares them), the rest this command
+/// line's own.
 #[derive(Args)]
 struct ConfigArgs {
     /// TOML file with the reconstruction parameters (see configs/).
     #[arg(long)]
     config: Option<PathBuf>,
 
-    /// Scalar field, with its defaults unless the config file sets the same kind: ssp07
-    /// (default), zb05, density, blobby, metaball or anisotropic.
+    /// Scalar field: ssp07, zb05, density, blobby, metaball or anisotropic, with its default
+    /// parameters unless the configuration gives the same kind.
+    ///
+    /// Default: ssp07.
     #[arg(long)]
     field: Option<String>,
 
-    /// Particle spacing r (the simulator's equilibrium distance). Estimated from the first
-    /// frame when neither this nor --particle-radius is given.
+    /// Particle spacing r, the simulator's equilibrium distance between particles.
+    ///
+    /// Estimated from the first frame when neither this nor --particle-radius is given.
     #[arg(long, conflicts_with = "particle_radius")]
     spacing: Option<f32>,
 
@@ -92,69 +95,89 @@ struct ConfigArgs {
     #[arg(long)]
     particle_radius: Option<f32>,
 
-    /// Marching Cubes cell size: 2r, r, r/2 (default), r/N, Kr, or a length; at most 4r (larger
-    /// cells lose the fluid's thin parts, then all of it).
+    /// Marching Cubes cell size: 2r, r, r/2, r/N, Kr or a length; at most 4r.
+    ///
+    /// Default: r/2. Larger cells than 4r lose the fluid's thin parts, then all of it.
     #[arg(long)]
     cell: Option<String>,
 
-    /// Vertex normals: field (the field's gradient, default), grid (differences of the
-    /// sampled grid: faster), or none. Post-processed meshes (all but --raw) get area-weighted
-    /// normals of the smoothed surface unless none.
+    /// Vertex normals: field (the field's gradient), grid (differences of the sampled grid:
+    /// faster) or none.
+    ///
+    /// Default: field. Post-processed meshes (all but --raw) get area-weighted normals of the
+    /// smoothed surface unless none.
     #[arg(long)]
     normals: Option<String>,
 
-    /// Move every vertex along its cube edge onto the field's exact isosurface with N Newton
-    /// steps (Marching Correctors; bare --correct: 3). Off by default: vertices then lie where
-    /// Marching Cubes' linear interpolation puts them.
+    /// Newton steps moving each vertex along its cube edge onto the field's exact isosurface
+    /// (Marching Correctors); 0 keeps Marching Cubes' linear interpolation.
+    ///
+    /// Bare --correct: 3. Default: 0, vertices where Marching Cubes' linear interpolation
+    /// puts them.
     #[arg(long, value_name = "N", num_args = 0..=1, require_equals = true, default_missing_value = "3")]
     correct: Option<u32>,
 
-    /// Cubes per side of a block of the slices engine (default 64).
+    /// Cubes per side of a block of the slices engine.
+    ///
+    /// Default: 64.
     #[arg(long)]
     block: Option<u32>,
 
-    /// Reconstruction engine: narrow-band (default), the paper's baselines full-gather
-    /// (Z-index gather on every grid vertex) and scatter (serial, SSP07 only), or slices
-    /// (block-parallel Marching Slices, memory bounded per block; see --block). full-gather,
-    /// scatter and slices give the same components; the narrow band too, except at small
-    /// cells for blobs of a few cells farther than its 2r band from every surface particle
-    /// (at cell r/2: 1 of 55 components on cbd-small frame 40).
+    /// Reconstruction engine: narrow-band, full-gather, scatter or slices.
+    ///
+    /// Default: narrow-band. full-gather (Z-index gather on every grid vertex) and scatter
+    /// (serial, SSP07 only) are the paper's baselines; slices is block-parallel Marching
+    /// Slices, memory bounded per block (see --block). full-gather, scatter and slices give the
+    /// same components; the narrow band too, except at small cells for blobs of a few cells
+    /// farther than its 2r band from every surface particle (at cell r/2: 1 of 55 components
+    /// on cbd-small frame 40).
     #[arg(long)]
     engine: Option<String>,
 
-    /// Worker threads (default: all cores). The mesh does not depend on it.
+    /// Worker threads, all cores when not given; the mesh does not depend on it.
     #[arg(long)]
     threads: Option<usize>,
 
-    /// Heap a frame may plan to use, e.g. 8G or 512M: every engine estimates its need before
-    /// its big allocations and refuses a larger frame (the others go on). Default: 80 % of
-    /// the smallest of the cgroup limit, SLURM's memory and the available memory.
+    /// Heap a frame may plan to use, e.g. 8G or 512M: every engine refuses a frame that needs
+    /// more.
+    ///
+    /// Every engine estimates its need before its big allocations; the other frames go on.
+    /// Default: 80 % of the smallest of the cgroup limit, SLURM's memory and the available
+    /// memory.
     #[arg(long)]
     max_memory: Option<String>,
 
-    /// Mesh format: obj, ply (binary little-endian), ply-ascii, pov (POV-Ray mesh2 include,
-    /// .inc), vtk (legacy binary), vtu or vtp (VTK XML, zlib-compressed), usd (a .usda layer
-    /// per frame, with the particles' velocities, and for a sequence a stage that plays them
-    /// as one mesh: <name>.usda beside them), vdb (an OpenVDB level set per frame: float grid
-    /// `surface`, signed distance to the mesh within 3 voxels of the cell, negative inside;
-    /// --attributes as grids, velocity as `v`). Default: from the output file's extension,
-    /// else obj.
+    /// Mesh format: obj, ply, ply-ascii, pov, vtk, vtu, vtp, usd or vdb; from the output's
+    /// extension when not given, else obj.
+    ///
+    /// ply is binary little-endian; pov a POV-Ray mesh2 include (.inc); vtk legacy binary; vtu
+    /// and vtp VTK XML, zlib-compressed; usd a .usda layer per frame, with the particles'
+    /// velocities, and for a sequence a stage that plays them as one mesh (<name>.usda beside
+    /// them); vdb an OpenVDB level set per frame (float grid `surface`, signed distance to the
+    /// mesh within 3 voxels of the cell, negative inside; --attributes as grids, velocity as
+    /// `v`).
     #[arg(long)]
     format: Option<String>,
 
-    /// Rotate the mesh on output: z turns Y-up data Z-up, y turns Z-up data Y-up. Default:
-    /// coordinates as they are.
+    /// Rotate the mesh on output: z turns Y-up data Z-up, y turns Z-up data Y-up.
+    ///
+    /// Default: coordinates as they are.
     #[arg(long, value_name = "AXIS")]
     up_axis: Option<String>,
 
-    /// Per-vertex attributes to write (PLY, VTK, VTU, VTP, USD): particle attributes by name
-    /// (velocity, density, …; v, vel and vx vy vz all find velocity), interpolated onto the
-    /// vertices with the kernel-weighted mean of the particles around each; for VDB, onto the
+    /// Particle attributes interpolated onto the mesh's vertices, by name (velocity, density,
+    /// …).
+    ///
+    /// Written to PLY, VTK, VTU, VTP and USD: v, vel and vx vy vz all find velocity; the value
+    /// at a vertex is the kernel-weighted mean of the particles around it. For VDB, onto the
     /// level set's active voxels, a grid each.
     #[arg(long, value_name = "LIST")]
     attributes: Option<String>,
 
-    /// Drop the particles outside this box before reconstructing (their count is logged).
+    /// Drop the particles outside this box (min x, min y, min z, max x, max y, max z) before
+    /// reconstructing.
+    ///
+    /// Their count is logged.
     #[arg(
         long,
         value_name = "MINX,MINY,MINZ,MAXX,MAXY,MAXZ",
@@ -162,35 +185,51 @@ struct ConfigArgs {
     )]
     particle_aabb: Option<String>,
 
-    /// Keep the field's exact isosurface: no smoothing and no volume restoration (by default
-    /// the mesh is smoothed and each part given the volume of the particles inside it).
+    /// Keep the field's exact isosurface: no smoothing and no volume restoration.
+    ///
+    /// By default the mesh is smoothed and each part given the volume of the particles inside
+    /// it.
     #[arg(long)]
     raw: bool,
 
     /// In a sequence, move each frame's surface towards its neighbouring frames' surfaces
-    /// carried by the fluid's motion (particle ids, else velocities with post.frame_time), a
-    /// low-pass in time against flicker. Experimental: about 2.4x the wall time
+    /// carried by the fluid's motion (experimental).
+    ///
+    /// The motion comes from particle ids, else velocities with post.frame_time: a low-pass in
+    /// time against flicker, for about 2.4x the wall time.
     #[arg(long)]
     temporal: bool,
 
-    /// Decimate the mesh (quadric edge collapses) keeping every vertex and triangle centre
-    /// within this distance of the full surface: 0.1r (a tenth of the spacing) or a length.
-    /// Closed and manifold, components and volume kept
+    /// Decimate with quadric edge collapses, keeping every vertex and triangle centre within
+    /// this distance of the full surface.
+    ///
+    /// 0.1r (a tenth of the spacing) or a length. Closed and manifold, components and volume
+    /// kept.
     #[arg(long, value_name = "LENGTH")]
     decimate: Option<String>,
 
-    /// Drop droplets and other parts enclosing less than V particle volumes (V r³; after the
-    /// default volume restoration a droplet of n particles holds n r³)
+    /// Drop the parts of the mesh enclosing less than this many particle volumes r³.
+    ///
+    /// After the default volume restoration a droplet of n particles holds n r³.
     #[arg(long, value_name = "V")]
     min_component: Option<f64>,
 
-    /// Keep only the mesh inside this box; the cuts are capped, so it stays closed
+    /// Keep only the mesh inside this box (min x, min y, min z, max x, max y, max z); the cuts
+    /// are capped, so it stays closed.
     #[arg(
         long,
         value_name = "MINX,MINY,MINZ,MAXX,MAXY,MAXZ",
         allow_hyphen_values = true
     )]
     mesh_aabb: Option<String>,
+
+    /// What the volume restoration brings to N·r³: frame (the whole mesh, one offset) or
+    /// component (each closed part to its own particles).
+    ///
+    /// Default: frame, which moves a frame's surface the way its neighbours' move: less
+    /// flicker in a sequence, where a droplet's own target jumps with its particle count.
+    #[arg(long, value_name = "SCOPE")]
+    volume_scope: Option<String>,
 }
 
 impl ConfigArgs {
@@ -202,41 +241,38 @@ impl ConfigArgs {
         if self.threads == Some(0) {
             bail!("--threads must be at least 1");
         }
-        fn parsed<T>(
-            text: &Option<String>,
-            flag: &'static str,
-            parse: impl Fn(&str) -> splash_sph::Result<T>,
-        ) -> Result<Option<T>> {
-            text.as_deref().map(parse).transpose().context(flag)
-        }
-        let overrides = Overrides {
+        let mut overrides = Overrides {
             field: self.field.clone(),
             spacing: self.particle_radius.map(|p| 2.0 * p).or(self.spacing),
-            cell: parsed(&self.cell, "--cell", Length::parse)?,
-            normals: parsed(&self.normals, "--normals", Normals::parse)?,
             correct: self.correct,
             block: self.block,
-            engine: parsed(&self.engine, "--engine", Engine::parse)?,
             threads: self.threads,
-            max_memory: parsed(&self.max_memory, "--max-memory", Bytes::parse)?,
-            format: self.format.as_deref().map(MeshFormat::parse).transpose()?,
-            up_axis: self.up_axis.as_deref().map(UpAxis::parse).transpose()?,
-            attributes: parsed(
-                &self.attributes,
-                "--attributes",
-                OutputConfig::parse_attributes,
-            )?,
-            particle_aabb: parsed(
-                &self.particle_aabb,
-                "--particle-aabb",
-                splash_sph::parse_aabb,
-            )?,
             raw: self.raw.then_some(true),
-            mesh_aabb: parsed(&self.mesh_aabb, "--mesh-aabb", splash_sph::parse_aabb)?,
             min_component: self.min_component,
-            decimate: parsed(&self.decimate, "--decimate", Length::parse)?,
             temporal: self.temporal.then_some(true),
+            ..Overrides::default()
         };
+        // The flags given as text, parsed by the library's one parser of each option.
+        for (name, text) in [
+            ("cell", &self.cell),
+            ("normals", &self.normals),
+            ("engine", &self.engine),
+            ("max_memory", &self.max_memory),
+            ("format", &self.format),
+            ("up_axis", &self.up_axis),
+            ("attributes", &self.attributes),
+            ("particle_aabb", &self.particle_aabb),
+            ("mesh_aabb", &self.mesh_aabb),
+            ("decimate", &self.decimate),
+            ("volume_scope", &self.volume_scope),
+        ] {
+            if let Some(text) = text {
+                let flag = splash_sph::option(name).cli.name().unwrap_or(name);
+                overrides
+                    .set(name, text)
+                    .with_context(|| format!("--{flag}"))?;
+            }
+        }
         Ok(config.apply(&overrides)?)
     }
 }

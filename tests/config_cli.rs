@@ -107,6 +107,15 @@ fn flags_override_the_file_and_typos_are_errors() {
             .unwrap()
             .contains("unknown field 'splat'")
     );
+    let out = splash(&["config", "show", "--volume-scope", "droplet"]);
+    let err = String::from_utf8(out.stderr).unwrap();
+    assert!(
+        !out.status.success()
+            && err.contains(
+                "--volume-scope: unknown volume scope 'droplet': expected frame or component"
+            ),
+        "{err}"
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
@@ -166,6 +175,8 @@ fn shown_configuration_records_the_whole_run() {
         "z",
         "--attributes",
         "velocity",
+        "--volume-scope",
+        "component",
     ];
     let shown = splash(&[&["config", "show"][..], &run].concat());
     assert!(shown.status.success(), "{shown:?}");
@@ -177,6 +188,7 @@ fn shown_configuration_records_the_whole_run() {
         "format = \"ply\"",
         "up_axis = \"z\"",
         "attributes = [\"velocity\"]",
+        "volume_scope = \"component\"",
     ] {
         assert!(text.contains(line), "no '{line}' in\n{text}");
     }
