@@ -49,11 +49,13 @@ fn default_config(py: Python<'_>) -> PyResult<Bound<'_, PyAny>> {
 }
 
 options_function! {
-/// The configuration that ``reconstruct`` would use with the same ``config`` and keyword
-/// arguments, as TOML text (what ``splash config show`` prints; save it to reuse it with
-/// ``splash recon --config``). Raises ValueError as ``reconstruct`` does for bad settings.
+/// The configuration that ``recon_sequence`` (and ``reconstruct``, which takes the same
+/// keyword arguments but the options of files and sequences) would use with the same
+/// ``config`` and keyword arguments, as TOML text (what ``splash config show`` prints with the
+/// flags of the same names; save it to reuse it with ``splash recon --config``). Raises
+/// ValueError as ``reconstruct`` does for bad settings.
 fn config_toml<'py>(config: Option<&Bound<'py, PyAny>>, spacing: Option<f32>)
-    signature(config=None, *, spacing=None,) then() -> PyResult<String>, |options| {
+    signature(config=None, *, spacing=None,) then() files -> PyResult<String>, |options| {
     Ok(settings::resolve(config, Overrides { spacing, ..options })?.to_toml())
 }
 }

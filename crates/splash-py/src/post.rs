@@ -9,7 +9,6 @@ use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyTuple};
 use splash_sph::TriMesh;
-use splash_sph::mesh::VolumeScope;
 use splash_sph::mesh::post::{Volumes, postprocess_mesh};
 
 use crate::arrays;
@@ -79,7 +78,7 @@ pub fn postprocess<'py>(
     lambda_: Option<f32>,
     mu: Option<f32>,
     volume_rounds: Option<i64>,
-    volume_scope: Option<&str>,
+    volume_scope: Option<String>,
     max_offset: Option<f32>,
     refine_angle: Option<f32>,
     relax_iterations: Option<i64>,
@@ -98,6 +97,7 @@ pub fn postprocess<'py>(
         decimate,
         min_component,
         mesh_aabb,
+        volume_scope,
         ..Overrides::default()
     };
     let mut config = settings::resolve(config, overrides)?;
@@ -127,16 +127,6 @@ pub fn postprocess<'py>(
     post.mu = mu.unwrap_or(post.mu);
     post.max_offset = max_offset.unwrap_or(post.max_offset);
     post.refine_angle = refine_angle.unwrap_or(post.refine_angle);
-    post.volume_scope = match volume_scope {
-        None => post.volume_scope,
-        Some("frame") => VolumeScope::Frame,
-        Some("component") => VolumeScope::Component,
-        Some(other) => {
-            return Err(PyValueError::new_err(format!(
-                "volume_scope must be \"frame\" or \"component\", got {other:?}"
-            )));
-        }
-    };
     post.validate().map_err(to_py)?;
 
     let input = MeshInput::of(mesh)?;

@@ -42,29 +42,44 @@ options_function! {
 /// accepted, integer arrays are refused. Coordinates must be finite. An empty (0, 3) array
 /// gives an empty mesh.
 ///
-/// ``spacing``: the particle spacing r (the simulator's equilibrium distance), in world units.
-/// Required unless the config gives it: it is never guessed (see ``estimate_spacing``).
+/// ``spacing``: Particle spacing r, the simulator's equilibrium distance between particles,
+/// in world units. Required unless the config gives it: it is never guessed (see
+/// ``estimate_spacing``).
 ///
-/// Keyword arguments override the config (None leaves its value): ``cell``: the Marching Cubes
-/// cell, ``"r/2"`` (default), ``"r"``, ``"2r"``, ``"0.5r"`` or a number in world units.
-/// ``field``: ``"ssp07"`` (default), ``"zb05"``, ``"density"``, ``"blobby"``, ``"metaball"`` or
-/// ``"anisotropic"`` with its default parameters (a config's field of the same kind keeps its
-/// own). ``engine``: ``"narrow-band"`` (default), ``"full-gather"``, ``"scatter"`` or
-/// ``"slices"``; full-gather, scatter and slices give the same surface, and the narrow band too
-/// but for the blobs of a cell or two beyond its band at small cells, which it misses (1 of 55
-/// components on cbd-small frame 40 at cell r/2; docs/reference/recon.md, Engines).
-/// ``normals``: ``"field"`` (default, the field's gradient), ``"grid"`` (central differences)
-/// or ``"none"``. ``correct``: Newton steps that
-/// move each vertex along its cube edge onto the field's exact isosurface (3 is plenty; 0,
-/// the default, keeps Marching Cubes' linear interpolation). ``threads``: worker threads, all
-/// cores by default; the mesh does not depend on it (each calling thread keeps its workers for
-/// its next calls). ``max_memory``: the heap a frame may plan to use (every engine checks
-/// it), in bytes or as ``"8G"``. ``raw=True``: the field's exact isosurface, without the
-/// default post-processing (smoothing, each part given its particles' volume N·r³).
-/// ``decimate``: a length (``"0.1r"`` or a number) within which every vertex and triangle
-/// centre of the decimated mesh stays of the full surface. ``min_component``: drop parts
-/// enclosing fewer than this many particle volumes r³. ``mesh_aabb``: six numbers (min x, min
-/// y, min z, max x, max y, max z); the mesh is clipped to that box and its cuts capped.
+/// Keyword arguments override the config (None leaves its value); each is the option of the
+/// command line's flag of the same name (``--max-memory`` for ``max_memory``), where a number
+/// is a length in world units:
+///
+/// - ``cell``: Marching Cubes cell size: 2r, r, r/2, r/N, Kr or a length; at most 4r.
+///   Default ``"r/2"``.
+/// - ``field``: Scalar field: ssp07, zb05, density, blobby, metaball or anisotropic, with its
+///   default parameters unless the configuration gives the same kind. Default ``"ssp07"``.
+/// - ``engine``: Reconstruction engine: narrow-band, full-gather, scatter or slices. Default
+///   ``"narrow-band"``. full-gather, scatter and slices give the same surface, and the narrow
+///   band too but for the blobs of a cell or two beyond its band at small cells, which it
+///   misses (1 of 55 components on cbd-small frame 40 at cell r/2;
+///   docs/reference/recon.md, Engines).
+/// - ``normals``: Vertex normals: field (the field's gradient), grid (differences of the
+///   sampled grid: faster) or none. Default ``"field"``.
+/// - ``correct``: Newton steps moving each vertex along its cube edge onto the field's exact
+///   isosurface (Marching Correctors); 0 keeps Marching Cubes' linear interpolation. Default
+///   0; 3 is plenty.
+/// - ``block``: Cubes per side of a block of the slices engine. Default 64.
+/// - ``threads``: Worker threads, all cores when not given; the mesh does not depend on it.
+///   Each calling thread keeps its workers for its next calls.
+/// - ``max_memory``: Heap a frame may plan to use, e.g. 8G or 512M: every engine refuses a
+///   frame that needs more. In bytes or as ``"8G"``.
+/// - ``raw``: Keep the field's exact isosurface: no smoothing and no volume restoration.
+///   ``raw=True`` skips the default post-processing (smoothing, each part given its
+///   particles' volume N·r³; ``postprocess`` runs it on any mesh).
+/// - ``volume_scope``: What the volume restoration brings to N·r³: frame (the whole mesh, one
+///   offset) or component (each closed part to its own particles). Default ``"frame"``.
+/// - ``decimate``: Decimate with quadric edge collapses, keeping every vertex and triangle
+///   centre within this distance of the full surface: ``"0.1r"`` or a number.
+/// - ``min_component``: Drop the parts of the mesh enclosing less than this many particle
+///   volumes r³.
+/// - ``mesh_aabb``: Keep only the mesh inside this box (min x, min y, min z, max x, max y,
+///   max z); the cuts are capped, so it stays closed.
 ///
 /// ``config``: a TOML file's path (as ``splash recon --config`` reads) or a dict shaped like
 /// it (see ``default_config``). Its ``output.format`` and ``output.up_axis`` become the
@@ -94,7 +109,7 @@ fn reconstruct<'py>(
     positions: &Bound<'py, PyAny>,
     spacing: Option<f32>,
 ) signature(positions, spacing=None, *,)
-    then(config: Option<&Bound<'py, PyAny>>, attributes: Option<&Bound<'py, PyAny>>) post
+    then(config: Option<&Bound<'py, PyAny>>, attributes: Option<&Bound<'py, PyAny>>)
     -> PyResult<Mesh>, |options| {
     let overrides = Overrides { spacing, ..options };
     let config = settings::resolve(config, overrides)?;

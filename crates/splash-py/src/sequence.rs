@@ -9,7 +9,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList, PyString};
 use splash_sph::frames::{self, Output, Shard};
 use splash_sph::pipeline::{Batch, FrameOutcome, Plan, Progress, RunReport};
-use splash_sph::{FrameStats, InputFormat, MeshFormat, OutputConfig, UpAxis};
+use splash_sph::{FrameStats, InputFormat};
 
 use crate::errors::to_py;
 use crate::pools;
@@ -39,18 +39,28 @@ options_function! {
 /// 30-40x5"``. ``shard``: ``"K/N"`` (this job takes every N-th frame from the K-th) or
 /// ``"auto/N"`` (K from ``SLURM_ARRAY_TASK_ID``). ``skip_existing``: leave frames whose output
 /// exists alone. ``fail_fast``: stop at the first failing frame (by default it is reported
-/// and the others go on). ``attributes``: particle attributes to interpolate onto the
-/// vertices, names or one comma-separated string (PLY, VTK, VTU, VTP, USD output).
-/// ``format="usd"`` also writes, after the frames, the stage that plays their layers as one
-/// animated mesh (as ``splash recon --format usd`` does), and takes the particles' velocities
-/// whenever they have them.
-/// ``temporal=True``: each frame's surface follows the fluid towards its neighbouring
-/// frames' (``--temporal``, ``[post] temporal``; experimental: less flicker for about 2.4× the
-/// time; needs particle ids, or velocities with ``post.frame_time``); frames without both
-/// neighbours are post-processed alone, with a warning.
-/// ``input_format``, ``format``, ``up_axis``: as the command line's flags. The other keyword
-/// arguments are ``reconstruct``'s; without ``spacing`` it is estimated once, on the first
-/// frame of the whole selection, so that every shard uses the same grid.
+/// and the others go on).
+/// ``input_format``: as the command line's ``--input-format``.
+///
+/// The options of files and sequences, besides ``reconstruct``'s:
+///
+/// - ``particle_aabb``: Drop the particles outside this box (min x, min y, min z, max x, max
+///   y, max z) before reconstructing.
+/// - ``format``: Mesh format: obj, ply, ply-ascii, pov, vtk, vtu, vtp, usd or vdb; from the
+///   output's extension when not given, else obj. ``format="usd"`` also writes, after the
+///   frames, the stage that plays their layers as one animated mesh, and takes the particles'
+///   velocities whenever they have them.
+/// - ``up_axis``: Rotate the mesh on output: z turns Y-up data Z-up, y turns Z-up data Y-up.
+/// - ``attributes``: Particle attributes interpolated onto the mesh's vertices, by name
+///   (velocity, density, …): a list of names or one comma-separated string; written to PLY,
+///   VTK, VTU, VTP and USD.
+/// - ``temporal``: In a sequence, move each frame's surface towards its neighbouring frames'
+///   surfaces carried by the fluid's motion (experimental). Less flicker for about 2.4× the
+///   time; needs particle ids, or velocities with ``post.frame_time``; frames without both
+///   neighbours are post-processed alone, with a warning.
+///
+/// The other keywords are ``reconstruct``'s; without ``spacing`` it is estimated once, on the
+/// first frame of the whole selection, so that every shard uses one grid.
 ///
 /// Returns the run report, a dict: ``selected``, ``shard`` (``"K/N"`` or None),
 /// ``assigned``, ``skipped`` (inputs whose output existed), ``to_do``, ``written``,
@@ -74,29 +84,14 @@ fn recon_sequence<'py>(
     shard: Option<String>,
     skip_existing: bool,
     fail_fast: bool,
-    attributes: Option<&Bound<'py, PyAny>>,
     input_format: Option<String>,
-    format: Option<String>,
-    up_axis: Option<String>,
-    temporal: Option<bool>,
     spacing: Option<f32>,
 ) signature(inputs, output, *, progress=None, frames=None, shard=None, skip_existing=false,
-    fail_fast=false, attributes=None, input_format=None, format=None, up_axis=None,
-    temporal=None, spacing=None,)
-    then(config: Option<&Bound<'py, PyAny>>) post
+    fail_fast=false, input_format=None, spacing=None,)
+    then(config: Option<&Bound<'py, PyAny>>) files
     -> PyResult<Bound<'py, PyDict>>, |options| {
     let overrides = Overrides { spacing, ..options };
     let mut config = settings::resolve(config, overrides)?;
-    config.post.temporal = temporal.unwrap_or(config.post.temporal);
-    if let Some(names) = attribute_names(attributes)? {
-        config.output.attributes = OutputConfig::parse_attributes(&names).map_err(to_py)?;
-    }
-    if let Some(f) = format {
-        config.output.format = Some(MeshFormat::parse(&f).map_err(to_py)?);
-    }
-    if let Some(axis) = up_axis {
-        config.output.up_axis = Some(UpAxis::parse(&axis).map_err(to_py)?);
-    }
     let input_format = input_format
         .map(|f| InputFormat::parse(&f))
         .transpose()
@@ -288,18 +283,4 @@ fn input_paths(inputs: &Bound<'_, PyAny>) -> PyResult<Vec<PathBuf>> {
     items
         .map(|item| Ok(PathBuf::from(path_text(&item?, "each input")?)))
         .collect()
-}
-
-/// `attributes` as one comma-separated list: a str, or a list of names.
-fn attribute_names(attributes: Option<&Bound<'_, PyAny>>) -> PyResult<Option<String>> {
-    let Some(a) = attributes else {
-        return Ok(None);
-    };
-    if let Ok(text) = a.extract::<String>() {
-        return Ok(Some(text));
-    }
-    let names: Vec<String> = a.extract().map_err(|_| {
-        PyTypeError::new_err("attributes must be names: a list of str or \"velocity,density\"")
-    })?;
-    Ok(Some(names.join(",")))
 }

@@ -6,27 +6,31 @@ use std::path::PathBuf;
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
-use splash_sph::{Bytes, Config, Engine, Length, Normals};
+use splash_sph::mesh::VolumeScope;
+use splash_sph::{Bytes, Config, Engine, Length, MeshFormat, Normals, OutputConfig, UpAxis};
 
 use crate::errors::to_py;
 
 /// Defines a `#[pyfunction]` that takes the keyword arguments overriding the configuration,
-/// named and typed here only: after the function's own parameters (`signature` gives their
-/// part of the Python signature, up to and with the `*`) come `cell` … `max_memory`, then the
-/// `then` parameters (keyword arguments defaulting to None), then, with `post`, `raw` …
-/// `mesh_aabb`. The body sees them as `$options`, an [`Overrides`] whose `spacing` is None
-/// (each function places that argument itself: positional in `reconstruct`).
+/// named and typed here only (the options of `splash_sph::OPTIONS`; the command line's
+/// `options_table` test checks the stub against that table): after the function's own
+/// parameters (`signature` gives their part of the Python signature, up to and with the `*`)
+/// come `cell` … `volume_scope`, then the `then` parameters (keyword arguments defaulting to
+/// None), then, with `files`, the options of files and sequences: `particle_aabb`, `format`,
+/// `up_axis`, `attributes` (names) and `temporal`. The body sees them as `$options`, an
+/// [`Overrides`] whose `spacing` is None (each function places that argument itself:
+/// positional in `reconstruct`).
 macro_rules! options_function {
     (
         $(#[$meta:meta])*
         fn $name:ident<'py>($($param:ident: $ty:ty),* $(,)?)
-            signature($($sig:tt)*) then($($then:ident: $then_ty:ty),*) post
+            signature($($sig:tt)*) then($($then:ident: $then_ty:ty),*) files
             -> $ret:ty, |$options:ident| $body:block
     ) => {
         options_function!(@emit $(#[$meta])* $name ($($param: $ty),*) ($($sig)*)
             ($($then: $then_ty),*)
-            (raw: Option<bool>, decimate: Option<Bound<'py, PyAny>>, min_component: Option<f64>,
-             mesh_aabb: Option<Vec<f32>>) $ret, $options $body);
+            (particle_aabb: Option<Vec<f32>>, format: Option<String>, up_axis: Option<String>,
+             attributes: Option<Bound<'py, PyAny>>, temporal: Option<bool>) $ret, $options $body);
     };
     (
         $(#[$meta:meta])*
@@ -38,13 +42,15 @@ macro_rules! options_function {
             ($($then: $then_ty),*) () $ret, $options $body);
     };
     (@emit $(#[$meta:meta])* $name:ident ($($param:ident: $ty:ty),*) ($($sig:tt)*)
-        ($($then:ident: $then_ty:ty),*) ($($post:ident: $post_ty:ty),*) $ret:ty,
+        ($($then:ident: $then_ty:ty),*) ($($files:ident: $files_ty:ty),*) $ret:ty,
         $options:ident $body:block) => {
         $(#[$meta])*
         #[allow(clippy::too_many_arguments)]
         #[pyo3::pyfunction]
         #[pyo3(signature = ($($sig)* cell=None, field=None, engine=None, normals=None,
-            correct=None, threads=None, max_memory=None $(, $then=None)* $(, $post=None)*))]
+            correct=None, block=None, threads=None, max_memory=None, raw=None, decimate=None,
+            min_component=None, mesh_aabb=None, volume_scope=None $(, $then=None)*
+            $(, $files=None)*))]
         pub fn $name<'py>(
             $($param: $ty,)*
             cell: Option<Bound<'py, PyAny>>,
@@ -52,10 +58,16 @@ macro_rules! options_function {
             engine: Option<String>,
             normals: Option<String>,
             correct: Option<i64>,
+            block: Option<i64>,
             threads: Option<i64>,
             max_memory: Option<Bound<'py, PyAny>>,
+            raw: Option<bool>,
+            decimate: Option<Bound<'py, PyAny>>,
+            min_component: Option<f64>,
+            mesh_aabb: Option<Vec<f32>>,
+            volume_scope: Option<String>,
             $($then: $then_ty,)*
-            $($post: $post_ty,)*
+            $($files: $files_ty,)*
         ) -> $ret {
             let $options = $crate::settings::Overrides {
                 cell,
@@ -63,9 +75,15 @@ macro_rules! options_function {
                 engine,
                 normals,
                 correct,
+                block,
                 threads,
                 max_memory,
-                $($post,)*
+                raw,
+                decimate,
+                min_component,
+                mesh_aabb,
+                volume_scope,
+                $($files,)*
                 ..Default::default()
             };
             $body
@@ -83,12 +101,20 @@ pub struct Overrides<'py> {
     pub engine: Option<String>,
     pub normals: Option<String>,
     pub correct: Option<i64>,
+    pub block: Option<i64>,
     pub threads: Option<i64>,
     pub max_memory: Option<Bound<'py, PyAny>>,
     pub raw: Option<bool>,
     pub decimate: Option<Bound<'py, PyAny>>,
     pub min_component: Option<f64>,
     pub mesh_aabb: Option<Vec<f32>>,
+    pub volume_scope: Option<String>,
+    pub particle_aabb: Option<Vec<f32>>,
+    pub format: Option<String>,
+    pub up_axis: Option<String>,
+    /// Attribute names: a str (`"velocity,density"`) or a list of str.
+    pub attributes: Option<Bound<'py, PyAny>>,
+    pub temporal: Option<bool>,
 }
 
 /// `config` (None, a TOML file's path or a dict) with `overrides` applied, validated.
@@ -117,38 +143,31 @@ pub fn resolve(config: Option<&Bound<'_, PyAny>>, overrides: Overrides<'_>) -> P
             ))
         })?)),
     };
-    let decimate = o.decimate.map(|d| length(d, "decimate")).transpose()?;
-    let mesh_aabb = match o.mesh_aabb {
-        None => None,
+    let aabb = |b: Option<Vec<f32>>, key: &str| match b {
+        None => Ok(None),
         Some(b) => Some(<[f32; 6]>::try_from(b.as_slice()).map_err(|_| {
             PyValueError::new_err(format!(
-                "mesh_aabb must be six numbers (min x, min y, min z, max x, max y, max z), got {}",
+                "{key} must be six numbers (min x, min y, min z, max x, max y, max z), got {}",
                 b.len()
             ))
-        })?),
+        }))
+        .transpose(),
     };
-    let cell = match o.cell {
-        None => None,
-        Some(cell) => Some(match cell.extract::<String>() {
-            Ok(text) => Length::parse(&text).map_err(to_py)?,
-            Err(_) => Length::World(cell.extract().map_err(|_| {
-                PyTypeError::new_err("cell must be a length such as \"r/2\" or a number")
-            })?),
-        }),
+    // Counts: a negative or huge one is refused naming its keyword; out-of-range ones by
+    // validate, naming the key.
+    let count = |n: Option<i64>, key: &str, what: &str| -> PyResult<Option<u32>> {
+        n.map(|n| {
+            u32::try_from(n)
+                .map_err(|_| PyValueError::new_err(format!("{key} must be {what}, got {n}")))
+        })
+        .transpose()
     };
+    let decimate = o.decimate.map(|d| length(d, "decimate")).transpose()?;
+    let cell = o.cell.map(|c| length(c, "cell")).transpose()?;
     let threads = match o.threads {
         None => None,
         Some(n) => Some(usize::try_from(n).ok().filter(|&n| n > 0).ok_or_else(|| {
             PyValueError::new_err(format!("threads must be at least 1, got {n}"))
-        })?),
-    };
-    // Out-of-range counts are refused by validate, naming the key.
-    let correct = match o.correct {
-        None => None,
-        Some(n) => Some(u32::try_from(n).map_err(|_| {
-            PyValueError::new_err(format!(
-                "correct must be from 0 to 32 Newton steps, got {n}"
-            ))
         })?),
     };
     let max_memory = match o.max_memory {
@@ -162,32 +181,52 @@ pub fn resolve(config: Option<&Bound<'_, PyAny>>, overrides: Overrides<'_>) -> P
             })?),
         }),
     };
+    let attributes = match attribute_names(o.attributes.as_ref())? {
+        None => None,
+        Some(names) => Some(OutputConfig::parse_attributes(&names).map_err(to_py)?),
+    };
+    fn parsed<T>(
+        text: Option<String>,
+        parse: impl Fn(&str) -> splash_sph::Result<T>,
+    ) -> PyResult<Option<T>> {
+        text.as_deref().map(parse).transpose().map_err(to_py)
+    }
     let overrides = splash_sph::Overrides {
         field: o.field,
         spacing: o.spacing,
         cell,
-        engine: o
-            .engine
-            .as_deref()
-            .map(Engine::parse)
-            .transpose()
-            .map_err(to_py)?,
-        normals: o
-            .normals
-            .as_deref()
-            .map(Normals::parse)
-            .transpose()
-            .map_err(to_py)?,
-        correct,
+        engine: parsed(o.engine, Engine::parse)?,
+        normals: parsed(o.normals, Normals::parse)?,
+        correct: count(o.correct, "correct", "from 0 to 32 Newton steps")?,
+        block: count(o.block, "block", "from 1 to 4096 cubes")?,
         threads,
         max_memory,
+        format: parsed(o.format, MeshFormat::parse)?,
+        up_axis: parsed(o.up_axis, UpAxis::parse)?,
+        attributes,
+        particle_aabb: aabb(o.particle_aabb, "particle_aabb")?,
         raw: o.raw,
-        decimate,
+        mesh_aabb: aabb(o.mesh_aabb, "mesh_aabb")?,
         min_component: o.min_component,
-        mesh_aabb,
-        ..Default::default()
+        decimate,
+        temporal: o.temporal,
+        volume_scope: parsed(o.volume_scope, VolumeScope::parse)?,
     };
     config.apply(&overrides).map_err(to_py)
+}
+
+/// `attributes` as one comma-separated list: a str, or a list of names.
+fn attribute_names(attributes: Option<&Bound<'_, PyAny>>) -> PyResult<Option<String>> {
+    let Some(a) = attributes else {
+        return Ok(None);
+    };
+    if let Ok(text) = a.extract::<String>() {
+        return Ok(Some(text));
+    }
+    let names: Vec<String> = a.extract().map_err(|_| {
+        PyTypeError::new_err("attributes must be names: a list of str or \"velocity,density\"")
+    })?;
+    Ok(Some(names.join(",")))
 }
 
 /// A configuration from a dict shaped like the TOML file (tables as nested dicts; None leaves a

@@ -203,14 +203,16 @@ def reconstruct(
     engine: Optional[str] = None,
     normals: Optional[str] = None,
     correct: Optional[int] = None,
+    block: Optional[int] = None,
     threads: Optional[int] = None,
     max_memory: Union[str, int, None] = None,
-    config: Union[_Path, Mapping[str, Any], None] = None,
-    attributes: Optional[Mapping[str, _Array]] = None,
     raw: Optional[bool] = None,
     decimate: Union[str, float, None] = None,
     min_component: Optional[float] = None,
     mesh_aabb: Optional[Sequence[float]] = None,
+    volume_scope: Optional[Literal["frame", "component"]] = None,
+    config: Union[_Path, Mapping[str, Any], None] = None,
+    attributes: Optional[Mapping[str, _Array]] = None,
 ) -> Mesh:
     """The closed surface mesh of SPH particles.
 
@@ -220,30 +222,44 @@ def reconstruct(
     of is accepted, integer arrays are refused. Coordinates must be finite. An empty (0, 3)
     array gives an empty mesh.
 
-    ``spacing``: the particle spacing r (the simulator's equilibrium distance), in world
-    units. Required unless the config gives it: it is never guessed (see
+    ``spacing``: Particle spacing r, the simulator's equilibrium distance between particles,
+    in world units. Required unless the config gives it: it is never guessed (see
     ``estimate_spacing``).
 
-    Keyword arguments override the config (None leaves its value): ``cell``: the Marching
-    Cubes cell, ``"r/2"`` (default), ``"r"``, ``"2r"``, ``"0.5r"`` or a number in world
-    units. ``field``: ``"ssp07"`` (default), ``"zb05"``, ``"density"``, ``"blobby"``,
-    ``"metaball"`` or ``"anisotropic"`` with its default parameters (a config's field of the
-    same kind keeps its own). ``engine``: ``"narrow-band"`` (default), ``"full-gather"``,
-    ``"scatter"`` or ``"slices"``; full-gather, scatter and slices give the same surface, and
-    the narrow band too but for the blobs of a cell or two beyond its band at small cells, which
-    it misses (1 of 55 components on cbd-small frame 40 at cell r/2; docs/reference/recon.md,
-    Engines). ``normals``: ``"field"``
-    (default, the field's gradient), ``"grid"`` (central differences) or ``"none"``.
-    ``correct``: Newton steps that move each vertex along its cube edge onto the field's
-    exact isosurface (3 is plenty; 0, the default, keeps linear interpolation). ``threads``: worker threads, all cores by default; the mesh does not depend on it (each
-    calling thread keeps its workers for its next calls). ``max_memory``: the heap a
-    frame may plan to use (every engine checks it), in bytes or as ``"8G"``. ``raw=True``:
-    the field's exact isosurface, without the default post-processing (smoothing, each part
-    given its particles' volume N·r³; ``postprocess`` runs it on any mesh). ``decimate``: a
-    length (``"0.1r"`` or a number) within which every vertex and triangle centre of the
-    decimated mesh stays of the full surface. ``min_component``: drop parts enclosing fewer
-    than this many particle volumes r³. ``mesh_aabb``: six numbers (min x, min y, min z, max
-    x, max y, max z); the mesh is clipped to that box and its cuts capped.
+    Keyword arguments override the config (None leaves its value); each is the option of the
+    command line's flag of the same name (``--max-memory`` for ``max_memory``), where a number
+    is a length in world units:
+
+    - ``cell``: Marching Cubes cell size: 2r, r, r/2, r/N, Kr or a length; at most 4r.
+      Default ``"r/2"``.
+    - ``field``: Scalar field: ssp07, zb05, density, blobby, metaball or anisotropic, with its
+      default parameters unless the configuration gives the same kind. Default ``"ssp07"``.
+    - ``engine``: Reconstruction engine: narrow-band, full-gather, scatter or slices. Default
+      ``"narrow-band"``. full-gather, scatter and slices give the same surface, and the narrow
+      band too but for the blobs of a cell or two beyond its band at small cells, which it
+      misses (1 of 55 components on cbd-small frame 40 at cell r/2;
+      docs/reference/recon.md, Engines).
+    - ``normals``: Vertex normals: field (the field's gradient), grid (differences of the
+      sampled grid: faster) or none. Default ``"field"``.
+    - ``correct``: Newton steps moving each vertex along its cube edge onto the field's exact
+      isosurface (Marching Correctors); 0 keeps Marching Cubes' linear interpolation. Default
+      0; 3 is plenty.
+    - ``block``: Cubes per side of a block of the slices engine. Default 64.
+    - ``threads``: Worker threads, all cores when not given; the mesh does not depend on it.
+      Each calling thread keeps its workers for its next calls.
+    - ``max_memory``: Heap a frame may plan to use, e.g. 8G or 512M: every engine refuses a
+      frame that needs more. In bytes or as ``"8G"``.
+    - ``raw``: Keep the field's exact isosurface: no smoothing and no volume restoration.
+      ``raw=True`` skips the default post-processing (smoothing, each part given its
+      particles' volume N·r³; ``postprocess`` runs it on any mesh).
+    - ``volume_scope``: What the volume restoration brings to N·r³: frame (the whole mesh, one
+      offset) or component (each closed part to its own particles). Default ``"frame"``.
+    - ``decimate``: Decimate with quadric edge collapses, keeping every vertex and triangle
+      centre within this distance of the full surface: ``"0.1r"`` or a number.
+    - ``min_component``: Drop the parts of the mesh enclosing less than this many particle
+      volumes r³.
+    - ``mesh_aabb``: Keep only the mesh inside this box (min x, min y, min z, max x, max y,
+      max z); the cuts are capped, so it stays closed.
 
     ``config``: a TOML file's path (as ``splash recon --config`` reads) or a dict shaped like
     it (see ``default_config``). Its ``output.format`` and ``output.up_axis`` become the
@@ -483,24 +499,27 @@ def recon_sequence(
     shard: Optional[str] = None,
     skip_existing: bool = False,
     fail_fast: bool = False,
-    attributes: Union[str, Sequence[str], None] = None,
     input_format: Optional[str] = None,
-    format: Optional[str] = None,
-    up_axis: Optional[str] = None,
-    temporal: Optional[bool] = None,
     spacing: Optional[float] = None,
     cell: Union[str, float, None] = None,
     field: Optional[str] = None,
     engine: Optional[str] = None,
     normals: Optional[str] = None,
     correct: Optional[int] = None,
+    block: Optional[int] = None,
     threads: Optional[int] = None,
     max_memory: Union[str, int, None] = None,
-    config: Union[_Path, Mapping[str, Any], None] = None,
     raw: Optional[bool] = None,
     decimate: Union[str, float, None] = None,
     min_component: Optional[float] = None,
     mesh_aabb: Optional[Sequence[float]] = None,
+    volume_scope: Optional[Literal["frame", "component"]] = None,
+    config: Union[_Path, Mapping[str, Any], None] = None,
+    particle_aabb: Optional[Sequence[float]] = None,
+    format: Optional[str] = None,
+    up_axis: Optional[str] = None,
+    attributes: Union[str, Sequence[str], None] = None,
+    temporal: Optional[bool] = None,
 ) -> RunReport:
     """Reconstructs a sequence of particle files into mesh files, as ``splash recon`` does:
     the same frames, output names, shards, restarts and bytes.
@@ -515,13 +534,25 @@ def recon_sequence(
     stops the run and is raised again. ``frames``: ``"1-10,20,30-40x5"``. ``shard``:
     ``"K/N"`` or ``"auto/N"`` (K from ``SLURM_ARRAY_TASK_ID``). ``skip_existing``: leave
     frames whose output exists alone. ``fail_fast``: stop at the first failing frame.
-    ``attributes``: particle attributes to interpolate onto the vertices (PLY, VTK, VTU, VTP,
-    USD). ``format="usd"`` also writes, after the frames, the stage that plays their layers as
-    one animated mesh, and takes the particles' velocities whenever they have them.
-    ``temporal=True``: each frame's surface follows the fluid towards its neighbouring frames'
-    (``--temporal``; experimental: less flicker for about 2.4× the time; needs particle ids,
-    or velocities with ``post.frame_time``); frames without both neighbours are post-processed
-    alone, with a warning.
+    ``input_format``: as the command line's ``--input-format``.
+
+    The options of files and sequences, besides ``reconstruct``'s:
+
+    - ``particle_aabb``: Drop the particles outside this box (min x, min y, min z, max x, max
+      y, max z) before reconstructing.
+    - ``format``: Mesh format: obj, ply, ply-ascii, pov, vtk, vtu, vtp, usd or vdb; from the
+      output's extension when not given, else obj. ``format="usd"`` also writes, after the
+      frames, the stage that plays their layers as one animated mesh, and takes the particles'
+      velocities whenever they have them.
+    - ``up_axis``: Rotate the mesh on output: z turns Y-up data Z-up, y turns Z-up data Y-up.
+    - ``attributes``: Particle attributes interpolated onto the mesh's vertices, by name
+      (velocity, density, …): a list of names or one comma-separated string; written to PLY,
+      VTK, VTU, VTP and USD.
+    - ``temporal``: In a sequence, move each frame's surface towards its neighbouring frames'
+      surfaces carried by the fluid's motion (experimental). Less flicker for about 2.4× the
+      time; needs particle ids, or velocities with ``post.frame_time``; frames without both
+      neighbours are post-processed alone, with a warning.
+
     The other keywords are ``reconstruct``'s; without ``spacing`` it is estimated once, on the
     first frame of the whole selection, so that every shard uses one grid.
 
@@ -548,9 +579,22 @@ def config_toml(
     engine: Optional[str] = None,
     normals: Optional[str] = None,
     correct: Optional[int] = None,
+    block: Optional[int] = None,
     threads: Optional[int] = None,
     max_memory: Union[str, int, None] = None,
+    raw: Optional[bool] = None,
+    decimate: Union[str, float, None] = None,
+    min_component: Optional[float] = None,
+    mesh_aabb: Optional[Sequence[float]] = None,
+    volume_scope: Optional[Literal["frame", "component"]] = None,
+    particle_aabb: Optional[Sequence[float]] = None,
+    format: Optional[str] = None,
+    up_axis: Optional[str] = None,
+    attributes: Union[str, Sequence[str], None] = None,
+    temporal: Optional[bool] = None,
 ) -> str:
-    """The configuration that ``reconstruct`` would use with the same ``config`` and keyword
-    arguments, as TOML text (what ``splash config show`` prints; save it to reuse it with
-    ``splash recon --config``). Raises ValueError as ``reconstruct`` does for bad settings."""
+    """The configuration that ``recon_sequence`` (and ``reconstruct``, which takes the same
+    keyword arguments but the options of files and sequences) would use with the same
+    ``config`` and keyword arguments, as TOML text (what ``splash config show`` prints with the
+    flags of the same names; save it to reuse it with ``splash recon --config``). Raises
+    ValueError as ``reconstruct`` does for bad settings."""
