@@ -9,13 +9,14 @@ import shlex
 FIELDS = ("ssp07", "zb05", "density", "blobby", "metaball", "anisotropic")
 NORMALS = ("field", "grid", "none")
 ENGINES = ("narrow-band", "full-gather", "scatter", "slices")
+VOLUME_SCOPES = ("frame", "component")
 
 
 def to_command(s):
     """`splash recon …` for settings `s`: input, output, spacing, cell, field, normals,
-    engine, velocity (bool), up_axis ("" or "y"/"z"), and post-processing: raw (bool),
-    decimate (in r) and min_component (in r³), None when off, mesh_aabb (six numbers) or
-    None."""
+    engine, correct (Newton steps, 0: none), velocity (bool), up_axis ("" or "y"/"z"), and
+    post-processing: raw (bool), volume_scope ("frame" or "component"), decimate (in r) and
+    min_component (in r³), None when off, mesh_aabb (six numbers) or None."""
     words = ["splash", "recon", s.get("input") or "PARTICLES"]
     if s.get("spacing"):
         # Blender keeps it as a float32: 7 digits say all it holds.
@@ -23,8 +24,12 @@ def to_command(s):
     words += ["--cell", s["cell"], "--field", s["field"], "--normals", s["normals"]]
     if s.get("engine", "narrow-band") != "narrow-band":
         words += ["--engine", s["engine"]]
+    if s.get("correct"):
+        words.append(f"--correct={int(s['correct'])}")
     if s.get("raw"):
         words.append("--raw")
+    if s.get("volume_scope", "frame") != "frame":
+        words += ["--volume-scope", s["volume_scope"]]
     if s.get("decimate") is not None:
         words += ["--decimate", f"{s['decimate']:.7g}r"]
     if s.get("min_component") is not None:
@@ -63,6 +68,7 @@ def from_command(line):
         "--attributes", "--up-axis", "-o", "--output", "--format", "--config", "--threads",
         "--frames", "--shard", "--max-memory", "--input-format", "--particle-aabb",
         "--block", "--log-format", "--report", "--decimate", "--min-component", "--mesh-aabb",
+        "--volume-scope",
     }  # fmt: skip
     i = 0
     while i < len(words):
@@ -77,6 +83,11 @@ def from_command(line):
             i += 2
         elif word == "--raw":
             out["raw"] = True
+            i += 1
+            continue
+        elif word == "--correct":
+            # As the CLI takes it: bare, 3 steps; a count only as --correct=N.
+            out["correct"] = 3
             i += 1
             continue
         else:
@@ -107,6 +118,10 @@ def from_command(line):
             decimate.append(value)
         elif word == "--min-component":
             out["min_component"] = _number(word, value, positive=False)
+        elif word == "--correct":
+            out["correct"] = _count(word, value)
+        elif word == "--volume-scope":
+            out["volume_scope"] = _choice(word, value, VOLUME_SCOPES)
         elif word in ("-o", "--output"):
             out["output"] = value
         else:
@@ -128,6 +143,13 @@ def _number(option, value, positive=True):
         sign = "positive" if positive else "non-negative"
         raise CommandError(f"{option} {value}: expected a {sign} number")
     return number
+
+
+def _count(option, value):
+    """A number of Newton steps, 0 to 32 as the CLI takes them."""
+    if not value.isdigit() or int(value) > 32:
+        raise CommandError(f"{option}={value}: expected a count from 0 to 32")
+    return int(value)
 
 
 def _in_spacings(option, value, spacing):

@@ -49,11 +49,13 @@ def surface_object(scene, source):
 
 
 def post_options(settings, q, source):
-    """The package's post-processing keywords for the settings group `q`: `raw`, `decimate`
-    (a length in r), `min_component` (r³) and `mesh_aabb`, the clip box in `source`'s space."""
+    """The package's post-processing keywords for the settings group `q`: `raw`,
+    `volume_scope`, `decimate` (a length in r), `min_component` (r³) and `mesh_aabb`, the clip
+    box in `source`'s space."""
     # Blender keeps floats as float32: 7 digits, as the copied command line writes them.
     return {
         "raw": q.raw,
+        "volume_scope": q.volume_scope,
         "decimate": f"{q.decimate:.7g}r" if q.use_decimate else None,
         "min_component": float(f"{q.min_component:.7g}") if q.use_min_component else None,
         "mesh_aabb": clip_box(settings.clip_object, source),
@@ -134,6 +136,7 @@ def reconstruct(scene, render, depsgraph=None):
             "field": q.field,
             "normals": q.normals if shows_normals(q) else "none",
             "engine": q.engine,
+            "correct": q.correct,
             **post_options(settings, q, source),
         }
         # The frame is not part of the key: a sequence saved every n-th frame holds each

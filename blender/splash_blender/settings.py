@@ -30,29 +30,95 @@ ENGINES = [
     ("scatter", "Scatter", "Every grid vertex, particle by particle"),
     ("slices", "Slices", "Marching Slices in blocks: little memory"),
 ]
+VOLUME_SCOPES = [
+    ("frame", "Frame", "One offset for the whole mesh: a frame's surface moves as its neighbours'"),
+    ("component", "Component", "Each closed part to its own particles' volume"),
+]
+
+# splash's defaults, which the render settings keep: the options of splash_sph.OPTIONS
+# (crates/splash-sph/src/overrides.rs), whose names, defaults and help texts (the first words of
+# each description) the options_table test of the splash command compares with these.
+RENDER_DEFAULTS = {
+    "cell": "r/2",
+    "field": "ssp07",
+    "normals": "field",
+    "engine": "narrow-band",
+    "correct": 0,
+    "raw": False,
+    "volume_scope": "frame",
+}
+# Custom split normals cost Blender about 4 s per million triangles to set up (Blender 3.4):
+# the viewport shades smooth with Blender's own vertex normals instead. Post-processing
+# adds a third to the package's time at the viewport's settings (cbd-small, CPU 0.051 ->
+# 0.068 s/frame), which 24 fps cannot spare: the viewport shows the raw isosurface by
+# default, renders the post-processed one.
+VIEWPORT_DEFAULTS = {
+    **RENDER_DEFAULTS,
+    "cell": "r",
+    "field": "density",
+    "normals": "none",
+    "raw": True,
+}
 
 
-def _quality(cell, field, normals, raw):
+def _quality(defaults):
     """A settings group with its own defaults (viewport and render differ)."""
+    d = defaults
     return type(
-        f"SPLASH_PG_quality_{field}_{cell.replace('/', '_')}",
+        f"SPLASH_PG_quality_{d['field']}_{d['cell'].replace('/', '_')}",
         (bpy.types.PropertyGroup,),
         {
             "__annotations__": {
                 "cell": StringProperty(
                     name="Cell",
-                    default=cell,
-                    description="Marching Cubes cell: r/2, r, 2r … or a length in scene units",
+                    default=d["cell"],
+                    description="Marching Cubes cell size: 2r, r, r/2, r/N, Kr or a length; at "
+                    "most 4r. A length is in scene units",
                 ),
-                "field": EnumProperty(name="Field", items=FIELDS, default=field),
-                "normals": EnumProperty(name="Normals", items=NORMALS, default=normals),
-                "engine": EnumProperty(name="Engine", items=ENGINES, default="narrow-band"),
+                "field": EnumProperty(
+                    name="Field",
+                    items=FIELDS,
+                    default=d["field"],
+                    description="Scalar field: ssp07, zb05, density, blobby, metaball or "
+                    "anisotropic, with its default parameters unless the configuration gives "
+                    "the same kind",
+                ),
+                "normals": EnumProperty(
+                    name="Normals",
+                    items=NORMALS,
+                    default=d["normals"],
+                    description="Vertex normals: field (the field's gradient), grid (differences "
+                    "of the sampled grid: faster) or none",
+                ),
+                "engine": EnumProperty(
+                    name="Engine",
+                    items=ENGINES,
+                    default=d["engine"],
+                    description="Reconstruction engine: narrow-band, full-gather, scatter or "
+                    "slices",
+                ),
+                "correct": IntProperty(
+                    name="Correct",
+                    default=d["correct"],
+                    min=0,
+                    max=32,
+                    description="Newton steps moving each vertex along its cube edge onto the "
+                    "field's exact isosurface (Marching Correctors); 0 keeps Marching Cubes' "
+                    "linear interpolation (--correct)",
+                ),
                 "raw": BoolProperty(
                     name="Raw isosurface",
-                    default=raw,
-                    description="The field's exact isosurface (--raw): no smoothing, no volume "
-                    "restoration. Off: smoothed, each part given its particles' volume (at the "
-                    "viewport's coarse settings a third more time per frame)",
+                    default=d["raw"],
+                    description="Keep the field's exact isosurface: no smoothing and no volume "
+                    "restoration (--raw). Off: smoothed, each part given its particles' volume "
+                    "(at the viewport's coarse settings a third more time per frame)",
+                ),
+                "volume_scope": EnumProperty(
+                    name="Volume",
+                    items=VOLUME_SCOPES,
+                    default=d["volume_scope"],
+                    description="What the volume restoration brings to N·r³: frame (the whole "
+                    "mesh, one offset) or component (each closed part to its own particles)",
                 ),
                 "use_decimate": BoolProperty(
                     name="Decimate",
@@ -66,8 +132,8 @@ def _quality(cell, field, normals, raw):
                     min=1e-4,
                     soft_max=1.0,
                     precision=3,
-                    description="Largest distance of a vertex or triangle centre from the full "
-                    "surface, in spacings r",
+                    description="Decimate with quadric edge collapses, keeping every vertex and "
+                    "triangle centre within this distance of the full surface; in spacings r",
                 ),
                 "use_min_component": BoolProperty(
                     name="Drop droplets",
@@ -81,21 +147,17 @@ def _quality(cell, field, normals, raw):
                     min=0.0,
                     soft_max=100.0,
                     precision=2,
-                    description="In particle volumes r³: after the volume restoration a droplet "
-                    "of n particles holds n r³; a raw lone particle's SSP07 sphere about 3.6 r³",
+                    description="Drop the parts of the mesh enclosing less than this many "
+                    "particle volumes r³: after the volume restoration a droplet of n particles "
+                    "holds n r³; a raw lone particle's SSP07 sphere about 3.6 r³",
                 ),
             }
         },
     )
 
 
-# Custom split normals cost Blender about 4 s per million triangles to set up (Blender 3.4):
-# the viewport shades smooth with Blender's own vertex normals instead. Post-processing
-# adds a third to the package's time at the viewport's settings (cbd-small, CPU 0.051 ->
-# 0.068 s/frame), which 24 fps cannot spare: the viewport shows the raw isosurface by
-# default, renders the post-processed one.
-ViewportQuality = _quality("r", "density", "none", raw=True)
-RenderQuality = _quality("r/2", "ssp07", "field", raw=False)
+ViewportQuality = _quality(VIEWPORT_DEFAULTS)
+RenderQuality = _quality(RENDER_DEFAULTS)
 
 
 def _poll_particles(_self, obj):
@@ -125,8 +187,9 @@ class SPLASH_PG_live(bpy.types.PropertyGroup):
         default=0.0,
         min=0.0,
         precision=4,
-        description="Particle spacing r in the object's units; 0: estimated once from the "
-        "current frame and kept, so that every frame shares one grid",
+        description="Particle spacing r, the simulator's equilibrium distance between "
+        "particles, in the object's units; 0: estimated once from the current frame and kept, "
+        "so that every frame shares one grid",
     )
     velocity: BoolProperty(
         name="Velocity",

@@ -22,8 +22,10 @@ def _settings(scene):
         "field": q.field,
         "normals": q.normals,
         "engine": q.engine,
+        "correct": q.correct,
         "velocity": s.velocity,
         "raw": q.raw,
+        "volume_scope": q.volume_scope,
         "decimate": q.decimate if q.use_decimate else None,
         "min_component": q.min_component if q.use_min_component else None,
         # The box is in the particle object's space, the files' coordinates.
@@ -104,9 +106,12 @@ class SPLASH_OT_paste_command(bpy.types.Operator):
         for key in ("cell", "field", "normals", "engine"):
             if key in parsed:
                 setattr(s.render, key, parsed[key])
-        # Post-processing options are off unless the line names them, as in the CLI.
+        # The correction and the post-processing options are at their defaults unless the
+        # line names them, as in the CLI.
         q = s.render
+        q.correct = parsed.get("correct", 0)
         q.raw = parsed.get("raw", False)
+        q.volume_scope = parsed.get("volume_scope", "frame")
         q.use_decimate = "decimate" in parsed
         q.use_min_component = "min_component" in parsed
         if q.use_decimate:
@@ -189,7 +194,7 @@ class VIEW3D_PT_splash(bpy.types.Panel):
         for title, q in (("Viewport", s.viewport), ("Render", s.render)):
             col = box.column(align=True)
             col.label(text=title)
-            for key in ("cell", "field", "normals", "engine", "raw"):
+            for key in ("cell", "field", "normals", "engine", "correct", "raw", "volume_scope"):
                 col.prop(q, key)
             for use, key in (("use_decimate", "decimate"), ("use_min_component", "min_component")):
                 row = col.row(align=True)

@@ -589,7 +589,8 @@ def test_panel(ui):
     drawn = []
     panel = type("Panel", (), {"layout": _Layout(drawn)})()
     ui.VIEW3D_PT_splash.draw(panel, bpy.context)
-    want = {"raw", "use_decimate", "decimate", "use_min_component", "min_component", "clip_object"}
+    want = {"raw", "use_decimate", "decimate", "use_min_component", "min_component", "clip_object",
+            "correct", "volume_scope"}  # fmt: skip
     check(want <= set(drawn), f"the panel shows the post-processing options ({sorted(want)})")
 
 
@@ -654,6 +655,13 @@ def test_command(command, ui):
         {"input": "a b/", "spacing": 0.5, "cell": "r", "field": "density", "normals": "grid",
          "engine": "slices", "velocity": False, "output": "o/"}))  # fmt: skip
     check(parsed["input"] == "'a b/'" and parsed["engine"] == "slices", "command round trip")
+    line = "splash recon x --correct=2 --volume-scope component"
+    check(bpy.ops.splash.paste_command(line=line) == {"FINISHED"}, "paste correct, volume scope")
+    check((q.correct, q.volume_scope) == (2, "component"), "the pasted line sets them")
+    copied = command.to_command(ui._settings(scene))
+    check("--correct=2 --volume-scope component" in copied, f"and copies them: {copied}")
+    bpy.ops.splash.paste_command(line=other)
+    check((q.correct, q.volume_scope) == (0, "frame"), "a line without them resets them")
 
 
 def camera_on(obj, scale_margin=1.3):
