@@ -16,6 +16,8 @@ mod bench_temporal;
 mod farm;
 mod log;
 mod memory;
+#[cfg(test)]
+mod options_table;
 mod preview;
 mod report;
 mod tables;
