@@ -185,6 +185,9 @@ impl Mesh {
     }
 }
 
+/// `mesh_edges`' arrays: the edges' vertex pairs and each corner's edge.
+type EdgeArrays<'py> = (Bound<'py, PyArray2<u32>>, Bound<'py, PyArray1<u32>>);
+
 /// The edges of the triangles ``faces``, as Blender's meshes hold them beside the faces:
 /// ``(edges, corner_edges)``, ``edges`` each distinct edge once as an (E, 2) uint32 array of
 /// vertex indices, the lower first, and ``corner_edges`` an (3F,) uint32 array giving for
@@ -198,7 +201,7 @@ pub fn mesh_edges<'py>(
     py: Python<'py>,
     faces: &Bound<'py, PyAny>,
     vertex_count: usize,
-) -> PyResult<(Bound<'py, PyArray2<u32>>, Bound<'py, PyArray1<u32>>)> {
+) -> PyResult<EdgeArrays<'py>> {
     let triangles = arrays::triangles(faces, "faces")?;
     let edges = py
         .detach(|| Edges::of(vertex_count, &triangles))

@@ -234,8 +234,10 @@ fn following_real_frames_leaves_no_face_crossing() {
         .map(|f| dir.join(format!("frame_{f:04}.vtk")))
         .collect();
     let out = scratch("real");
-    let mut config = Config::default();
-    config.spacing = Some(0.04);
+    let mut config = Config {
+        spacing: Some(0.04),
+        ..Config::default()
+    };
     config.post.temporal = true;
     let record = run_with(&inputs, &out, config, None);
     assert_eq!(record.warnings.len(), 2, "{:?}", record.warnings);
