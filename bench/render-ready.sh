@@ -44,7 +44,8 @@ trap 'rm -rf "$work"' EXIT
 out=${KEEP:-$work}
 
 spacing="" threads=2 runs=3 sliver=""
-median() { sort -g | awk '{a[NR]=$1} END {if (NR) print a[int((NR+1)/2)]}'; }
+# (Empty lines, as from the space-separated lists below, are no values.)
+median() { sort -g | awk 'NF {a[++n] = $1} END {if (n) print a[int((n + 1) / 2)]}'; }
 ratio() { awk -v x="$1" -v y="$2" 'BEGIN{ if (y > 0 && x != "NA") printf "%.2f", x / y; else print "NA" }'; }
 # Runs one command: prints "seconds peak_MiB".
 timed() {
