@@ -7,13 +7,19 @@
 #
 #   bench/compare.sh -r 0.014 /work/shared/data/cbd-small -r 0.005 /work/shared/data/cbd-large
 #   bench/compare.sh -c "2r r r/2" -t 2 -n 3 -r 0.005 spray.ply
+#   bench/compare.sh --pin none -r 0.014 fixtures/frame_0040.ply
 #
 # Options (each applies to the inputs after it): -r SPACING (particle spacing r, required),
 # -c CELLS (default "2r r r/2"), -t THREADS (default 2), -n RUNS (pairs per row, default 1).
+# --pin CPUS, wherever given, applies to every run: splash and splashsurf alike under `taskset
+# -c CPUS` (default 0,1; "none": unpinned; exits 2 without taskset or with a CPU not
+# available). The header line gives the CPU model, the CPUs available and the pinning.
 # Environment: SPLASH (default release/splash in cargo's target directory), SPLASHSURF
 # (default: splashsurf on the PATH; the table leaves its columns empty without one), KEEP (a
 # directory to keep the meshes).
 set -euo pipefail
+# shellcheck source=bench/pin.sh
+. "$(dirname "$0")/pin.sh"
 
 splash=${SPLASH:-$("$(dirname "$0")"/../scripts/target-dir)/release/splash}
 peer=${SPLASHSURF:-$(command -v splashsurf || true)}
@@ -22,13 +28,22 @@ peer=${SPLASHSURF:-$(command -v splashsurf || true)}
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 out=${KEEP:-$work}
+# --pin, wherever it is, for all the runs; the other options in order.
+pin=0,1 args=()
+while [ $# -gt 0 ]; do
+    if [ "$1" = --pin ]; then [ $# -ge 2 ] || { echo "--pin needs CPUS (e.g. 0,1, or none)" >&2; exit 2; }
+        pin=$2; shift 2
+    else args+=("$1"); shift; fi
+done
+set -- ${args[@]+"${args[@]}"}
+pin_setup "$pin"
 
 spacing="" cells="2r r r/2" threads=2 runs=1
 median() { sort -g | awk '{a[NR]=$1} END {if (NR) print a[int((NR+1)/2)]}'; }
 faces() { sed -n '/end_header/q;s/^element face //p' "$1" | head -1; }
 # Times one command: prints "seconds peak_MB".
 timed() {
-    /usr/bin/time -f "%e %M" -o "$work/time" "$@" >"$work/log" 2>&1 || {
+    /usr/bin/time -f "%e %M" -o "$work/time" ${pinned[@]+"${pinned[@]}"} "$@" >"$work/log" 2>&1 || {
         echo "failed: $*" >&2; tail -5 "$work/log" >&2; echo "NA NA"; return; }
     awk '{printf "%s %.0f\n", $1, $2 / 1024}' "$work/time"
 }
@@ -63,7 +78,7 @@ row() { # frame cell
     fi
 }
 
-echo "splash: $splash; splashsurf: ${peer:-none on the PATH}; $(nproc) cores, $(date -u +%F)"
+echo "splash: $splash; splashsurf: ${peer:-none on the PATH}; $pin_note; $(date -u +%F)"
 echo
 echo "| frame | cell | splash s | splashsurf s | ratio | splash peak | splashsurf peak | splash triangles | splashsurf triangles |"
 echo "|---|---|---|---|---|---|---|---|---|"

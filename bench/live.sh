@@ -8,27 +8,37 @@
 #   bench/live.sh -n 3 --vs 4405cf0 ../shared/data/cbd-small 0.014
 #   BPY_PYTHON=/path/venv/bin/python bench/live.sh ../shared/data/cbd-small 0.014
 #   bench/live.sh --play 24 --vs HEAD ../shared/data/cbd-small 0.014
+#   bench/live.sh --pin none ../shared/data/cbd-small 0.014
 #
 # --play FPS plays the frames as an imported particle sequence paced at FPS (bench_live.py
 # --play): end to end is then the main thread's time per frame change, and the CPU column
 # counts every thread (live mode's read-ahead included) and the idle wait.
 #
+# --pin CPUS runs Blender (or BPY_PYTHON) under `taskset -c CPUS` for both add-ons alike, its
+# threads and the package's with it (default 0,1; "none": unpinned; exits 2 without taskset or
+# with a CPU not available); the add-on's build is not pinned. The table's header line gives
+# the CPU model, the CPUs available and the pinning.
+#
 # Environment: BLENDER (default blender), or BPY_PYTHON, a Python with the `bpy` module
 # (`pip install "bpy==4.5.*"`). Builds the add-on with scripts/build-blender-addon (maturin).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-runs=1 vs="" play=()
-usage="usage: bench/live.sh [-n RUNS] [--vs REV] [--play FPS] PARTICLES SPACING"
+# shellcheck source=bench/pin.sh
+. bench/pin.sh
+runs=1 vs="" play=() pin=0,1
+usage="usage: bench/live.sh [-n RUNS] [--vs REV] [--play FPS] [--pin CPUS] PARTICLES SPACING"
 while [ $# -gt 2 ]; do
     case "$1" in
         -n) runs=$2; shift 2 ;;
         --vs) vs=$2; shift 2 ;;
         --play) play=(--play "$2"); shift 2 ;;
+        --pin) pin=$2; shift 2 ;;
         *) echo "$usage" >&2; exit 2 ;;
     esac
 done
 [ $# -eq 2 ] || { echo "$usage" >&2; exit 2; }
 particles=$(realpath "$1") spacing=$2
+pin_setup "$pin"
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 scripts/build-blender-addon "$work/this.zip" >/dev/null
@@ -50,13 +60,16 @@ for run in $(seq "$runs"); do
         bench_args=(-- --addon "$work/$name.zip" --particles "$particles" --spacing "$spacing"
                     ${play[@]+"${play[@]}"})
         if [ -n "${BPY_PYTHON:-}" ]; then
-            "$BPY_PYTHON" tests/blender/bench_live.py "${bench_args[@]}"
+            ${pinned[@]+"${pinned[@]}"} "$BPY_PYTHON" tests/blender/bench_live.py "${bench_args[@]}"
         else
-            "${BLENDER:-blender}" -b --factory-startup --python tests/blender/bench_live.py \
+            ${pinned[@]+"${pinned[@]}"} "${BLENDER:-blender}" -b --factory-startup --python tests/blender/bench_live.py \
                 "${bench_args[@]}"
         fi 2>&1 | grep -E '^(Blender [0-9]|live )' | sed "s/^/$name run $run: /" | tee -a "$work/log"
     done
 done
+echo
+echo "$particles, r = $spacing; add-ons: this${vs:+ and $vs}${play[1]:+; played at ${play[1]} fps}; $runs runs; $pin_note; $(date -u +%F)"
+echo
 python3 - "$work/log" <<'PY'
 import re, statistics, sys
 rows = {}

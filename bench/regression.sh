@@ -9,9 +9,13 @@
 #   bench/regression.sh /path/to/splash-104c9ab target/release/splash
 #   bench/regression.sh -n 5 --pin 0,1 -d ../shared/data OLD NEW
 #
-# Options: -n RUNS (pairs per row, default 5), --pin CPUS (default 0,1; "none": unpinned),
-# -t THREADS (default 2), -d DATA (the shared frames, default ../shared/data). Installs nothing.
+# Options: -n RUNS (pairs per row, default 5), --pin CPUS (both binaries under `taskset -c
+# CPUS`; default 0,1; "none": unpinned; exits 2 without taskset or with a CPU not available),
+# -t THREADS (default 2), -d DATA (the shared frames, default ../shared/data). The header line
+# gives the CPU model, the CPUs available and the pinning. Installs nothing.
 set -euo pipefail
+# shellcheck source=bench/pin.sh
+. "$(dirname "$0")/pin.sh"
 
 runs=5 pin=0,1 threads=2 data=../shared/data
 while [ $# -gt 2 ]; do
@@ -25,12 +29,11 @@ while [ $# -gt 2 ]; do
 done
 [ $# -eq 2 ] || { echo "usage: bench/regression.sh [-n RUNS] [--pin CPUS] [-t THREADS] [-d DATA] OLD NEW" >&2; exit 2; }
 old=$1 new=$2
+pin_setup "$pin"
 for b in "$old" "$new"; do [ -x "$b" ] || { echo "not an executable: $b" >&2; exit 2; }; done
 [ -d "$data/cbd-small" ] || { echo "skipped: no frames in $data (cbd-small, cbd-large)" >&2; exit 0; }
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-pinned=()
-[ "$pin" != none ] && pinned=(taskset -c "$pin")
 # The old binary takes --raw only if it knows it.
 old_raw=()
 "$old" recon --help 2>/dev/null | grep -q -- '--raw' && old_raw=(--raw)
@@ -42,7 +45,7 @@ wall() { # out binary args...
     rm -rf "$out"
     local start end
     start=$(date +%s.%N)
-    "${pinned[@]}" "$@" -q -o "$out/" >"$work/log" 2>&1 || { tail -3 "$work/log" >&2; echo NA; return; }
+    ${pinned[@]+"${pinned[@]}"} "$@" -q -o "$out/" >"$work/log" 2>&1 || { tail -3 "$work/log" >&2; echo NA; return; }
     end=$(date +%s.%N)
     awk -v a="$start" -v b="$end" 'BEGIN { printf "%.4f\n", b - a }'
 }
@@ -65,7 +68,7 @@ row() { # label input spacing extra-args...
         "$(printf '%s\n' "${ratios[@]}" | median)" "$same"
 }
 
-echo "old: $old; new: $new; $threads threads, pinned to ${pin}; $runs alternating pairs; $(date -u +%F)"
+echo "old: $old; new: $new; $pin_note; $threads threads; $runs alternating pairs; $(date -u +%F)"
 echo "| work | old s | new s | new ÷ old | same bytes |"
 echo "|---|---|---|---|---|"
 row "cbd-small f40, density r/2" "$data/cbd-small/frame_0040.ply" 0.014 --field density

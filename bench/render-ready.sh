@@ -9,13 +9,29 @@
 #
 #   bench/render-ready.sh -r 0.014 -s frame_0040.ply ../shared/data/cbd-small \
 #       -r 0.005 ../shared/data/cbd-large/frame_0023.ply
+#   bench/render-ready.sh --pin none -n 1 -r 0.014 fixtures/frame_0040.ply
 #
 # Options (each applies to the inputs after it): -r SPACING (required), -t THREADS (default 2),
 # -n RUNS (default 3), -s FRAME (the file name whose slivers are shown; default the last).
+# --pin CPUS, wherever given, applies to every timed run: the splash pipelines and splashsurf
+# alike under `taskset -c CPUS` (default 0,1; "none": unpinned; exits 2 without taskset or with
+# a CPU not available); the quality scoring is not timed and not pinned. The header lines give
+# the CPU model, the CPUs available and the pinning.
 # Environment: SPLASH (default release/splash in cargo's target directory), SPLASHSURF (default:
 # splashsurf on the PATH), KEEP (a directory to keep the meshes).
 set -euo pipefail
 cd "$(dirname "$0")/.."
+# shellcheck source=bench/pin.sh
+. bench/pin.sh
+# --pin, wherever it is, for all the runs; the other options in order.
+pin=0,1 args=()
+while [ $# -gt 0 ]; do
+    if [ "$1" = --pin ]; then [ $# -ge 2 ] || { echo "--pin needs CPUS (e.g. 0,1, or none)" >&2; exit 2; }
+        pin=$2; shift 2
+    else args+=("$1"); shift; fi
+done
+set -- ${args[@]+"${args[@]}"}
+pin_setup "$pin"
 
 splash=${SPLASH:-$(scripts/target-dir)/release/splash}
 peer=${SPLASHSURF:-$(command -v splashsurf || true)}
@@ -28,11 +44,12 @@ trap 'rm -rf "$work"' EXIT
 out=${KEEP:-$work}
 
 spacing="" threads=2 runs=3 sliver=""
-median() { sort -g | awk '{a[NR]=$1} END {if (NR) print a[int((NR+1)/2)]}'; }
+# (Empty lines, as from the space-separated lists below, are no values.)
+median() { sort -g | awk 'NF {a[++n] = $1} END {if (n) print a[int((n + 1) / 2)]}'; }
 ratio() { awk -v x="$1" -v y="$2" 'BEGIN{ if (y > 0 && x != "NA") printf "%.2f", x / y; else print "NA" }'; }
 # Runs one command: prints "seconds peak_MiB".
 timed() {
-    /usr/bin/time -f "%e %M" -o "$work/time" "$@" >"$work/log" 2>&1 || {
+    /usr/bin/time -f "%e %M" -o "$work/time" ${pinned[@]+"${pinned[@]}"} "$@" >"$work/log" 2>&1 || {
         echo "failed: $*" >&2; tail -5 "$work/log" >&2; echo "NA NA"; return; }
     awk '{printf "%s %.1f\n", $1, $2 / 1024}' "$work/time"
 }
@@ -71,7 +88,7 @@ table() { # input
                 "$(echo "${secs[raw]}" | awk '{print $NF}')") "
         done
     done
-    echo "$input, r = $spacing, cell r/2, $threads threads, $runs runs; slivers of $(basename "$last")"
+    echo "$input, r = $spacing, cell r/2, $threads threads, $runs runs; $pin_note; slivers of $(basename "$last")"
     echo
     echo "| pipeline | volume error min … max (mean abs) | bumpiness | slivers | faces (mean) | wall s | ÷ raw | peak MiB |"
     echo "|---|---|---|---|---|---|---|---|"
@@ -87,7 +104,7 @@ table() { # input
     echo
 }
 
-echo "splash: $splash; splashsurf: ${peer:-none on the PATH}; $(nproc) cores, $(date -u +%F)"
+echo "splash: $splash; splashsurf: ${peer:-none on the PATH}; $pin_note; $(date -u +%F)"
 while [ $# -gt 0 ]; do
     case $1 in
     -r) spacing=$2; shift 2 ;;

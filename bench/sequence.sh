@@ -9,14 +9,20 @@
 #
 #   bench/sequence.sh -r 0.014 /work/shared/data/cbd-small
 #   bench/sequence.sh -f "obj ply" -t 2 -n 5 -r 0.014 /work/shared/data/cbd-small
+#   bench/sequence.sh --pin none -r 0.014 /work/shared/data/cbd-small
 #
 # Options (each applies to the directories after it): -r SPACING (particle spacing r,
 # required), -c CELL (r/2, r or 2r; default r/2), -f FORMATS (default "obj ply"), -t THREADS
-# (default 2), -n RUNS (pairs per row, default 3). Directories hold `frame_NNNN.ply` files.
+# (default 2), -n RUNS (pairs per row, default 3). --pin CPUS, wherever given, applies to every
+# run: splash, splashsurf and BASE alike under `taskset -c CPUS` (default 0,1; "none":
+# unpinned; exits 2 without taskset or with a CPU not available). The header line gives the
+# CPU model, the CPUs available and the pinning. Directories hold `frame_NNNN.ply` files.
 # Environment: SPLASH (default release/splash in cargo's target directory), SPLASHSURF
 # (default: splashsurf on the PATH; the table leaves its columns empty without one), BASE (a
 # second splash binary, timed too, with the ratio splash / BASE: a before-and-after).
 set -euo pipefail
+# shellcheck source=bench/pin.sh
+. "$(dirname "$0")/pin.sh"
 
 splash=${SPLASH:-$("$(dirname "$0")"/../scripts/target-dir)/release/splash}
 peer=${SPLASHSURF:-$(command -v splashsurf || true)}
@@ -25,13 +31,22 @@ base=${BASE:-}
 [ -x /usr/bin/time ] || { echo "needs /usr/bin/time (GNU time) for peak memory" >&2; exit 2; }
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
+# --pin, wherever it is, for all the runs; the other options in order.
+pin=0,1 args=()
+while [ $# -gt 0 ]; do
+    if [ "$1" = --pin ]; then [ $# -ge 2 ] || { echo "--pin needs CPUS (e.g. 0,1, or none)" >&2; exit 2; }
+        pin=$2; shift 2
+    else args+=("$1"); shift; fi
+done
+set -- ${args[@]+"${args[@]}"}
+pin_setup "$pin"
 
 spacing="" cell="r/2" formats="obj ply" threads=2 runs=3
 median() { sort -g | awk '{a[NR]=$1} END {if (NR) print a[int((NR+1)/2)]}'; }
 ratio() { awk -v x="$1" -v y="$2" 'BEGIN{ if (y > 0 && x != "NA") printf "%.2f", x / y; else print "NA" }'; }
 # Times one command: prints "seconds peak_MB".
 timed() {
-    /usr/bin/time -f "%e %M" -o "$work/time" "$@" >"$work/log" 2>&1 || {
+    /usr/bin/time -f "%e %M" -o "$work/time" ${pinned[@]+"${pinned[@]}"} "$@" >"$work/log" 2>&1 || {
         echo "failed: $*" >&2; tail -5 "$work/log" >&2; echo "NA NA"; return; }
     awk '{printf "%s %.0f\n", $1, $2 / 1024}' "$work/time"
 }
@@ -71,7 +86,7 @@ row() { # dir format
         "$(printf '%s\n' "${bs[@]}" | median)" "$(printf '%s\n' "${r_base[@]}" | median)"
 }
 
-echo "splash: $splash; splashsurf: ${peer:-none on the PATH}; base: ${base:-none}; $(nproc) cores, $(date -u +%F)"
+echo "splash: $splash; splashsurf: ${peer:-none on the PATH}; base: ${base:-none}; $pin_note; $(date -u +%F)"
 echo
 echo "| sequence | format | frames | splash s | splash peak | splashsurf s | ratio | splashsurf peak | base s | ratio to base |"
 echo "|---|---|---|---|---|---|---|---|---|---|"
