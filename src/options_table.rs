@@ -63,7 +63,7 @@ const PYTHON_FUNCTIONS: &[PythonFunction] = &[
     },
     PythonFunction {
         name: "reconstruct",
-        others: &["positions", "config", "attributes"],
+        others: &["positions", "config", "attributes", "ids", "neighbours"],
         lacks: &[
             ("particle_aabb", "it takes an array of positions: filter it"),
             (
@@ -78,7 +78,10 @@ const PYTHON_FUNCTIONS: &[PythonFunction] = &[
                 "attributes",
                 "its `attributes` are arrays by name, not names",
             ),
-            ("temporal", "one frame has no neighbouring frames"),
+            (
+                "temporal",
+                "one frame has no neighbouring frames: its `ids` and `neighbours` make it follow them",
+            ),
         ],
     },
 ];

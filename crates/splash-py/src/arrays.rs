@@ -64,6 +64,30 @@ pub fn scalars(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<f32>> {
     Ok(a.as_array().iter().map(|&v| v as f32).collect())
 }
 
+/// The (N,) integer array `obj` as particle ids (copied): any integer dtype, each id in
+/// [0, 2^32).
+pub fn ids(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<u32>> {
+    let array = ndarray_of(obj)?;
+    check_shape(&array, what, None)?;
+    if !matches!(array.dtype().kind(), b'i' | b'u') {
+        return Err(wrong_dtype(&array, what, "integer"));
+    }
+    let wide: Bound<'_, PyArray1<i64>> = match array.cast::<PyArray1<i64>>() {
+        Ok(a) => a.clone(),
+        Err(_) => array.call_method1("astype", ("int64",))?.cast_into()?,
+    };
+    let wide = wide.try_readonly()?;
+    wide.as_array()
+        .iter()
+        .enumerate()
+        .map(|(i, &id)| {
+            u32::try_from(id).map_err(|_| {
+                PyValueError::new_err(format!("{what}[{i}] is {id}: ids must lie in [0, 2^32)"))
+            })
+        })
+        .collect()
+}
+
 /// The (F, 3) uint32 array `obj` as triangles (copied).
 pub fn triangles(obj: &Bound<'_, PyAny>, what: &str) -> PyResult<Vec<[u32; 3]>> {
     let array = ndarray_of(obj)?;

@@ -5,7 +5,8 @@ use std::time::{Duration, Instant};
 use pyo3::exceptions::{PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
-use splash_sph::pipeline;
+use splash_sph::pipeline::{self, FrameParticles};
+use splash_sph::temporal::Followed;
 use splash_sph::{
     Attribute as ParticleAttribute, Clock, Config, FrameStats, Reconstructor, TriMesh, Vec3,
 };
@@ -30,6 +31,7 @@ struct Output {
     stats: FrameStats,
     attributes: Vec<Vec<Vec3>>,
     interpolation: Duration,
+    followed: Option<Followed>,
     total: Duration,
 }
 
@@ -90,6 +92,15 @@ options_function! {
 /// particles within the field's support, weighted by the SSP07 kernel); they come back in
 /// ``Mesh.attributes``.
 ///
+/// ``ids`` and ``neighbours``: to make the surface follow the fluid from frame to frame, as
+/// ``recon_sequence(temporal=True)`` does (issue 38): ``ids`` an (N,) integer array of the
+/// particles' unique identities, ``neighbours`` the frames before and after as
+/// ``((positions, ids), (positions, ids))``. The three frames are reconstructed alike (about
+/// three times the work) and this frame's surface moves towards its neighbours' carried to its
+/// time by the particles matched by id; particles without a match do not carry it. With
+/// ``raw=True`` nothing follows. ``Mesh.report["followed"]`` gives the vertices ``moved`` and
+/// the ``rms`` and ``max`` move in world units.
+///
 /// ``Mesh.report`` holds the counts (``particles``, ``surface_particles``, ``vertices``,
 /// ``triangles``, ...), ``spacing`` and ``cell`` in world units, ``engine``, ``field``,
 /// ``threads``, ``correction`` (with ``correct``: vertices ``moved``, their ``shift_mean`` and
@@ -109,7 +120,8 @@ fn reconstruct<'py>(
     positions: &Bound<'py, PyAny>,
     spacing: Option<f32>,
 ) signature(positions, spacing=None, *,)
-    then(config: Option<&Bound<'py, PyAny>>, attributes: Option<&Bound<'py, PyAny>>)
+    then(config: Option<&Bound<'py, PyAny>>, attributes: Option<&Bound<'py, PyAny>>,
+        ids: Option<&Bound<'py, PyAny>>, neighbours: Option<&Bound<'py, PyAny>>)
     -> PyResult<Mesh>, |options| {
     let overrides = Overrides { spacing, ..options };
     let config = settings::resolve(config, overrides)?;
@@ -122,16 +134,32 @@ fn reconstruct<'py>(
     }
     let points = arrays::points(positions, "positions")?;
     let attributes = attribute_values(attributes, points.as_slice().len())?;
+    let frames = neighbour_frames(ids, neighbours)?;
     let (format, up_axis) = (config.output.format, config.output.up_axis);
     let (engine, field) = (config.engine.name(), config.field.kind());
 
     let positions = points.as_slice();
     let values: Vec<&[Vec3]> = attributes.iter().map(|a| a.values.as_slice()).collect();
+    let frames = frames.as_ref().map(|n| {
+        let frame = |positions, ids| FrameParticles { positions, ids };
+        [
+            frame(n.before.0.as_slice(), &n.before.1[..]),
+            frame(positions, &n.ids[..]),
+            frame(n.after.0.as_slice(), &n.after.1[..]),
+        ]
+    });
     let out = py
-        .detach(|| run(config, positions, &values))
+        .detach(|| run(config, positions, &values, frames))
         .map_err(to_py)?;
 
     let report = report(py, &out, engine, field)?;
+    if let Some(f) = &out.followed {
+        let followed = PyDict::new(py);
+        followed.set_item("moved", f.moved)?;
+        followed.set_item("rms", f.rms)?;
+        followed.set_item("max", f.max)?;
+        report.set_item("followed", followed)?;
+    }
     let mesh_attributes = PyDict::new(py);
     for (a, values) in attributes.iter().zip(out.attributes) {
         if a.scalar {
@@ -152,10 +180,53 @@ fn reconstruct<'py>(
 }
 }
 
+/// This frame's ids and its neighbours' positions and ids, for following the fluid.
+struct Neighbours<'py> {
+    ids: Vec<u32>,
+    before: (Points<'py>, Vec<u32>),
+    after: (Points<'py>, Vec<u32>),
+}
+
+/// `ids` and `neighbours` checked: both or neither.
+fn neighbour_frames<'py>(
+    ids: Option<&Bound<'py, PyAny>>,
+    neighbours: Option<&Bound<'py, PyAny>>,
+) -> PyResult<Option<Neighbours<'py>>> {
+    let (ids, neighbours) = match (ids, neighbours) {
+        (None, None) => return Ok(None),
+        (Some(ids), Some(n)) => (ids, n),
+        _ => {
+            return Err(PyValueError::new_err(
+                "ids and neighbours go together: pass this frame's particle ids with the \
+                 frames before and after as neighbours=((positions, ids), (positions, ids))",
+            ));
+        }
+    };
+    let pair: (Bound<'py, PyAny>, Bound<'py, PyAny>) = neighbours.extract().map_err(|_| {
+        PyTypeError::new_err(
+            "neighbours must be the frames before and after: ((positions, ids), (positions, ids))",
+        )
+    })?;
+    let frame = |f: &Bound<'py, PyAny>, side: &str| -> PyResult<(Points<'py>, Vec<u32>)> {
+        let (p, i): (Bound<'py, PyAny>, Bound<'py, PyAny>) = f.extract().map_err(|_| {
+            PyTypeError::new_err(format!("neighbours' frame {side} must be (positions, ids)"))
+        })?;
+        let points = arrays::points(&p, &format!("the positions of the frame {side}"))?;
+        let ids = arrays::ids(&i, &format!("the ids of the frame {side}"))?;
+        Ok((points, ids))
+    };
+    Ok(Some(Neighbours {
+        ids: arrays::ids(ids, "ids")?,
+        before: frame(&pair.0, "before")?,
+        after: frame(&pair.1, "after")?,
+    }))
+}
+
 fn run(
     mut config: Config,
     positions: &[Vec3],
     attributes: &[&[Vec3]],
+    frames: Option<[FrameParticles<'_>; 3]>,
 ) -> splash_sph::Result<Output> {
     let start = Instant::now();
     // The library would start a pool of its own for every call.
@@ -167,8 +238,21 @@ fn run(
             .map(|values| ParticleAttribute::Vector(values.to_vec()))
             .collect();
         let columns: Vec<&ParticleAttribute> = columns.iter().collect();
-        let surface =
-            pipeline::surface(&reconstructor, positions, &columns, &mut Clock::default())?;
+        let (surface, followed) = match frames {
+            None => (
+                pipeline::surface(&reconstructor, positions, &columns, &mut Clock::default())?,
+                None,
+            ),
+            Some(frames) => {
+                let (surface, followed) = pipeline::surface_following(
+                    &reconstructor,
+                    frames,
+                    &columns,
+                    &mut Clock::default(),
+                )?;
+                (surface, Some(followed))
+            }
+        };
         let attributes = surface
             .attributes
             .into_iter()
@@ -182,6 +266,7 @@ fn run(
             stats: surface.stats,
             attributes,
             interpolation: surface.interpolation,
+            followed,
             total: start.elapsed(),
         })
     })?

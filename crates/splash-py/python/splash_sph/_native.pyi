@@ -213,6 +213,8 @@ def reconstruct(
     volume_scope: Optional[Literal["frame", "component"]] = None,
     config: Union[_Path, Mapping[str, Any], None] = None,
     attributes: Optional[Mapping[str, _Array]] = None,
+    ids: Optional[_Array] = None,
+    neighbours: Optional[Tuple[Tuple[_Array, _Array], Tuple[_Array, _Array]]] = None,
 ) -> Mesh:
     """The closed surface mesh of SPH particles.
 
@@ -269,6 +271,15 @@ def reconstruct(
     array, interpolated as ``splash recon --attributes velocity`` does (the mean of the
     particles within the field's support, weighted by the SSP07 kernel); they come back in
     ``Mesh.attributes``.
+
+    ``ids`` and ``neighbours``: to make the surface follow the fluid from frame to frame, as
+    ``recon_sequence(temporal=True)`` does (issue 38): ``ids`` an (N,) integer array of the
+    particles' unique identities, ``neighbours`` the frames before and after as
+    ``((positions, ids), (positions, ids))``. The three frames are reconstructed alike (about
+    three times the work) and this frame's surface moves towards its neighbours' carried to its
+    time by the particles matched by id; particles without a match do not carry it. With
+    ``raw=True`` nothing follows. ``Mesh.report["followed"]`` gives the vertices ``moved`` and
+    the ``rms`` and ``max`` move in world units.
 
     ``Mesh.report`` holds the counts (``particles``, ``surface_particles``, ``vertices``,
     ``triangles``, ...), ``spacing`` and ``cell`` in world units, ``engine``, ``field``,

@@ -45,4 +45,4 @@ pub use batch::Batch;
 pub use frame::{FramePipeline, particle_attributes};
 pub use plan::Plan;
 pub use run::{FrameOutcome, Progress, RunReport, run_plan};
-pub use surface::{Surface, surface};
+pub use surface::{FrameParticles, Surface, surface, surface_following};

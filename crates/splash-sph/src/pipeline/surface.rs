@@ -1,17 +1,19 @@
 //! One frame's surface from particles in memory: reconstruction (Akinci et al. 2012,
 //! Algorithm 1) with the mesh's post-processing (`[post]`, run by the reconstructor), then the
 //! particle attributes interpolated onto the final vertices. The file pipeline ([`FramePipeline`](super::FramePipeline)) and
-//! the Python binding both go through it.
+//! the Python binding both go through it; [`surface_following`] does the same for a frame whose
+//! neighbouring frames the caller holds, its surface following the fluid (issue 38).
 
 use std::time::{Duration, Instant};
 
 use glam::Vec3;
 
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::io::Attribute;
 use crate::mesh::TriMesh;
 use crate::reconstructor::Reconstructor;
 use crate::report::{FrameStats, Observer};
+use crate::temporal::{Followed, FrameMotion, Neighbour, follow_fluid};
 
 /// A frame's surface: its mesh, the attributes asked for (one value per vertex each, in the
 /// order asked), and its figures.
@@ -49,4 +51,89 @@ pub fn surface(
         stats: rec.stats,
         interpolation: start.elapsed(),
     })
+}
+
+/// One frame's particles with their ids, for [`surface_following`].
+#[derive(Debug, Clone, Copy)]
+pub struct FrameParticles<'a> {
+    /// Positions.
+    pub positions: &'a [Vec3],
+    /// Each particle's identity across frames (unique).
+    pub ids: &'a [u32],
+}
+
+/// The [`surface`] of frame t (`frames[1]`) moved towards the surfaces of frames t−1 and t+1
+/// (`frames[0]`, `frames[2]`) carried to its time by the particles matched by id
+/// ([`follow_fluid`], what `post.temporal` does in a sequence), with `attributes` (one value
+/// per particle of frame t) interpolated onto the moved vertices. The three frames are
+/// reconstructed alike (so about three times the work of [`surface`]); `observer` measures
+/// frame t's stages. Particles of frame t missing from a neighbour do not carry it. With
+/// `post.raw` the neighbours are not followed: [`Followed`] says nothing moved.
+///
+/// Errors: those of [`surface`] for any of the three frames, [`Error::Input`] for ids that
+/// repeat or do not match their positions' count (naming the frame).
+pub fn surface_following(
+    reconstructor: &Reconstructor,
+    frames: [FrameParticles<'_>; 3],
+    attributes: &[&Attribute],
+    observer: &mut dyn Observer,
+) -> Result<(Surface, Followed)> {
+    const NAMES: [&str; 3] = ["the frame before", "the frame", "the frame after"];
+    let motions = frames
+        .iter()
+        .zip(NAMES)
+        .map(|(f, name)| {
+            FrameMotion::with_ids(f.positions.to_vec(), f.ids.to_vec())
+                .map_err(|e| Error::input(format!("{name}: {e}")))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let own = &motions[1];
+    let rec = reconstructor
+        .reconstruct_observed(&own.positions, observer)
+        .map_err(|e| e.context("reconstruction failed"))?;
+    let mut mesh = rec.mesh;
+    let mut followed = Followed::default();
+    if !reconstructor.config().post.raw && !mesh.triangles.is_empty() {
+        let side = |k: usize| -> Result<(TriMesh, Vec<Option<Vec3>>)> {
+            let other = reconstructor
+                .reconstruct(&motions[k].positions)
+                .map_err(|e| e.context(format!("reconstruction of {} failed", NAMES[k])))?;
+            let steps = k as i32 - 1;
+            let moves = own
+                .displacements(&motions[k], steps, None)
+                .expect("both frames have ids");
+            Ok((other.mesh, moves))
+        };
+        let (before, after) = (side(0)?, side(2)?);
+        let neighbours = [
+            Neighbour {
+                mesh: &before.0,
+                displacements: &before.1,
+            },
+            Neighbour {
+                mesh: &after.0,
+                displacements: &after.1,
+            },
+        ];
+        let (spacing, cell) = (rec.stats.spacing, rec.stats.cell);
+        followed = reconstructor.install(|| {
+            follow_fluid(
+                &mut mesh,
+                &own.positions,
+                neighbours,
+                spacing,
+                spacing,
+                cell,
+            )
+        })?;
+    }
+    let start = Instant::now();
+    let attributes = reconstructor.interpolate_all(&mesh, &own.positions, attributes)?;
+    let surface = Surface {
+        mesh,
+        attributes,
+        stats: rec.stats,
+        interpolation: start.elapsed(),
+    };
+    Ok((surface, followed))
 }

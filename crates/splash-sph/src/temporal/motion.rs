@@ -10,7 +10,7 @@ use rustc_hash::FxHashMap;
 
 use crate::attribute_names;
 use crate::attributes::interpolate;
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::field::radial_kernel::RadialKernel;
 use crate::io::Attribute;
 
@@ -67,6 +67,26 @@ impl FrameMotion {
         )
     }
 
+    /// Positions with their particles' `ids` (as a caller holding frames in memory has them);
+    /// [`Error::Input`] when the counts differ or an id repeats.
+    pub fn with_ids(positions: Vec<Vec3>, ids: Vec<u32>) -> Result<FrameMotion> {
+        if ids.len() != positions.len() {
+            return Err(Error::input(format!(
+                "{} ids for {} particles",
+                ids.len(),
+                positions.len()
+            )));
+        }
+        if let Some(id) = repeated(&ids) {
+            return Err(Error::input(format!("particle id {id} appears twice")));
+        }
+        Ok(FrameMotion {
+            positions,
+            ids: Some(ids),
+            velocities: None,
+        })
+    }
+
     /// The displacement of each of this frame's particles to frame `other`, `steps` frames
     /// later (negative: earlier): matched by id where both frames have ids (None for a
     /// particle `other` lacks), else `steps` × `frame_time` × the velocity where this frame
@@ -107,12 +127,17 @@ fn exact_ids(ids: &[f32]) -> std::result::Result<Vec<u32>, String> {
         ));
     }
     let ids: Vec<u32> = ids.iter().map(|&id| id as u32).collect();
-    let mut sorted = ids.clone();
-    sorted.sort_unstable();
-    if let Some(w) = sorted.windows(2).find(|w| w[0] == w[1]) {
-        return Err(format!("particle id {} appears twice", w[0]));
+    if let Some(id) = repeated(&ids) {
+        return Err(format!("particle id {id} appears twice"));
     }
     Ok(ids)
+}
+
+/// An id that appears more than once in `ids`, if any.
+fn repeated(ids: &[u32]) -> Option<u32> {
+    let mut sorted = ids.to_vec();
+    sorted.sort_unstable();
+    sorted.windows(2).find(|w| w[0] == w[1]).map(|w| w[0])
 }
 
 /// The cubic-spline mean (support `support`, Shepard-normalised) of the displacements
