@@ -143,9 +143,13 @@ def _set_normals(mesh, normals):
 
 def _set_attribute(mesh, name, values):
     """`values` (V, 3) as a FLOAT_VECTOR or (V,) as a FLOAT point attribute `name`, reusing
-    the mesh's own when it has that type."""
+    the mesh's own when it has that type. Particle ids go to Blender's own `id`, an INT
+    attribute (geometry nodes' stable ids), which takes no other type."""
     if values.ndim == 2 and values.shape[1] == 3:
         kind, key = "FLOAT_VECTOR", "vector"
+    elif values.ndim == 1 and name == "id":
+        kind, key = "INT", "value"
+        values = values.astype(np.int32)
     elif values.ndim == 1:
         kind, key = "FLOAT", "value"
     else:
