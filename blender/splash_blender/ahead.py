@@ -33,15 +33,20 @@ def key(name, positions, velocities, spacing, options):
     )
 
 
-def surface(positions, velocities, spacing, options):
+def surface(positions, velocities, spacing, options, follow=None):
     """(vertices, faces, normals or None, attributes, edges) of the package's `reconstruct`,
     `edges` as `mesh_edges` gives them (which Blender would otherwise search for on the main
-    thread)."""
+    thread). `follow`: the (positions, ids) of the frames before, at and after, for a surface
+    that follows the fluid (`positions` are then the middle frame's)."""
     splash_sph = vendor.splash_sph()
+    following = {}
+    if follow is not None:
+        following = {"ids": follow[1][1], "neighbours": (follow[0], follow[2])}
     mesh = splash_sph.reconstruct(
         positions,
         spacing,
         attributes=None if velocities is None else {"velocity": velocities},
+        **following,
         **options,
     )
     normals = mesh.normals if len(mesh.normals) else None

@@ -15,8 +15,9 @@ VOLUME_SCOPES = ("frame", "component")
 def to_command(s):
     """`splash recon …` for settings `s`: input, output, spacing, cell, field, normals,
     engine, correct (Newton steps, 0: none), velocity (bool), up_axis ("" or "y"/"z"), and
-    post-processing: raw (bool), volume_scope ("frame" or "component"), decimate (in r) and
-    min_component (in r³), None when off, mesh_aabb (six numbers) or None."""
+    post-processing: raw (bool), volume_scope ("frame" or "component"), temporal (bool),
+    decimate (in r) and min_component (in r³), None when off, mesh_aabb (six numbers) or
+    None."""
     words = ["splash", "recon", s.get("input") or "PARTICLES"]
     if s.get("spacing"):
         # Blender keeps it as a float32: 7 digits say all it holds.
@@ -30,6 +31,8 @@ def to_command(s):
         words.append("--raw")
     if s.get("volume_scope", "frame") != "frame":
         words += ["--volume-scope", s["volume_scope"]]
+    if s.get("temporal"):
+        words.append("--temporal")
     if s.get("decimate") is not None:
         words += ["--decimate", f"{s['decimate']:.7g}r"]
     if s.get("min_component") is not None:
@@ -83,6 +86,10 @@ def from_command(line):
             i += 2
         elif word == "--raw":
             out["raw"] = True
+            i += 1
+            continue
+        elif word == "--temporal":
+            out["temporal"] = True
             i += 1
             continue
         elif word == "--correct":

@@ -9,8 +9,11 @@ back, or rendering a frame already seen, costs no reconstruction. Errors go to t
 """
 
 import logging
+import os
 import time
 from collections import OrderedDict
+
+import numpy as np
 
 import bpy
 from bpy.app.handlers import persistent
@@ -139,9 +142,21 @@ def reconstruct(scene, render, depsgraph=None):
             "correct": q.correct,
             **post_options(settings, q, source),
         }
+        follow, alone = None, None
+        if q.temporal and not q.raw:
+            follow = neighbour_frames(source, positions)
+            if isinstance(follow, str):
+                follow, alone = None, follow
+                log.warning("splash: frame %d post-processed alone: %s", frame, alone)
         # The frame is not part of the key: a sequence saved every n-th frame holds each
         # surface for n frames.
-        key = ahead.key(source.name, positions, velocities, settings.spacing, options)
+        key = ahead.key(
+            source.name,
+            positions,
+            velocities,
+            settings.spacing,
+            options if follow is None else {**options, "temporal": True},
+        )
         surface = surface_object(scene, source)
         if _state.get("shown") == (surface.name, key) and len(surface.data.vertices):
             # Already showing it (a render's frame_change_post, then its render_pre).
@@ -157,7 +172,7 @@ def reconstruct(scene, render, depsgraph=None):
             arrays = ahead.take(_sequence_file(source), key)
             made_ahead = arrays is not None
             if not made_ahead:
-                arrays = ahead.surface(positions, velocities, settings.spacing, options)
+                arrays = ahead.surface(positions, velocities, settings.spacing, options, follow)
             _remember(key, arrays, settings.cache_mb * 1e6)
     except ValueError as e:
         raise LiveError(f"frame {frame}: {e}") from None
@@ -169,11 +184,56 @@ def reconstruct(scene, render, depsgraph=None):
         f"frame {frame}: {len(positions)} particles, {len(arrays[1])} triangles, "
         f"{seconds:.2f} s ({'render' if render else 'viewport'}"
         f"{', cached' if cached else ''}{', read ahead' if made_ahead else ''}"
-        f"{', in place' if in_place else ''})"
+        f"{', in place' if in_place else ''}"
+        f"{', following the fluid' if follow is not None else ''}"
+        f"{f', alone: {alone}' if alone else ''})"
     )
     settings.error = ""
-    _read_ahead(source, frame, settings, options)
+    if follow is None:
+        # A surface made ahead would not follow its own neighbours.
+        _read_ahead(source, frame, settings, options)
     return surface
+
+
+def neighbour_frames(source, positions):
+    """The (positions, ids) of the particle files before, at and after the one `source`
+    shows, for a surface that follows the fluid; or why it cannot: not an imported particle
+    sequence, a modifier or shape key changing its particles, the first or last file, a gap in
+    the frame numbers, a file without particle ids or that cannot be read."""
+    path = _sequence_file(source)
+    if path is None:
+        return "the particle object is not an imported particle sequence"
+    if len(source.modifiers) or source.data.shape_keys is not None:
+        return "a modifier or shape key changes the particles"
+    group = source.splash_sequence
+    try:
+        files = sequence.frame_files(group.directory, particles=True)
+    except sequence.SequenceError as e:
+        return str(e)
+    paths = [p for _, p in files]
+    if path not in paths:
+        return "its file is no longer in the sequence"
+    i = paths.index(path)
+    if i == 0 or i + 1 == len(paths):
+        return "no file before or after it"
+    numbers = [n for n, _ in files]
+    steps = [b - a for a, b in zip(numbers, numbers[1:]) if b > a]
+    if steps and max(numbers[i] - numbers[i - 1], numbers[i + 1] - numbers[i]) > min(steps):
+        return "a gap in the frame numbers beside it"
+    splash_sph = vendor.splash_sph()
+    frames = []
+    for p in paths[i - 1 : i + 2]:
+        try:
+            particles = splash_sph.read_particles(p)
+        except (ValueError, OSError) as e:
+            return f"cannot read '{os.path.basename(p)}': {e}"
+        if "id" not in particles:
+            return f"'{os.path.basename(p)}' has no particle ids"
+        xyz = np.ascontiguousarray(particles.positions, dtype=np.float32)
+        frames.append((xyz, particles["id"].astype(np.int64)))
+    if not np.array_equal(frames[1][0], positions):
+        return "the object's particles are not its file's"
+    return frames
 
 
 def _sequence_file(source):

@@ -46,6 +46,7 @@ RENDER_DEFAULTS = {
     "correct": 0,
     "raw": False,
     "volume_scope": "frame",
+    "temporal": False,
 }
 # Custom split normals cost Blender about 4 s per million triangles to set up (Blender 3.4):
 # the viewport shades smooth with Blender's own vertex normals instead. Post-processing
@@ -119,6 +120,15 @@ def _quality(defaults):
                     default=d["volume_scope"],
                     description="What the volume restoration brings to N·r³: frame (the whole "
                     "mesh, one offset) or component (each closed part to its own particles)",
+                ),
+                "temporal": BoolProperty(
+                    name="Follow the fluid",
+                    default=d["temporal"],
+                    description="In a sequence, move each frame's surface towards its "
+                    "neighbouring frames' surfaces carried by the fluid's motion (experimental). "
+                    "--temporal. Live mode does it for an imported particle sequence whose "
+                    "files carry particle ids, reading the files before and after the frame: "
+                    "about three times the work per frame",
                 ),
                 "use_decimate": BoolProperty(
                     name="Decimate",

@@ -26,6 +26,7 @@ def _settings(scene):
         "velocity": s.velocity,
         "raw": q.raw,
         "volume_scope": q.volume_scope,
+        "temporal": q.temporal,
         "decimate": q.decimate if q.use_decimate else None,
         "min_component": q.min_component if q.use_min_component else None,
         # The box is in the particle object's space, the files' coordinates.
@@ -112,6 +113,7 @@ class SPLASH_OT_paste_command(bpy.types.Operator):
         q.correct = parsed.get("correct", 0)
         q.raw = parsed.get("raw", False)
         q.volume_scope = parsed.get("volume_scope", "frame")
+        q.temporal = parsed.get("temporal", False)
         q.use_decimate = "decimate" in parsed
         q.use_min_component = "min_component" in parsed
         if q.use_decimate:
@@ -196,6 +198,7 @@ class VIEW3D_PT_splash(bpy.types.Panel):
             col.label(text=title)
             for key in ("cell", "field", "normals", "engine", "correct", "raw", "volume_scope"):
                 col.prop(q, key)
+            col.prop(q, "temporal")
             for use, key in (("use_decimate", "decimate"), ("use_min_component", "min_component")):
                 row = col.row(align=True)
                 row.prop(q, use)

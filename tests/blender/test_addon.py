@@ -590,7 +590,7 @@ def test_panel(ui):
     panel = type("Panel", (), {"layout": _Layout(drawn)})()
     ui.VIEW3D_PT_splash.draw(panel, bpy.context)
     want = {"raw", "use_decimate", "decimate", "use_min_component", "min_component", "clip_object",
-            "correct", "volume_scope"}  # fmt: skip
+            "correct", "volume_scope", "temporal"}  # fmt: skip
     check(want <= set(drawn), f"the panel shows the post-processing options ({sorted(want)})")
 
 
@@ -655,13 +655,13 @@ def test_command(command, ui):
         {"input": "a b/", "spacing": 0.5, "cell": "r", "field": "density", "normals": "grid",
          "engine": "slices", "velocity": False, "output": "o/"}))  # fmt: skip
     check(parsed["input"] == "'a b/'" and parsed["engine"] == "slices", "command round trip")
-    line = "splash recon x --correct=2 --volume-scope component"
+    line = "splash recon x --correct=2 --volume-scope component --temporal"
     check(bpy.ops.splash.paste_command(line=line) == {"FINISHED"}, "paste correct, volume scope")
-    check((q.correct, q.volume_scope) == (2, "component"), "the pasted line sets them")
+    check((q.correct, q.volume_scope, q.temporal) == (2, "component", True), "the pasted line sets them")
     copied = command.to_command(ui._settings(scene))
-    check("--correct=2 --volume-scope component" in copied, f"and copies them: {copied}")
+    check("--correct=2 --volume-scope component --temporal" in copied, f"and copies them: {copied}")
     bpy.ops.splash.paste_command(line=other)
-    check((q.correct, q.volume_scope) == (0, "frame"), "a line without them resets them")
+    check((q.correct, q.volume_scope, q.temporal) == (0, "frame", False), "a line without them resets them")
 
 
 def camera_on(obj, scale_margin=1.3):
@@ -732,6 +732,65 @@ def test_renders(seqs):
     )
 
 
+def test_follow(live, sequence, splash_sph):
+    """Render settings that follow the fluid: an imported particle sequence whose files carry
+    ids follows its neighbours where it has both (the package's reconstruct with ids and
+    neighbours), and its first frame is post-processed alone, saying why."""
+    scene = bpy.context.scene
+    directory = os.path.join(WORK, "follow")
+    os.makedirs(directory, exist_ok=True)
+    k = np.arange(-6, 7) * SPACING
+    lattice = np.stack(np.meshgrid(k, k, k, indexing="ij"), -1).reshape(-1, 3)
+    ball = lattice[np.linalg.norm(lattice, axis=1) <= 6 * SPACING].astype(np.float32)
+    ids = np.arange(len(ball), dtype=np.float32)
+    frames = []
+    for n in range(3):
+        # Moving and swelling a little, so that the neighbours do not quite agree.
+        xyz = (ball * (1 + 0.01 * n) + [0.3 * SPACING * n, 0, 0]).astype(np.float32)
+        frames.append(xyz)
+        header = (
+            f"ply\nformat binary_little_endian 1.0\nelement vertex {len(xyz)}\n"
+            + "".join(f"property float {c}\n" for c in ("x", "y", "z", "id"))
+            + "end_header\n"
+        )
+        with open(f"{directory}/frame_{n + 1:04d}.ply", "wb") as f:
+            f.write(header.encode())
+            f.write(np.column_stack([xyz, ids]).astype("<f4").tobytes())
+    obj, _ = sequence.import_sequence(bpy.context, directory, "Z", name="follow", particles=True)
+    got = obj.data.attributes.get("id")
+    check(
+        got is not None and got.data_type == "INT",
+        "particle ids become Blender's own id attribute (INT), which takes no other type",
+    )
+    s = scene.splash
+    s.source, s.spacing, s.render.temporal = obj, SPACING, True
+    s.render.cell, s.render.field, s.render.normals = "r/2", "ssp07", "field"
+    surface = live.surface_object(scene, obj)
+    scene.frame_set(2)
+    check(live.update(scene, render=True), f"following: frame 2 ({s.error})")
+    check("following the fluid" in s.status, f"following: frame 2 follows ({s.status})")
+    i = ids.astype(np.int64)
+    want = splash_sph.reconstruct(
+        frames[1], SPACING, ids=i, neighbours=((frames[0], i), (frames[2], i)),
+        cell="r/2", field="ssp07", normals="field",
+    )  # fmt: skip
+    alone = splash_sph.reconstruct(frames[1], SPACING, cell="r/2", field="ssp07")
+    v, f = mesh_arrays(surface)
+    check(
+        np.array_equal(v, want.vertices) and np.array_equal(f, want.faces),
+        "following: the package's surface that follows the fluid",
+    )
+    check(not np.array_equal(v, alone.vertices), "following: not the frame alone's surface")
+    scene.frame_set(1)
+    check(live.update(scene, render=True), f"following: frame 1 ({s.error})")
+    check(
+        "alone: no file before or after it" in s.status,
+        f"following: the first frame alone, saying why ({s.status})",
+    )
+    s.render.temporal = False
+    s.enabled = False
+
+
 def install():
     """Installs and enables the zip: an extension (it has blender_manifest.toml) through the
     extensions platform into the local repository, whose Python package is
@@ -775,6 +834,7 @@ def main():
     test_panel(ui)
     test_command(command, ui)
     test_renders(seqs)
+    test_follow(live, sequence, splash_sph)
 
 
 try:

@@ -344,9 +344,7 @@ pub const OPTIONS: &[OptionSpec] = &[
         key: "post.temporal",
         cli: Spelling::Named("temporal"),
         python: Spelling::Named("temporal"),
-        blender: Spelling::Absent(
-            "live mode reconstructs one frame at a time, without its neighbours",
-        ),
+        blender: Spelling::Named("temporal"),
         value: OptionValue::Flag,
         default: "false",
         help: "In a sequence, move each frame's surface towards its neighbouring frames' \
