@@ -29,12 +29,7 @@ work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 out=${KEEP:-$work}
 # --pin, wherever it is, for all the runs; the other options in order.
-pin=0,1 args=()
-while [ $# -gt 0 ]; do
-    if [ "$1" = --pin ]; then [ $# -ge 2 ] || { echo "--pin needs CPUS (e.g. 0,1, or none)" >&2; exit 2; }
-        pin=$2; shift 2
-    else args+=("$1"); shift; fi
-done
+pin_args "$@"
 set -- ${args[@]+"${args[@]}"}
 pin_setup "$pin"
 

@@ -52,3 +52,19 @@ pin_setup() {
     pinned=(taskset -c "$pin")
     pin_note="CPU $model, $count available, pinned to $pin"
 }
+
+# Takes --pin CPUS out of the arguments wherever it stands: sets `pin` (default 0,1) and `args`,
+# the others in order (then: set -- ${args[@]+"${args[@]}"}; pin_setup "$pin").
+pin_args() {
+    pin=0,1 args=()
+    while [ $# -gt 0 ]; do
+        if [ "$1" = --pin ]; then
+            [ $# -ge 2 ] || { echo "--pin needs CPUS (e.g. 0,1, or none)" >&2; exit 2; }
+            pin=$2
+            shift 2
+        else
+            args+=("$1")
+            shift
+        fi
+    done
+}

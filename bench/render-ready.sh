@@ -24,12 +24,7 @@ cd "$(dirname "$0")/.."
 # shellcheck source=bench/pin.sh
 . bench/pin.sh
 # --pin, wherever it is, for all the runs; the other options in order.
-pin=0,1 args=()
-while [ $# -gt 0 ]; do
-    if [ "$1" = --pin ]; then [ $# -ge 2 ] || { echo "--pin needs CPUS (e.g. 0,1, or none)" >&2; exit 2; }
-        pin=$2; shift 2
-    else args+=("$1"); shift; fi
-done
+pin_args "$@"
 set -- ${args[@]+"${args[@]}"}
 pin_setup "$pin"
 
