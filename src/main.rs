@@ -8,22 +8,16 @@ use anyhow::{Context, Result, bail};
 use clap::{Args, Parser, Subcommand};
 
 mod bench;
-mod bench_cli;
-mod bench_iso;
-mod bench_preview;
-mod bench_slices;
-mod bench_temporal;
 mod farm;
 mod log;
 mod memory;
 #[cfg(test)]
 mod options_table;
 mod preview;
-mod report;
-mod tables;
 
 use splash_sph::frames::Output;
 use splash_sph::pipeline::Batch;
+use splash_sph::report::{Build, Report, ReportFormat};
 use splash_sph::{Config, Overrides};
 
 use farm::FarmArgs;
@@ -55,7 +49,7 @@ enum Command {
     Config(ConfigCommand),
     /// Compare the engines on scenes at several cell sizes and thread counts; print the paper's
     /// Tables 1, 3/4 and 5/6 and write the raw records as JSON.
-    Bench(bench_cli::BenchArgs),
+    Bench(bench::BenchArgs),
     /// Print a shell completion script, e.g. `splash completions bash >
     /// ~/.local/share/bash-completion/completions/splash`.
     Completions {
@@ -398,7 +392,7 @@ fn main() -> ExitCode {
         Command::Recon(args) => recon(*args, None),
         Command::Iso(args) => iso(*args),
         Command::Preview(args) => preview::preview(*args),
-        Command::Bench(args) => bench_cli::bench(args),
+        Command::Bench(args) => bench::bench(args),
         Command::Config(ConfigCommand::Show(args)) => show_config(&args),
         Command::Completions { shell } => completions(shell),
     };
@@ -484,7 +478,7 @@ fn recon_with(
     iso: Option<splash_sph::iso::IsoRequest>,
 ) -> Result<ExitCode> {
     // The report gives the configuration as resolved, threads included.
-    let report_config = serde_json::to_value(&config)?;
+    let report_config = args.run.report.is_some().then(|| config.clone());
     if let Some(n) = config.threads.take() {
         // Every frame runs in the global pool, sized once.
         rayon::ThreadPoolBuilder::new()
@@ -506,8 +500,13 @@ fn recon_with(
         std::io::stderr().is_terminal(),
     );
     let inputs = args.farm.select(&args.inputs, &console)?;
-    if let Some(path) = &args.run.report {
-        report::records::check_report_path(path)?;
+    if let Some(path) = &args.run.report
+        && ReportFormat::from_path(path).is_none()
+    {
+        bail!(
+            "--report {}: a report ends in .json, .csv or .md",
+            path.display()
+        );
     }
     let batch = Batch {
         inputs,
@@ -521,14 +520,30 @@ fn recon_with(
         iso,
     };
     let report = batch.run(&mut Metered(&mut console))?;
-    if let Some(path) = &args.run.report {
-        bench_cli::write_recon_report(path, &report.outcomes, &batch.config, report_config)?;
+    if let (Some(path), Some(config)) = (&args.run.report, &report_config) {
+        Report::of_run(&report.outcomes, config, this_build())?.write(path)?;
     }
     Ok(if console.finish(&report) {
         ExitCode::SUCCESS
     } else {
         ExitCode::FAILURE
     })
+}
+
+/// This program, for the reports: its version, git revision (from build.rs), profile, and
+/// whether the counting allocator measures the heap.
+fn this_build() -> Build {
+    Build {
+        version: env!("CARGO_PKG_VERSION").into(),
+        git_revision: option_env!("SPLASH_GIT_REVISION").map(str::to_string),
+        profile: if cfg!(debug_assertions) {
+            "debug"
+        } else {
+            "release"
+        }
+        .into(),
+        heap_counted: memory::counting(),
+    }
 }
 
 #[cfg(test)]

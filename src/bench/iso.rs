@@ -15,7 +15,7 @@ use serde::Serialize;
 use splash_sph::iso::{Derived, IsoRequest, IsoStats, extract};
 use splash_sph::{Config, Length, estimate_spacing};
 
-use crate::report::records::{Build, Machine};
+use splash_sph::report::{Build, Machine};
 
 #[derive(Args)]
 #[command(after_help = "\
@@ -193,7 +193,7 @@ pub fn run(args: BenchIsoArgs) -> Result<ExitCode> {
     }
     let report = IsoBenchReport {
         machine: Machine::this(),
-        build: Build::this(),
+        build: crate::this_build(),
         frame: args.frame.display().to_string(),
         particles: particles.positions.len(),
         spacing: r,

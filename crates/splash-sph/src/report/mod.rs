@@ -1,10 +1,17 @@
 //! The report of one reconstruction: counts, the reconstruction's own array bytes, and (when
-//! the caller passes an [`Observer`]) the time and heap of each stage of Algorithm 1.
+//! the caller passes an [`Observer`]) the time and heap of each stage of Algorithm 1
+//! ([`FrameStats`]); and the report of a run over frames, one [`FrameRecord`] per frame with
+//! their average, the machine and the build, as JSON, CSV or Markdown ([`Report`], what
+//! `splash recon --report` writes).
+
+mod records;
 
 use std::fmt;
 use std::time::{Duration, Instant};
 
 use serde::Serialize;
+
+pub use records::{Build, Figures, FrameRecord, Machine, Report, ReportFormat, cell_label};
 
 /// Times of the stages of Algorithm 1 (Akinci et al. 2012), plus I/O.
 #[derive(Debug, Clone, Copy, Default, Serialize)]

@@ -1,7 +1,7 @@
 //! `splash bench`: the paper's comparison matrix on the user's own frames. Every frame of every
 //! scene is reconstructed at every cell size by the scatter (1 thread), the full gather and the
 //! narrow band (each at every thread count), each run in its own rayon pool; the averages per
-//! frame fill Tables 1, 3/4 and 5/6 of Akinci et al. 2012 (see [`crate::tables`]).
+//! frame fill Tables 1, 3/4 and 5/6 of Akinci et al. 2012 (see [`super::tables`]).
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -13,7 +13,7 @@ use splash_sph::bytes::human;
 use splash_sph::{Config, Engine, InputFormat, Length, Reconstructor, estimate_spacing};
 
 use crate::memory::{self, reconstruct_measured};
-use crate::report::records::{Build, FrameRecord, Machine};
+use splash_sph::report::{Build, FrameRecord, Machine, cell_label};
 
 pub struct Options {
     /// Scene directories (every particle file inside is a frame) or particle files (grouped
@@ -63,15 +63,6 @@ pub struct BenchReport {
     pub max_memory: u64,
     pub config: serde_json::Value,
     pub runs: Vec<Run>,
-}
-
-/// A cell size as the paper writes it: r, r/2, 2r, or the length.
-pub fn cell_label(cell: Length) -> String {
-    match cell {
-        Length::Spacings(0.5) => "r/2".into(),
-        Length::Spacings(0.25) => "r/4".into(),
-        other => other.to_string(),
-    }
 }
 
 /// Groups the inputs into scenes.
@@ -273,7 +264,7 @@ pub fn run(opts: &Options, mut say: impl FnMut(&str)) -> Result<BenchReport> {
     }
     Ok(BenchReport {
         machine: Machine::this(),
-        build: Build::this(),
+        build: crate::this_build(),
         cells: opts.cells.iter().map(|&c| cell_label(c)).collect(),
         threads: opts.threads.clone(),
         spacings,

@@ -1,6 +1,15 @@
-//! The command-line side of `splash bench` and of `splash recon --report`.
+//! `splash bench`: its arguments, and the paper's comparison of the engines (`engines.rs`,
+//! `tables.rs`); the other papers' benches are `iso.rs`, `preview.rs`, `slices.rs` and
+//! `temporal.rs`. Nothing here is on `splash recon`'s path.
 
-use std::path::{Path, PathBuf};
+mod engines;
+mod iso;
+mod preview;
+mod slices;
+mod tables;
+mod temporal;
+
+use std::path::PathBuf;
 use std::process::ExitCode;
 
 use anyhow::{Context, Result, bail};
@@ -8,10 +17,7 @@ use clap::{Args, Subcommand};
 
 use splash_sph::{Bytes, Config, Engine, Length};
 
-use crate::bench::{self, Options};
-use crate::report::records::{FrameRecord, Report};
-use crate::tables;
-use splash_sph::pipeline::FrameOutcome;
+use engines::Options;
 
 #[derive(Args)]
 #[command(after_help = "\
@@ -85,24 +91,24 @@ pub struct BenchArgs {
 enum BenchTable {
     /// Marching Correctors' Tables I–V on one frame: stage times at kernel scales 1, 0.75,
     /// 0.5 and cells r/2, r with and without correction, for the vorticity, |v| and λ2.
-    Iso(crate::bench_iso::BenchIsoArgs),
+    Iso(iso::BenchIsoArgs),
     /// Fitted BVH's ablations (Gourmel et al. 2010, Tables 3-5 in shape): each part switched
     /// off, and the plain BVH, on a 640x360 render of one frame.
-    Preview(crate::bench_preview::BenchPreviewArgs),
+    Preview(preview::BenchPreviewArgs),
     /// Marching Slices' Fig. 7 (Rosenberg & Birdwell 2008): the slices engine against
     /// surface-following Marching Cubes in blocks and with hash maps, time and memory.
-    Slices(crate::bench_slices::BenchSlicesArgs),
+    Slices(slices::BenchSlicesArgs),
     /// Jitter of whole sequences (issue 38): raw, default, your variants and the peer on
     /// consecutive frames, measured against the fluid's own motion, with time and memory.
-    Temporal(crate::bench_temporal::BenchTemporalArgs),
+    Temporal(temporal::BenchTemporalArgs),
 }
 
 pub fn bench(args: BenchArgs) -> Result<ExitCode> {
     match args.table {
-        Some(BenchTable::Iso(iso)) => return crate::bench_iso::run(iso),
-        Some(BenchTable::Preview(preview)) => return crate::bench_preview::run(preview),
-        Some(BenchTable::Slices(slices)) => return crate::bench_slices::run(slices),
-        Some(BenchTable::Temporal(temporal)) => return crate::bench_temporal::run(temporal),
+        Some(BenchTable::Iso(iso)) => return iso::run(iso),
+        Some(BenchTable::Preview(preview)) => return preview::run(preview),
+        Some(BenchTable::Slices(slices)) => return slices::run(slices),
+        Some(BenchTable::Temporal(temporal)) => return temporal::run(temporal),
         None => {}
     }
     let mut config = match &args.config {
@@ -147,7 +153,7 @@ pub fn bench(args: BenchArgs) -> Result<ExitCode> {
         config,
     };
     let quiet = args.quiet;
-    let report = bench::run(&opts, |line| {
+    let report = engines::run(&opts, |line| {
         if !quiet {
             eprintln!("{line}");
         }
@@ -165,43 +171,4 @@ pub fn bench(args: BenchArgs) -> Result<ExitCode> {
         eprintln!("raw records: {}", args.json.display());
     }
     Ok(ExitCode::SUCCESS)
-}
-
-/// `splash recon --report`: one record per reconstructed frame, failed frames left out.
-pub fn write_recon_report(
-    path: &Path,
-    outcomes: &[FrameOutcome],
-    config: &Config,
-    resolved: serde_json::Value,
-) -> Result<()> {
-    let records: Vec<FrameRecord> = outcomes
-        .iter()
-        .filter_map(|o| {
-            let stats = o.result.as_ref().ok()?;
-            let scene = o
-                .input
-                .parent()
-                .and_then(|p| p.file_name())
-                .map_or(String::new(), |n| n.to_string_lossy().into_owned());
-            let frame = o
-                .input
-                .file_name()
-                .map_or(String::new(), |n| n.to_string_lossy().into_owned());
-            Some(FrameRecord::new(
-                &scene,
-                &frame,
-                config.engine.name(),
-                &bench::cell_label(config.cell),
-                stats,
-            ))
-        })
-        .collect();
-    let mut resolved = resolved;
-    if let (Some(obj), Some(first)) = (resolved.as_object_mut(), records.first()) {
-        // The spacing used (given or estimated) and the world cell, besides the config.
-        obj.insert("spacing_used".into(), first.spacing.into());
-        obj.insert("cell_world".into(), first.cell_world.into());
-        obj.insert("engine".into(), config.engine.name().into());
-    }
-    Report::new(resolved, rayon::current_num_threads(), records).write(path)
 }

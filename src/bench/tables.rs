@@ -3,10 +3,10 @@
 //! size). All figures are averages per frame; a row some of whose runs were refused reads "NA"
 //! with the reason.
 
-use crate::bench::{BenchReport, Run, matrix};
-use crate::report::records::Figures;
+use super::engines::{BenchReport, Run, matrix};
 use splash_sph::Engine;
 use splash_sph::bytes::human;
+use splash_sph::report::Figures;
 
 /// Mean figures of the runs matching a scene, cell, engine and thread count; Err with the first
 /// reason when a run has none, None when there are no such runs.
