@@ -13,7 +13,7 @@ use clap::Args;
 
 use splash_sph::frames::{Output, select};
 use splash_sph::io::read_mesh;
-use splash_sph::mesh::quality::{quality, volume_error};
+use splash_sph::mesh::{quality, volume_error};
 use splash_sph::pipeline::{Batch, FrameOutcome, Progress};
 use splash_sph::temporal::{FrameMotion, Jitter, Window, frame_jitter};
 use splash_sph::{Config, Length, MeshFormat, TriMesh, estimate_spacing, read_particles};

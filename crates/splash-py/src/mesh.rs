@@ -9,7 +9,7 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use splash_sph::io::{self, VertexAttributes};
-use splash_sph::mesh::edges::Edges;
+use splash_sph::mesh::Edges;
 use splash_sph::{Attribute, MeshFormat, TriMesh, UpAxis};
 
 use crate::arrays;

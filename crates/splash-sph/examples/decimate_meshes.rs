@@ -8,8 +8,9 @@
 //! `--clip=X0,Y0,Z0,X1,Y1,Z1` and `--min-component=V` (in SPACING³) also clip each mesh to the
 //! box and drop its small components, and report the results' topology and volume.
 
-use splash_sph::mesh::topology::{component_volumes, signed_volume, topology};
-use splash_sph::mesh::{clip_to_box, decimate, drop_small_components};
+use splash_sph::mesh::{
+    clip_to_box, component_volumes, decimate, drop_small_components, signed_volume, topology,
+};
 use splash_sph::{TriMesh, Vec3};
 use std::collections::HashMap;
 use std::io::{BufRead, BufReader, Read};

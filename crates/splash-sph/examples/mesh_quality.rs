@@ -5,14 +5,14 @@
 //!
 //! Prints one row per mesh (volume error V/(N·r³) − 1, bumpiness, slivers, faces,
 //! closed/manifold, components of ≤ 20 faces, self-intersecting faces; see
-//! `splash_sph::mesh::quality`), then the summary row of the table: volume error
+//! `splash_sph::mesh::Quality`), then the summary row of the table: volume error
 //! min … max (mean abs), mean bumpiness, slivers of SLIVER_FRAME (a file name; the first mesh
 //! when absent), mean faces; and the self-intersecting faces of all meshes.
 
 use std::path::{Path, PathBuf};
 
 use splash_sph::io::read_mesh;
-use splash_sph::mesh::quality::{quality, volume_error};
+use splash_sph::mesh::{quality, volume_error};
 use splash_sph::read_particles;
 
 fn main() -> Result<(), String> {

@@ -1,24 +1,28 @@
-//! Triangle meshes: the output of every engine.
+//! Triangle meshes: the output of every engine. Their post-processing ([`post`]: smoothing,
+//! volume, [`clip_to_box`], [`drop_small_components`], [`decimate`]), and their measures:
+//! [`topology`] (closed and manifold, components, enclosed volume), [`quality`] (the render
+//! figures of issue 25), [`self_intersecting_faces`], [`SignedDistance`] and [`Edges`].
 
-pub mod adjacency;
-pub mod components;
-pub mod correction;
-pub mod edges;
+pub(crate) mod adjacency;
+mod components;
+pub(crate) mod correction;
+mod edges;
 pub(crate) mod marching_cubes;
 pub mod post;
-pub mod quality;
-pub mod self_intersections;
-pub mod signed_distance;
+pub(crate) mod quality;
+mod self_intersections;
+pub(crate) mod signed_distance;
 mod stars;
-pub mod topology;
+pub(crate) mod topology;
 
 pub use components::drop_small_components;
-pub use post::clipping::clip_to_box;
-pub use post::decimation::decimate;
-pub use post::volume::VolumeScope;
+pub use edges::Edges;
+pub use post::{VolumeScope, clip_to_box, decimate};
+pub use quality::{Quality, SLIVER_DEGREES, SMALL_COMPONENT_FACES, quality, volume_error};
 pub use self_intersections::self_intersecting_faces;
 pub use signed_distance::SignedDistance;
 pub(crate) use stars::area_weighted_normals;
+pub use topology::{Topology, component_volumes, signed_volume, topology};
 
 #[doc(no_inline)]
 pub use crate::data::TriMesh;

@@ -1,20 +1,5 @@
-//! Render quality of a surface mesh, the figures of issue 25: volume error against the
-//! particles' own volume N·r³, bumpiness (dihedral angles), sliver share, closedness and small
-//! components.
-//!
-//! Definitions (each sum in `f64`, in fixed chunks: the same mesh gives the same bits on any
-//! number of threads):
-//! - **volume error** = V / (N·r³) − 1, V the mesh's signed volume: incompressible SPH keeps
-//!   each particle's volume r³, so N·r³ is the fluid's volume ([`volume_error`]).
-//! - **bumpiness** = Σₑ θₑ·wₑ / Σₑ wₑ over the edges e shared by exactly two non-degenerate
-//!   triangles, θₑ the angle between their face normals in degrees and wₑ the mean of their
-//!   two areas: an area-weighted mean dihedral angle, 0 on a plane, which falls as a smooth
-//!   surface is sampled more finely and rises with every ripple.
-//! - **slivers** = share of the triangles whose smallest interior angle is under 10°
-//!   (degenerate triangles, with a repeated vertex or no area, count as slivers).
-//! - **self-intersecting faces** = faces that cross, touch or overlap another face of the mesh
-//!   beyond the corners they share, by the exact test of [`self_intersecting_faces`]: 0 for a
-//!   surface that is the boundary of a solid.
+//! Render quality of a surface mesh, the figures of issue 25 ([`Quality`], with their
+//! definitions).
 
 use glam::DVec3;
 use rayon::prelude::*;
@@ -27,7 +12,22 @@ pub const SLIVER_DEGREES: f64 = 10.0;
 /// Components of at most this many triangles count as small (floaters).
 pub const SMALL_COMPONENT_FACES: usize = 20;
 
-/// The figures of one mesh.
+/// The render figures of one mesh (issue 25): volume error against the particles' own volume
+/// N·r³, bumpiness (dihedral angles), sliver share, closedness and small components.
+///
+/// Definitions (each sum in `f64`, in fixed chunks: the same mesh gives the same bits on any
+/// number of threads):
+/// - **volume error** = V / (N·r³) − 1, V the mesh's signed volume: incompressible SPH keeps
+///   each particle's volume r³, so N·r³ is the fluid's volume ([`volume_error`]).
+/// - **bumpiness** = Σₑ θₑ·wₑ / Σₑ wₑ over the edges e shared by exactly two non-degenerate
+///   triangles, θₑ the angle between their face normals in degrees and wₑ the mean of their
+///   two areas: an area-weighted mean dihedral angle, 0 on a plane, which falls as a smooth
+///   surface is sampled more finely and rises with every ripple.
+/// - **slivers** = share of the triangles whose smallest interior angle is under 10°
+///   (degenerate triangles, with a repeated vertex or no area, count as slivers).
+/// - **self-intersecting faces** = faces that cross, touch or overlap another face of the mesh
+///   beyond the corners they share, by the exact test of [`self_intersecting_faces`]: 0 for a
+///   surface that is the boundary of a solid.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Quality {
     /// Triangles.
@@ -36,7 +36,7 @@ pub struct Quality {
     pub vertices: usize,
     /// Signed enclosed volume.
     pub volume: f64,
-    /// Area-weighted mean dihedral angle, degrees (see the module's definition).
+    /// Area-weighted mean dihedral angle, degrees (see the definition above).
     pub bumpiness: f64,
     /// Share of triangles with an angle under [`SLIVER_DEGREES`], in [0, 1].
     pub slivers: f64,

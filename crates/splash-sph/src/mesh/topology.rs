@@ -1,18 +1,16 @@
 //! Exact topological checks of a [`TriMesh`]: edge manifoldness, orientation consistency,
 //! connected components, Euler characteristic, enclosed volume and normal orientation.
-//!
-//! Degenerate triangles (repeating a vertex index) are counted in
-//! [`Topology::degenerate_triangles`] and otherwise ignored: they enclose nothing and their
-//! "edges" (a vertex to itself, or one edge twice) would only blur the manifold checks.
 
 use super::TriMesh;
-use glam::Vec3;
 use rayon::prelude::*;
 
-/// Counts describing the combinatorial structure of a mesh.
+/// Counts describing the combinatorial structure of a mesh: edge manifoldness, orientation
+/// consistency, connected components and Euler characteristic.
 ///
 /// Everything except `triangles`, `degenerate_triangles` and `unused_vertices` is computed on
-/// the non-degenerate triangles only.
+/// the non-degenerate triangles only. Degenerate triangles (repeating a vertex index) are
+/// counted in [`Topology::degenerate_triangles`] and otherwise ignored: they enclose nothing and
+/// their "edges" (a vertex to itself, or one edge twice) would only blur the manifold checks.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Topology {
     /// Length of the vertex array.
@@ -200,10 +198,12 @@ pub fn component_volumes(mesh: &TriMesh) -> Vec<(usize, f64)> {
 /// Fraction of the vertices used by a non-degenerate triangle whose stored normal has a positive
 /// dot product with the area-weighted sum of the face normals around it. 1.0 means the normals
 /// point outward consistently with the winding; a vertex without a stored normal counts as
-/// disagreeing. NaN when no vertex is used, so that any threshold check on it fails.
-pub fn normal_agreement(mesh: &TriMesh) -> f64 {
+/// disagreeing. NaN when no vertex is used, so that any threshold check on it fails. (The
+/// tests' check of the engines' normals.)
+#[cfg(test)]
+pub(crate) fn normal_agreement(mesh: &TriMesh) -> f64 {
     check_indices(mesh);
-    let mut face_sum = vec![Vec3::ZERO; mesh.vertices.len()];
+    let mut face_sum = vec![glam::Vec3::ZERO; mesh.vertices.len()];
     let mut used = vec![false; mesh.vertices.len()];
     for t in mesh.triangles.iter().filter(|t| !is_degenerate(t)) {
         let [a, b, c] = t.map(|i| mesh.vertices[i as usize]);
@@ -271,6 +271,7 @@ impl UnionFind {
 mod tests {
     use super::*;
     use crate::tests::common::torus;
+    use glam::Vec3;
 
     /// Builds a mesh whose normals point away from `center` (outward for convex shapes).
     fn mesh(vertices: Vec<Vec3>, triangles: Vec<[u32; 3]>, center: Vec3) -> TriMesh {

@@ -13,6 +13,8 @@ mod iso_components;
 mod lambda2;
 mod marching_cubes;
 mod post;
+#[cfg(target_os = "linux")]
+mod post_stages;
 mod reconstruction;
 mod slices;
 mod surface_following;

@@ -1,19 +1,24 @@
 //! Render-ready meshes (issue 25): the isosurface smoothed with Taubin's λ|μ filter, its
 //! volume brought to that of the particles inside it (N·r³; each component's to N_c·r³ with
 //! `volume_scope = "component"`) by offsets along the normals interleaved with smoothing,
-//! where asked the edges bisected where the surface bends (`refine_angle`, [`refine_bends`]),
-//! the triangles evened out by tangential relaxation, and the normals recomputed. `[post]` in the configuration; `raw = true` keeps the exact
-//! isosurface. Then, where asked: the mesh clipped to a box ([`clip_to_box`]), components
-//! below a volume dropped ([`drop_small_components`]) and the mesh decimated ([`decimate`]).
+//! where asked the edges bisected where the surface bends (`refine_angle`), the triangles
+//! evened out by tangential relaxation, and the normals recomputed. `[post]` in the
+//! configuration; `raw = true` keeps the exact isosurface. Then, where asked: the mesh clipped
+//! to a box ([`clip_to_box`]), components below a volume dropped ([`drop_small_components`])
+//! and the mesh decimated ([`decimate`]).
 //! [`postprocess_mesh`] runs the same on any closed mesh, checked first, with each component
 //! keeping its own volume when there are no particles.
 
-pub mod clearance;
-pub mod clipping;
-pub mod decimation;
-pub mod refinement;
-pub mod smoothing;
-pub mod volume;
+mod clearance;
+mod clipping;
+mod decimation;
+pub(crate) mod refinement;
+pub(crate) mod smoothing;
+pub(crate) mod volume;
+
+pub use clipping::clip_to_box;
+pub use decimation::decimate;
+pub use volume::VolumeScope;
 
 use glam::Vec3;
 use serde::{Deserialize, Serialize};
@@ -25,13 +30,10 @@ use crate::mesh::stars::{area_weighted_normals, validate};
 use crate::mesh::topology::topology;
 use crate::mesh::{TriMesh, drop_small_components};
 use clearance::Clearance;
-use clipping::clip_to_box;
-use decimation::decimate;
 use refinement::refine_bends;
 use smoothing::{relax_tangentially, taubin, vertex_normals};
 use volume::{
-    Components, Measures, VolumeScope, first_order_offsets, normals_and_measures, particles_inside,
-    restore,
+    Components, Measures, first_order_offsets, normals_and_measures, particles_inside, restore,
 };
 
 /// `[post]`: what happens to the mesh after the engine. Defaults measured on cbd-small (21
@@ -68,11 +70,11 @@ pub struct PostConfig {
     /// in all; a step of 0.5 r left 1.66 % slivers, 0.25 r 1.29 % before relaxation).
     pub max_offset: f32,
     /// Bisect the edges whose two triangles meet at more than this angle, in degrees, after the
-    /// volume rounds ([`refine_bends`]; default 0: never). The edges bisected differ from frame
-    /// to frame, so a sequence flickers (issue 38: jitter on dense-dambreak 0.047 r without,
-    /// 0.060 r with 16; on two simulated scenes 0.032 → 0.049 r and 0.108 → 0.161 r). 16 takes
-    /// cbd-large f23 from 2.66° to 1.96° and cbd-small from 1.65° to 1.40° for 26 % and 20 %
-    /// more triangles, rims and droplets no longer faceted, for about 1.17× the wall time.
+    /// volume rounds (default 0: never). The edges bisected differ from frame to frame, so a
+    /// sequence flickers (issue 38: jitter on dense-dambreak 0.047 r without, 0.060 r with 16;
+    /// on two simulated scenes 0.032 → 0.049 r and 0.108 → 0.161 r). 16 takes cbd-large f23
+    /// from 2.66° to 1.96° and cbd-small from 1.65° to 1.40° for 26 % and 20 % more triangles,
+    /// rims and droplets no longer faceted, for about 1.17× the wall time.
     pub refine_angle: f32,
     /// Tangential relaxation steps after the volume rounds and the refinement (default 12:
     /// slivers on cbd-large f23 0.46 %, 0.40 % with 15; without refinement 10 took them from
