@@ -10,9 +10,7 @@ use std::time::Duration;
 use anyhow::{Result, anyhow};
 use clap::Args;
 
-use splash_sph::preview::{
-    BvhKind, BvhOptions, Camera, LEAF_K_COST, Previewer, SplitRule, Style, up_vector,
-};
+use splash_sph::preview::{BvhKind, BvhOptions, Camera, Previewer, SplitRule, Style, up_vector};
 use splash_sph::{Config, estimate_spacing, read_particles};
 
 /// The hierarchies compared: a name, the kind and the switches.
@@ -206,7 +204,7 @@ fn bench(input: &Path, mut config: Config, size: (u32, u32)) -> Result<ExitCode>
         let r = s.rays.rays.max(1) as f64;
         println!(
             "| {name} | {:.0} | {:.0} | {:.1} |",
-            (s.rays.metaballs as f64 + LEAF_K_COST as f64 * s.rays.along_ray as f64) / r,
+            s.rays.leaf_test_cost() / r,
             s.rays.metaballs_squared as f64 / r,
             s.rays.terms as f64 / r,
         );

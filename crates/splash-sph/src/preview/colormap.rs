@@ -29,7 +29,9 @@ pub fn viridis_srgb(t: f32) -> [u8; 3] {
     [v.x as u8, v.y as u8, v.z as u8]
 }
 
-/// CIE L* (0–100) of sRGB components in [0, 1]: the lightness a perceptual map keeps monotone.
+/// CIE L* (0–100) of sRGB components in [0, 1]: the lightness a perceptual map keeps monotone
+/// (the tests' check of the map).
+#[cfg(test)]
 pub fn lightness(srgb: Vec3) -> f32 {
     let lin = |c: f32| {
         if c <= 0.04045 {

@@ -176,7 +176,6 @@ pub struct FittedBvh {
     /// The box of all metaballs' spheres: the same for every hierarchy over these particles.
     pub(crate) scene: Aabb,
     pub(crate) field: Metaballs,
-    kind: BvhKind,
 }
 
 /// Counts of a built hierarchy.
@@ -298,6 +297,7 @@ impl FittedBvh {
     /// would take more than `max_bytes`.
     ///
     /// [`Error::Limit`]: crate::Error::Limit
+    #[cfg(test)]
     pub fn build(
         points: &[Vec3],
         field: Metaballs,
@@ -339,7 +339,6 @@ impl FittedBvh {
                 original: Vec::new(),
                 scene: Aabb::EMPTY,
                 field,
-                kind,
             });
         }
         let mut centres = Aabb::EMPTY;
@@ -402,13 +401,7 @@ impl FittedBvh {
             original: order,
             scene,
             field,
-            kind,
         })
-    }
-
-    /// Which hierarchy this is.
-    pub fn kind(&self) -> BvhKind {
-        self.kind
     }
 
     /// Node, leaf and list counts.
@@ -438,6 +431,7 @@ impl FittedBvh {
     }
 
     /// Every leaf as (box, centres of its list).
+    #[cfg(test)]
     pub fn leaves(&self) -> impl Iterator<Item = (Aabb, Vec<Vec3>)> + '_ {
         self.nodes.iter().filter(|n| n.count > 0).map(|n| {
             let list = &self.items[n.first as usize..(n.first + n.count) as usize];
@@ -446,11 +440,6 @@ impl FittedBvh {
                 list.iter().map(|&i| self.points[i as usize]).collect(),
             )
         })
-    }
-
-    /// The metaball centres (in the hierarchy's order).
-    pub fn centres(&self) -> &[Vec3] {
-        &self.points
     }
 
     /// The field.

@@ -6,6 +6,7 @@
 //! δ_i from the ray adds c·(q_i − (t − t_i)²/R²)^α with q_i = 1 − δ_i²/R², a polynomial in t
 //! wherever it is positive: the tracer collects (t_i, q_i) once per leaf and ray.
 
+#[cfg(test)]
 use glam::Vec3;
 
 use crate::field::MetaballConfig;
@@ -37,6 +38,7 @@ impl Metaballs {
     }
 
     /// Σ t_i^α at `x` over `centres` (in their order): the field is T − c·this.
+    #[cfg(test)]
     pub fn sum_at(&self, centres: impl IntoIterator<Item = Vec3>, x: Vec3) -> f32 {
         let inv_r2 = self.inv_r2();
         let mut sum = 0.0;
@@ -50,6 +52,7 @@ impl Metaballs {
     }
 
     /// Whether `x` is inside the fluid (f(x) ≤ 0).
+    #[cfg(test)]
     pub fn inside(&self, centres: impl IntoIterator<Item = Vec3>, x: Vec3) -> bool {
         self.sum_at(centres, x) >= self.level
     }

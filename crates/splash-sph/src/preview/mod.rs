@@ -3,12 +3,12 @@
 //!
 //! The surface is the zero set of the `metaball` field (the configuration's `[field]` table
 //! when it is of that kind, else the metaball defaults), the one `splash recon --field
-//! metaball` meshes. [`Previewer::render`] builds the hierarchy ([`FittedBvh`]), traces
-//! stratified samples per pixel through a [`Camera`] ([`Tracer`]), shades hits with a key
-//! light from the camera's side, a fill and a sky ambient, a hard shadow and optional ambient
-//! occlusion ([`Style`]), coloured by a particle attribute through viridis with a legend
-//! ([`Colouring`]) or plain; rows in parallel, every random number a hash of pixel and sample,
-//! so the image does not depend on the number of threads.
+//! metaball` meshes. [`Previewer::render`] builds the hierarchy (a Fitted BVH, or the plain
+//! BVH of [`BvhKind`]), traces stratified samples per pixel through a [`Camera`], shades hits
+//! with a key light from the camera's side, a fill and a sky ambient, a hard shadow and
+//! optional ambient occlusion ([`Style`]), coloured by a particle attribute through viridis
+//! with a legend ([`Colouring`]) or plain; rows in parallel, every random number a hash of
+//! pixel and sample, so the image does not depend on the number of threads.
 //!
 //! ```
 //! use splash_sph::preview::{Camera, Previewer, Style};
@@ -51,13 +51,14 @@ use crate::io::Attribute;
 
 pub use crate::config::preview::PreviewConfig;
 pub use camera::{Camera, parse_size, robust_bounds, up_vector};
-pub use colormap::{lightness, viridis, viridis_srgb};
-pub use fitted_bvh::{Aabb, BvhKind, BvhOptions, BvhStats, FittedBvh, LEAF_K_COST, SplitRule};
-pub use legend::{bar_rect, label};
-pub use metaballs::Metaballs;
-pub use png_file::{Image, encode_png, write_png};
-pub use shade::{Lights, Style, parse_colour};
-pub use trace::{Hit, RayCounts, Scratch, Tracer};
+pub(crate) use colormap::viridis_srgb;
+pub(crate) use fitted_bvh::FittedBvh;
+pub use fitted_bvh::{BvhKind, BvhOptions, BvhStats, SplitRule};
+pub(crate) use metaballs::Metaballs;
+pub use png_file::{Image, write_png};
+pub use shade::{Style, parse_colour};
+pub use trace::RayCounts;
+pub(crate) use trace::Tracer;
 
 /// One rendered frame and what it took.
 pub struct Preview {
@@ -95,7 +96,7 @@ impl PreviewStats {
 
 /// The metaball parameters a configuration gives a preview: its `[field]` table when that is
 /// a metaball field, else the metaball defaults (what `--field metaball` meshes).
-pub fn metaball_config(config: &Config) -> MetaballConfig {
+pub(crate) fn metaball_config(config: &Config) -> MetaballConfig {
     match &config.field {
         FieldConfig::Metaball(m) => m.clone(),
         _ => MetaballConfig::default(),
@@ -152,7 +153,8 @@ impl Previewer {
     }
 
     /// The field drawn.
-    pub fn field(&self) -> Metaballs {
+    #[cfg(test)]
+    pub(crate) fn field(&self) -> Metaballs {
         self.field
     }
 
@@ -170,7 +172,8 @@ impl Previewer {
     }
 
     /// Builds the hierarchy over `positions` (finite), within the memory limit.
-    pub fn build(&self, positions: &[Vec3]) -> Result<FittedBvh> {
+    #[cfg(test)]
+    pub(crate) fn build(&self, positions: &[Vec3]) -> Result<FittedBvh> {
         self.build_within(positions, self.max_memory)
     }
 
@@ -320,7 +323,7 @@ impl Colouring {
 /// Traces and shades every pixel of `camera`'s image, rows in parallel: each pixel depends on
 /// nothing but its rays, whose samples are hashes of pixel and sample number, and the counts
 /// are integer sums, so any thread count gives the same.
-pub fn render_image(
+pub(crate) fn render_image(
     bvh: &FittedBvh,
     camera: &Camera,
     style: &Style,

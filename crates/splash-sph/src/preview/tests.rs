@@ -4,7 +4,11 @@ use std::path::PathBuf;
 
 use glam::Vec3;
 
+use super::colormap::{lightness, viridis};
 use super::fitted_bvh::{Node, Reach};
+use super::legend::{bar_rect, label};
+use super::png_file::encode_png;
+use super::trace::Hit;
 use super::*;
 use crate::field::FieldConfig;
 use crate::{Config, Reconstructor, read_particles};
@@ -845,14 +849,16 @@ fn packets_of_rays_hit_and_shadow_rays_stop_as_single_rays_do() {
     let camera = small_camera(&points, 48, 32);
     let field = Previewer::new(&config()).unwrap().field();
     let reference = brute(&points, field);
-    let hierarchies = [
-        FittedBvh::build(&points, field, BvhKind::Fitted, u64::MAX / 4).unwrap(),
-        FittedBvh::build(&points, field, BvhKind::Plain, u64::MAX / 4).unwrap(),
-    ];
+    let hierarchies = [BvhKind::Fitted, BvhKind::Plain].map(|kind| {
+        (
+            kind,
+            FittedBvh::build(&points, field, kind, u64::MAX / 4).unwrap(),
+        )
+    });
     let key = Vec3::new(0.3, 1.0, 0.5).normalize();
     let (mut scratch, mut counts) = (trace::Scratch::default(), RayCounts::default());
     let mut shadow_starts = (0, 0);
-    for bvh in &hierarchies {
+    for (kind, bvh) in &hierarchies {
         let tracer = Tracer::new(bvh);
         let brute = Tracer::new(&reference);
         let mut found = Vec::new();
@@ -879,7 +885,7 @@ fn packets_of_rays_hit_and_shadow_rays_stop_as_single_rays_do() {
                             &mut scratch,
                             &mut counts,
                         );
-                        assert_eq!(*hit, single, "{:?} pixel {x},{y}", bvh.kind());
+                        assert_eq!(*hit, single, "{kind:?} pixel {x},{y}");
                         // Shadow rays from just outside and just inside the surface.
                         let Some(h) = single else { continue };
                         for side in [1.0, -1.0] {
@@ -887,7 +893,7 @@ fn packets_of_rays_hit_and_shadow_rays_stop_as_single_rays_do() {
                             let inf = f32::INFINITY;
                             let got = tracer.occluded(o, key, 0.0, inf, &mut scratch, &mut counts);
                             let want = brute.occluded(o, key, 0.0, inf, &mut scratch, &mut counts);
-                            assert_eq!(got, want, "{:?} shadow from {o}", bvh.kind());
+                            assert_eq!(got, want, "{kind:?} shadow from {o}");
                             if got {
                                 shadow_starts.0 += 1;
                             } else {

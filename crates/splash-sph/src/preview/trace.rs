@@ -21,7 +21,7 @@
 
 use glam::Vec3;
 
-use super::fitted_bvh::{Aabb, FittedBvh};
+use super::fitted_bvh::{Aabb, FittedBvh, LEAF_K_COST};
 
 /// Where a ray meets the surface.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -60,8 +60,16 @@ pub struct RayCounts {
 }
 
 impl RayCounts {
+    /// The leaf tests' cost in entry tests by the measured model n + 16·k, the one
+    /// [`SplitRule::Measured`](super::SplitRule::Measured) builds for: the entries of the leaves'
+    /// lists plus 16 per metaball within R of the ray ([`metaballs`](Self::metaballs) + 16 ·
+    /// [`along_ray`](Self::along_ray)).
+    pub fn leaf_test_cost(&self) -> f64 {
+        self.metaballs as f64 + f64::from(LEAF_K_COST) * self.along_ray as f64
+    }
+
     /// Adds `o`'s counts.
-    pub fn add(&mut self, o: &RayCounts) {
+    pub(crate) fn add(&mut self, o: &RayCounts) {
         self.rays += o.rays;
         self.nodes += o.nodes;
         self.leaves += o.leaves;
