@@ -89,7 +89,7 @@ impl<'de> Deserialize<'de> for Bytes {
 }
 
 /// Total memory of the machine in bytes (MemTotal of /proc/meminfo), if known.
-pub fn machine_memory() -> Option<u64> {
+pub(crate) fn machine_memory() -> Option<u64> {
     let text = std::fs::read_to_string("/proc/meminfo").ok()?;
     meminfo_field(&text, "MemTotal:")
 }
@@ -98,7 +98,7 @@ pub fn machine_memory() -> Option<u64> {
 /// limit (v2 `memory.max`, v1 `memory.limit_in_bytes`, on its own group and every parent),
 /// SLURM's allocation (`SLURM_MEM_PER_NODE`, or `SLURM_MEM_PER_CPU` × `SLURM_CPUS_ON_NODE`, in
 /// MB) and the memory available now (MemAvailable of /proc/meminfo); None where none is known.
-pub fn available_memory() -> Option<u64> {
+pub(crate) fn available_memory() -> Option<u64> {
     let read = |p: &std::path::Path| std::fs::read_to_string(p).ok();
     let cgroup = read("/proc/self/cgroup".as_ref())
         .and_then(|text| cgroup_limit(&text, "/sys/fs/cgroup".as_ref(), read));
@@ -107,15 +107,16 @@ pub fn available_memory() -> Option<u64> {
     [cgroup, slurm, free].into_iter().flatten().min()
 }
 
-/// The memory limit when none is configured: 80 % of [`available_memory`], or 8 GiB where
-/// nothing is known. Room is left for the particles, the output and the allocator's own
-/// overhead, which the engines' estimates do not count.
+/// The memory limit when none is configured: 80 % of the memory the process may use, as far as
+/// the system says (the smallest of its cgroup's limit, SLURM's allocation and the memory
+/// available now), or 8 GiB where nothing is known. Room is left for the particles, the output
+/// and the allocator's own overhead, which the engines' estimates do not count.
 pub fn default_limit() -> u64 {
     limit_from(available_memory())
 }
 
 /// 80 % of `available`, or 8 GiB when it is unknown.
-pub fn limit_from(available: Option<u64>) -> u64 {
+pub(crate) fn limit_from(available: Option<u64>) -> u64 {
     available.map_or(8 << 30, |m| m / 5 * 4)
 }
 
@@ -125,7 +126,7 @@ pub fn limit_from(available: Option<u64>) -> u64 {
 /// `root/memory/path/memory.limit_in_bytes`). Every parent of the group is read too, and the
 /// mount's own top (in a container the group's path is often the host's, and the mount shows
 /// the container's group at the top). `max` and v1's "unlimited" (near 2⁶³) count as none.
-pub fn cgroup_limit(
+pub(crate) fn cgroup_limit(
     proc_cgroup: &str,
     root: &std::path::Path,
     read: impl Fn(&std::path::Path) -> Option<String>,
@@ -169,7 +170,7 @@ fn parse_limit(text: &str) -> Option<u64> {
 /// SLURM's memory for this job step on this node, from its environment (`get`):
 /// `SLURM_MEM_PER_NODE` MB, else `SLURM_MEM_PER_CPU` MB × `SLURM_CPUS_ON_NODE` (1 if unset).
 /// A value of 0 (all the node's memory) counts as none.
-pub fn slurm_limit(get: impl Fn(&str) -> Option<String>) -> Option<u64> {
+pub(crate) fn slurm_limit(get: impl Fn(&str) -> Option<String>) -> Option<u64> {
     let mb = |k: &str| -> Option<u64> {
         let t = get(k)?;
         // SLURM writes plain MB; accept a unit suffix as sbatch's --mem does.
@@ -192,7 +193,7 @@ pub fn slurm_limit(get: impl Fn(&str) -> Option<String>) -> Option<u64> {
 }
 
 /// A `Key:   N kB` line of /proc/meminfo, in bytes.
-pub fn meminfo_field(text: &str, key: &str) -> Option<u64> {
+pub(crate) fn meminfo_field(text: &str, key: &str) -> Option<u64> {
     let line = text.lines().find(|l| l.starts_with(key))?;
     let kib: u64 = line[key.len()..].split_whitespace().next()?.parse().ok()?;
     kib.checked_mul(1024)
