@@ -40,7 +40,7 @@ const NEIGHBOUR_SAMPLES: usize = 4096;
 /// the mean falls 27.4 → 11.7 → 9.5 → 5.7 → 2.2 at scales 1, 0.75, 0.7, 0.6, 0.5 while the
 /// triangles go 87 310 → 91 218 → 78 250 → 26 423 → 212: below 10 the sums of weights between
 /// particles fall under the node threshold, cells are discarded and the surface breaks up.
-pub const FEW_NEIGHBOURS: f64 = 10.0;
+pub(crate) const FEW_NEIGHBOURS: f64 = 10.0;
 
 /// An isosurface: its mesh (normals from ∇A, pointing to larger A), the extra attributes
 /// interpolated onto its vertices (named as `config.output.attributes`), and its figures.
@@ -53,7 +53,7 @@ pub struct Isosurface {
     /// Counts and times.
     pub stats: IsoStats,
     /// Signs that the settings do not fit the particles, in words, for the caller to show:
-    /// a kernel scale that leaves fewer than [`FEW_NEIGHBOURS`] particles in a support.
+    /// a kernel scale that leaves fewer than 10 particles in a support.
     pub warnings: Vec<String>,
 }
 
