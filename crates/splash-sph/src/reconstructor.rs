@@ -56,6 +56,9 @@ impl Reconstructor {
     /// This reconstructor, running `baseline` instead of its engine: the surface-following
     /// Marching Cubes that Rosenberg & Birdwell 2008 compare Marching Slices with (Fig. 7),
     /// which give the slices engine's mesh with other data structures (`splash bench slices`).
+    // Hidden: only `splash bench slices` runs the baselines, whose engines stay inside the
+    // library (they share its field sampling); no part of the documented API.
+    #[doc(hidden)]
     pub fn with_baseline(mut self, baseline: Baseline) -> Reconstructor {
         self.params.baseline = Some(baseline);
         self

@@ -70,6 +70,8 @@ pub struct Config {
 }
 
 /// A baseline of Fig. 7 of Rosenberg & Birdwell 2008 (approach 1 is the slices engine).
+// Hidden with `Reconstructor::with_baseline`, for `splash bench slices` only.
+#[doc(hidden)]
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Baseline {
     /// Approach 2: surface-following Marching Cubes in blocks, each with its corners in 3D
