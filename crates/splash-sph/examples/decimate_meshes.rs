@@ -121,7 +121,10 @@ fn main() {
         args.iter()
             .find_map(|a| a.strip_prefix(name).map(str::to_string))
     };
-    let clip = option("--clip=").map(|text| splash_sph::parse_aabb(&text).unwrap());
+    let clip = option("--clip=").map(|text| {
+        let v: Vec<f32> = text.split(',').map(|x| x.trim().parse().unwrap()).collect();
+        <[f32; 6]>::try_from(v).expect("--clip= takes six numbers")
+    });
     let min_component: Option<f64> = option("--min-component=").map(|v| v.parse().unwrap());
     let args: Vec<&String> = args.iter().filter(|a| !a.starts_with("--")).collect();
     let spacing: f32 = args[0].parse().unwrap();

@@ -57,8 +57,7 @@ pub mod temporal;
 
 pub use bytes::Bytes;
 pub use config::{
-    ATTRIBUTES, BandConfig, Baseline, Config, Engine, Normals, OutputConfig, SlicesConfig,
-    SurfaceParticles, parse_aabb,
+    BandConfig, Baseline, Config, Engine, Normals, OutputConfig, SlicesConfig, SurfaceParticles,
 };
 pub use data::{Attribute, MeshFormat, Particles, TriMesh, UpAxis};
 pub use error::{Error, Result};

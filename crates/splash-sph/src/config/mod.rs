@@ -169,7 +169,7 @@ fn attribute_name_problem(name: &str) -> Option<String> {
 }
 
 /// Parses `--particle-aabb MINX,MINY,MINZ,MAXX,MAXY,MAXZ`.
-pub fn parse_aabb(text: &str) -> Result<[f32; 6]> {
+pub(crate) fn parse_aabb(text: &str) -> Result<[f32; 6]> {
     let values: Vec<&str> = text.split(',').map(str::trim).collect();
     let mut out = [0.0f32; 6];
     if values.len() != 6 {
@@ -189,10 +189,6 @@ pub fn parse_aabb(text: &str) -> Result<[f32; 6]> {
     }
     Ok(out)
 }
-
-/// The vertex attribute every particle format can name (any particle attribute can be asked
-/// for: see [`OutputConfig::attributes`]).
-pub const ATTRIBUTES: [&str; 1] = ["velocity"];
 
 impl OutputConfig {
     /// Whether the velocities are asked for.
