@@ -64,7 +64,7 @@ pub struct FrameParticles<'a> {
 
 /// The [`surface`] of frame t (`frames[1]`) moved towards the surfaces of frames t−1 and t+1
 /// (`frames[0]`, `frames[2]`) carried to its time by the particles matched by id
-/// ([`follow_fluid`], what `post.temporal` does in a sequence), with `attributes` (one value
+/// (what `post.temporal` does in a sequence; see [`Followed`]), with `attributes` (one value
 /// per particle of frame t) interpolated onto the moved vertices. The three frames are
 /// reconstructed alike (so about three times the work of [`surface`]); `observer` measures
 /// frame t's stages. Particles of frame t missing from a neighbour do not carry it. With

@@ -1,14 +1,5 @@
-//! Surfaces that follow the fluid from frame to frame (issue 38): each vertex of frame t's mesh
-//! is moved along its normal to the binomial mean [1, 2, 1]/4 of where the surfaces of frames
-//! t−1, t and t+1 lie once carried to time t by the fluid's own motion (the kernel mean of the
-//! particles' displacements around the vertex, [`mean_motion`]). Where the fluid carries the
-//! surface as it moves, the neighbours agree with frame t and nothing moves; what jumps at one
-//! frame alone is shared with its neighbours, a low-pass in time along the flow (the explicit
-//! surfaces of Yu, Wojtan, Turk & Yap 2012 follow the fluid in the same sense). A neighbour
-//! farther than `reach` from the carried vertex (a topology change, a droplet that left) weighs
-//! less, smoothly down to nothing at the reach, so that no surface is pulled towards another.
-//! Where faces cross after all, their vertices and a ring around them keep their own frame's
-//! places.
+//! Surfaces that follow the fluid from frame to frame (issue 38): [`follow_fluid`], by the
+//! method [`Followed`] describes.
 
 use glam::Vec3;
 use rayon::prelude::*;
@@ -27,7 +18,19 @@ pub struct Neighbour<'a> {
     pub displacements: &'a [Option<Vec3>],
 }
 
-/// What [`follow_fluid`] did.
+/// What following the fluid did to a frame's surface (`post.temporal` in a sequence,
+/// [`surface_following`](crate::pipeline::surface_following) for frames in memory).
+///
+/// Each vertex of frame t's mesh is moved along its normal to the binomial mean [1, 2, 1]/4
+/// of where the surfaces of frames t−1, t and t+1 lie once carried to time t by the fluid's
+/// own motion (the kernel mean of the particles' displacements around the vertex, support 2r).
+/// Where the fluid carries the surface as it moves, the neighbours agree with frame t and
+/// nothing moves; what jumps at one frame alone is shared with its neighbours, a low-pass in
+/// time along the flow (the explicit surfaces of Yu, Wojtan, Turk & Yap 2012 follow the fluid
+/// in the same sense). A neighbour's surface weighs less the farther it lies from the carried
+/// vertex, smoothly down to nothing at r (a topology change, a droplet that left), so that no
+/// surface is pulled towards another. Where faces cross after all, their vertices and a ring around them
+/// keep their own frame's places.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct Followed {
     /// Vertices moved.
@@ -39,7 +42,7 @@ pub struct Followed {
 }
 
 /// Moves the vertices of `mesh` (frame t, with `particles` its particles) towards the surfaces
-/// of `neighbours` (frames t−1 and t+1) carried to time t, as in the module's header, and
+/// of `neighbours` (frames t−1 and t+1) carried to time t, as [`Followed`] says, and
 /// recomputes its normals when it has them. `spacing`: r; the motion's kernel has support 2r,
 /// the neighbours count within `reach`.
 pub fn follow_fluid(

@@ -1,12 +1,14 @@
-//! Sequences over time (issue 38): the fluid's motion between frames ([`motion`]), surfaces
-//! that follow it from frame to frame ([`filter`]), and the jitter of a sequence of surfaces
-//! measured against it ([`jitter`]).
+//! Sequences over time (issue 38): the fluid's motion between frames ([`FrameMotion`]), surfaces
+//! that follow it from frame to frame (`post.temporal` in a sequence, and
+//! [`surface_following`](crate::pipeline::surface_following): [`Followed`]), and the jitter of a
+//! sequence of surfaces measured against it ([`frame_jitter`]).
 
-pub mod filter;
-pub mod jitter;
-pub mod motion;
+mod filter;
+mod jitter;
+mod motion;
 
-pub use filter::{Followed, Neighbour, follow_fluid};
+pub use filter::Followed;
+pub(crate) use filter::{Neighbour, follow_fluid};
 
 pub use jitter::{Jitter, Window, frame_jitter};
-pub use motion::{FrameMotion, mean_motion};
+pub use motion::FrameMotion;
