@@ -1,8 +1,8 @@
 //! Frame sequences as simulators write them and farms split them: a frame's number is the last
 //! run of digits in its file stem (`frame_0042.ply` → 42), frames run in number order.
 //!
-//! - [`select`]: which particle files a run covers, from files, directories and globs;
-//! - [`FrameSet`]: the numbers a run keeps (`1-10,20,30-40x5`);
+//! - [`select`]: which particle files a run covers, from files, directories and globs, and
+//!   the frame numbers it keeps (`1-10,20,30-40x5`);
 //! - [`Shard`]: job K of N takes every N-th selected frame;
 //! - [`Output`]: where each frame's result goes (a directory, a pattern, beside the input).
 
@@ -13,9 +13,9 @@ mod shard;
 
 use std::path::{Path, PathBuf};
 
-pub use discovery::{Discovered, Selection, discover, select};
-pub use naming::{FRAME_DIGITS, Output, output_paths, same_file};
-pub use set::FrameSet;
+pub use discovery::{Selection, select};
+pub use naming::{Output, output_paths};
+pub(crate) use set::FrameSet;
 pub use shard::Shard;
 
 /// The last run of digits in a file stem: `frame_0042` → 42.
@@ -33,7 +33,8 @@ fn last_digits(s: &str) -> Option<(usize, usize)> {
     Some((start, end))
 }
 
-/// The frame number of a path, from its file stem ([`input_stem`]).
+/// The frame number of a path, from its file stem (its file name without the particle
+/// extension, `.bgeo.gz` and `.bgeo.sc` included).
 pub fn path_frame_number(path: &Path) -> Option<u64> {
     frame_number(&input_stem(path)?)
 }
@@ -43,7 +44,7 @@ const DOUBLE_EXTENSIONS: [&str; 2] = [".bgeo.gz", ".bgeo.sc"];
 
 /// The file name without its particle extension, the double ones (`.bgeo.gz`, `.bgeo.sc`)
 /// included: `f_7.ply` → `f_7`, `fluid.0042.bgeo.gz` → `fluid.0042`.
-pub fn input_stem(path: &Path) -> Option<String> {
+pub(crate) fn input_stem(path: &Path) -> Option<String> {
     let name = path.file_name()?.to_string_lossy();
     let lower = name.to_ascii_lowercase();
     for double in DOUBLE_EXTENSIONS {
@@ -67,7 +68,7 @@ fn input_extension(path: &Path) -> Option<String> {
 
 /// `stem` with its frame number zero-padded to at least `width` digits: `f_9` → `f_0009`.
 /// Longer numbers and stems without digits are returned unchanged.
-pub fn padded_stem(stem: &str, width: usize) -> String {
+pub(crate) fn padded_stem(stem: &str, width: usize) -> String {
     match last_digits(stem) {
         Some((start, end)) if end - start < width => {
             let digits = &stem[start..end];
@@ -78,7 +79,7 @@ pub fn padded_stem(stem: &str, width: usize) -> String {
 }
 
 /// Orders paths by frame number, numerically; paths without one go last; ties keep their order.
-pub fn sort_frames(paths: &mut [PathBuf]) {
+pub(crate) fn sort_frames(paths: &mut [PathBuf]) {
     paths.sort_by_key(|p| {
         let n = path_frame_number(p);
         (n.is_none(), n)

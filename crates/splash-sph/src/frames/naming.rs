@@ -10,15 +10,15 @@ use crate::io::MeshFormat;
 
 /// Frame numbers in directory output names are zero-padded to this many digits, as Blender's
 /// sequence importers expect (`fluid_0001.obj`).
-pub const FRAME_DIGITS: usize = 4;
+pub(crate) const FRAME_DIGITS: usize = 4;
 
 /// Where the results go.
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub enum Output {
     /// Beside each input, as `{stem}{suffix}.{ext}` (recon's suffix is `_surface`).
     BesideInput,
-    /// Into a directory, as `{stem}.{ext}`, the stem's frame number padded to
-    /// [`FRAME_DIGITS`] digits (`f_9.ply` → `f_0009.obj`).
+    /// Into a directory, as `{stem}.{ext}`, the stem's frame number padded to 4 digits
+    /// (`f_9.ply` → `f_0009.obj`).
     Directory(PathBuf),
     /// A file name with `{stem}` and/or `{frame}` (`{frame:04}` pads to 4 digits) replaced per
     /// frame; a plain name is allowed for a single input.
@@ -188,7 +188,7 @@ fn expand_pattern(pattern: &str, stem: &str) -> Result<String> {
 
 /// Whether `a` and `b` name one file: by their canonical paths where both exist (`./f.ply`
 /// and `f.ply`, links), else as written.
-pub fn same_file(a: &Path, b: &Path) -> bool {
+fn same_file(a: &Path, b: &Path) -> bool {
     match (a.canonicalize(), b.canonicalize()) {
         (Ok(a), Ok(b)) => a == b,
         _ => a == b,
