@@ -27,8 +27,8 @@
 //! (`.vdb`, [`write_vdb_file`], of a [`crate::level_set::LevelSet`]), atomically when written to a
 //! file with [`write_mesh_file`]. PLY, VTK and USD files can carry per-vertex attributes
 //! ([`VertexAttributes`]). [`read_mesh`] reads them back, but for POV-Ray's and USD's. A
-//! sequence of USD layers plays as one animated mesh through a stage of value clips
-//! ([`write_usd_stage`]).
+//! sequence of USD layers plays as one animated mesh through a stage of value clips, which a
+//! [`Batch`](crate::pipeline::Batch) writes after its frames.
 
 // The layout, for whoever adds a format. io/ is split by what flows through it, and a file that
 // reads or writes one format is named `<format>_read.rs` or `<format>_write.rs`, in the folder
@@ -63,10 +63,12 @@ mod text;
 #[doc(no_inline)]
 pub use crate::data::{Attribute, MeshFormat, Particles, UpAxis};
 pub use mesh::{
-    MeshFile, POV_OBJECT, USD_FRAMES_PER_SECOND, USD_PRIM, UsdClip, UsdFrame, VDB_LEAF_DIM,
-    VdbGrid, VdbLeaf, VdbNode, VdbTree, VdbValues, VertexAttributes, read_mesh, usd_stage_path,
-    usd_topology_path, vdb_node_origin, vdb_slot, write_mesh, write_mesh_file,
-    write_mesh_file_with, write_mesh_with, write_usd_file, write_usd_stage, write_vdb,
-    write_vdb_file,
+    MeshFile, POV_OBJECT, USD_PRIM, VDB_LEAF_DIM, VdbGrid, VdbLeaf, VdbNode, VdbTree, VdbValues,
+    VertexAttributes, read_mesh, write_mesh, write_mesh_file, write_mesh_file_with,
+    write_mesh_with, write_vdb, write_vdb_file,
+};
+pub(crate) use mesh::{
+    USD_FRAMES_PER_SECOND, UsdClip, UsdFrame, usd_stage_path, usd_topology_path, vdb_node_origin,
+    vdb_slot, write_usd_file, write_usd_stage,
 };
 pub use particles::{InputFormat, read_particles};

@@ -71,9 +71,10 @@ impl Batch {
         Ok(plan)
     }
 
-    /// The USD stage this run writes after its frames ([`io::usd_stage_path`] of the first
-    /// frame's layer), for USD output of a sequence: into a directory, by a pattern, or beside
-    /// the inputs, not into one named file.
+    /// The USD stage this run writes after its frames, for USD output of a sequence: into a
+    /// directory, by a pattern, or beside the inputs, not into one named file. It lies beside
+    /// the first frame's layer, named after it without its frame number
+    /// (`mesh/fluid_0001.usda` → `mesh/fluid.usda`).
     pub fn usd_stage(&self, outputs: &[PathBuf]) -> Option<PathBuf> {
         let one_file = matches!(&self.output, Output::Pattern(p) if !p.contains('{'));
         if self.format != MeshFormat::Usd || one_file {

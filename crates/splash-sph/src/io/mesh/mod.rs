@@ -28,14 +28,13 @@ use crate::data::{MeshFormat, TriMesh};
 use crate::error::Result;
 pub use pov_write::POV_OBJECT;
 pub use read::{MeshFile, read_mesh};
-pub use usd_stage_write::{
+pub(crate) use usd_stage_write::{
     USD_FRAMES_PER_SECOND, UsdClip, usd_stage_path, usd_topology_path, write_usd_stage,
 };
-pub use usd_write::{USD_PRIM, UsdFrame};
-pub use vdb_write::{
-    VDB_LEAF_DIM, VdbGrid, VdbLeaf, VdbNode, VdbTree, VdbValues, node_origin as vdb_node_origin,
-    slot as vdb_slot, write_vdb,
-};
+pub use usd_write::USD_PRIM;
+pub(crate) use usd_write::UsdFrame;
+pub use vdb_write::{VDB_LEAF_DIM, VdbGrid, VdbLeaf, VdbNode, VdbTree, VdbValues, write_vdb};
+pub(crate) use vdb_write::{node_origin as vdb_node_origin, slot as vdb_slot};
 pub use vertex_attributes::VertexAttributes;
 
 /// Writes `mesh` in `format`. `normals` must be empty or have one entry per vertex; without
@@ -91,7 +90,7 @@ pub fn write_mesh_with(
 /// Writes a USD layer of `mesh` placed in time and space by `frame` (its values sampled at
 /// the frame's time code, for a stage's value clips), whole or not at all, as
 /// [`write_mesh_file`] does.
-pub fn write_usd_file(
+pub(crate) fn write_usd_file(
     path: &Path,
     mesh: &TriMesh,
     attributes: &VertexAttributes,
