@@ -78,11 +78,6 @@ impl FramePipeline {
         })
     }
 
-    /// The spacing every frame uses: given, or estimated from the first frame with particles.
-    pub fn spacing(&self) -> Option<f32> {
-        self.spacing
-    }
-
     /// Without a spacing yet, estimates it from the first readable, non-empty frame of
     /// `earlier` (frames before this job's first one), as a run over the whole sequence would,
     /// so that every shard and every restart uses the same grid.
@@ -535,7 +530,7 @@ impl Writer {
 
 /// The attributes `names` (canonical spellings) of frame `input`, found through the alias
 /// table, in the order asked, each checked finite; the frame's other attributes are dropped.
-pub fn particle_attributes(
+pub(crate) fn particle_attributes(
     input: &Path,
     mut attributes: BTreeMap<String, Attribute>,
     names: &[String],

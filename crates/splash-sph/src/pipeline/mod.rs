@@ -42,7 +42,7 @@ mod run;
 mod surface;
 
 pub use batch::Batch;
-pub use frame::{FramePipeline, particle_attributes};
+pub(crate) use frame::FramePipeline;
 pub use plan::Plan;
 pub use run::{FrameOutcome, Progress, RunReport, run_plan};
 pub use surface::{FrameParticles, Surface, surface, surface_following};
