@@ -25,7 +25,7 @@ const ALIASES: &[(&str, &[&str])] = &[
 
 /// The canonical name of `name`: `v` and `vel` are `velocity`, `rho` is `density`; a name of
 /// no row comes back as it is.
-pub fn canonical(name: &str) -> &str {
+pub(crate) fn canonical(name: &str) -> &str {
     let name = name.trim();
     ALIASES
         .iter()
@@ -88,7 +88,10 @@ pub fn locate<'a>(
 
 /// Takes the attribute that `requested` names out of `attributes` (see [`locate`]), three
 /// components as one vector. None when the frame has none of these.
-pub fn take(attributes: &mut BTreeMap<String, Attribute>, requested: &str) -> Option<Attribute> {
+pub(crate) fn take(
+    attributes: &mut BTreeMap<String, Attribute>,
+    requested: &str,
+) -> Option<Attribute> {
     let names = attributes
         .iter()
         .map(|(k, a)| (k.as_str(), matches!(a, Attribute::Scalar(_))));
