@@ -25,7 +25,9 @@ use crate::length::{Length, positive};
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 pub struct Config {
-    /// Particle spacing r in world units; the CLI estimates it from the first frame when absent.
+    /// Particle spacing r in world units. A [`Reconstructor`](crate::Reconstructor) needs it; a
+    /// [`Batch`](crate::pipeline::Batch) without it estimates it from the first frame
+    /// ([`estimate_spacing`](crate::estimate_spacing)).
     pub spacing: Option<f32>,
     /// Marching Cubes cell edge length; at most 4r ([`validate`](Self::validate) refuses
     /// larger cells once the spacing is known).

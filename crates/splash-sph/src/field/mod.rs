@@ -1,6 +1,7 @@
 //! Scalar fields whose zero level set is the fluid surface, chosen and tuned by [`FieldConfig`]
-//! (the `[field]` table of a configuration). Every engine samples a field through one internal
-//! trait, and the Marching Cubes code never asks which one it is.
+//! (the `[field]` table of a configuration). Every engine samples whichever field is chosen the
+//! same way (value and analytic gradient at a point), and the Marching Cubes code never asks
+//! which one it is.
 
 pub(crate) mod anisotropic;
 pub(crate) mod blobby;

@@ -207,8 +207,8 @@ pub struct FrameStats {
     pub heap_peak: usize,
     /// Peak heap per stage, from the observer.
     pub stage_heap: StageHeap,
-    /// Peak resident set size of the process after the frame, set by callers that measure it
-    /// (the CLI: VmHWM), else 0.
+    /// Peak resident set size of the process after the frame (Linux's VmHWM), set by callers
+    /// that measure it, else 0.
     pub peak_rss: u64,
     /// Vertices per axis of the full grid: the particles' box widened by the support.
     pub grid: [u64; 3],
