@@ -684,7 +684,9 @@ mod tests {
         for degrees in [10.0, 20.0, 30.0, 45.0] {
             let mut mesh = torus(12, 8, 1.0, 0.3, 0.0);
             for (i, p) in mesh.vertices.iter_mut().enumerate() {
-                let h = |k: u32| (((i as u32 * 2654435761) ^ k).wrapping_mul(40503) % 1000) as f32;
+                let h = |k: u32| {
+                    (((i as u32).wrapping_mul(2654435761) ^ k).wrapping_mul(40503) % 1000) as f32
+                };
                 *p += 0.00004 * Vec3::new(h(1), h(2), h(3));
             }
             let before = mesh.triangles.len();
