@@ -68,7 +68,7 @@ pub use mesh::{
     write_mesh_with, write_vdb, write_vdb_file,
 };
 pub(crate) use mesh::{
-    USD_FRAMES_PER_SECOND, UsdClip, UsdFrame, usd_stage_path, usd_topology_path, vdb_node_origin,
-    vdb_slot, write_usd_file, write_usd_stage,
+    USD_FRAMES_PER_SECOND, UsdClip, UsdFrame, usd_stage_path, usd_topology_path, vdb_file_order,
+    vdb_node_origin, vdb_slot, write_usd_file, write_usd_stage,
 };
 pub use particles::{InputFormat, read_particles};

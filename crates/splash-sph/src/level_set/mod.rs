@@ -3,29 +3,31 @@
 //! [`HALF_WIDTH_VOXELS`] voxels on either side, stored as OpenVDB stores it ([`VdbTree`]):
 //! 8³ leaves only where the band is, so that memory follows the surface, not the volume.
 //!
-//! The distances are the mesh's own: the nearest point of the nearest triangle (Ericson), signed
-//! by angle-weighted pseudonormals (as [`SignedDistance`](crate::mesh::SignedDistance) signs
-//! them). Each triangle offers its distance to the voxels within about a voxel of it, which
-//! keep the least, and are signed by the triangles around their nearest one. Farther out, as in
-//! OpenVDB's `meshToVolume`, each voxel starts from the triangles nearest to its six neighbours,
-//! layer after layer, steps to nearer ones across edges and corners, and takes its sign from
-//! them: a voxel more than a voxel from the surface has the sign of its neighbours, as the
-//! surface cannot pass between them. Inactive voxels and tiles carry ±background by the sign of
-//! the region they lie in (see `tiles.rs`).
+//! The distances are the mesh's own, exact: each triangle offers the nearest point of itself
+//! (Ericson) to the voxels of its face's prism and of the wedges and cones of the edges and
+//! corners it owns, and each voxel keeps the least (`scan.rs`, Mauch's characteristic
+//! polyhedra). They are signed by the nearest triangle's normal where the normals around it are
+//! close enough for that to be right (`cones.rs`), else by the angle-weighted pseudonormals of
+//! the triangles around it (as [`SignedDistance`](crate::mesh::SignedDistance) signs them). A
+//! leaf's voxels beyond the band take the sign of their neighbours, which the surface cannot
+//! pass between; inactive tiles carry ±background by the sign of the region they lie in (see
+//! `tiles.rs`).
 
+mod cones;
+mod scan;
 mod tiles;
 
 use glam::{IVec3, Vec3};
 use rayon::prelude::*;
-use rustc_hash::{FxHashMap, FxHashSet};
 
 use std::path::Path;
-use std::sync::atomic::{AtomicU64, Ordering};
 
 use crate::data::{Attribute, TriMesh};
 use crate::error::Result;
 use crate::io::{self, VdbGrid, VdbLeaf, VdbTree, VdbValues};
-use crate::mesh::signed_distance::{signed_distance_among, triangle_distance};
+use crate::mesh::signed_distance::{nearest_on_triangle, signed_distance_among};
+use cones::{Cones, face_normal};
+use scan::Work;
 
 /// The level set's grid in a `.vdb` file.
 pub const SURFACE_GRID: &str = "surface";
@@ -33,17 +35,6 @@ pub const SURFACE_GRID: &str = "surface";
 /// The narrow band's half width in voxels (OpenVDB's `LEVEL_SET_HALF_WIDTH`).
 pub const HALF_WIDTH_VOXELS: f32 = 3.0;
 
-/// Seeds are queried within this many voxels of a triangle: more than one, so that a voxel
-/// left to its neighbours lies more than a voxel from the surface and shares their sign.
-const SEED_VOXELS: f32 = 1.05;
-
-/// Layers of neighbours after the seeds: enough to cross the band's remaining
-/// `HALF_WIDTH_VOXELS − SEED_VOXELS` voxels along the axes' staircase (√3 times longer).
-const LAYERS: usize = 4;
-
-/// Steps at most from a neighbour's nearest triangle to a nearer one around its corners: the
-/// nearest triangle moves along the surface from voxel to voxel, a triangle or two per voxel.
-const DESCENT: usize = 8;
 /// The six face neighbours of a voxel.
 const STEPS: [IVec3; 6] = [
     IVec3::X,
@@ -98,40 +89,6 @@ pub struct LevelSet {
     pub values: Vec<f32>,
 }
 
-/// A leaf being computed: each voxel's distance and nearest triangle, packed as the distance's
-/// bits over the triangle's index (so that, while distances are unsigned, the least is the
-/// nearest); `u64::MAX` until known.
-struct Work([AtomicU64; 512]);
-
-impl Work {
-    fn new() -> Work {
-        Work([const { AtomicU64::new(u64::MAX) }; 512])
-    }
-
-    fn get(&self, n: usize) -> Option<(f32, u32)> {
-        let packed = self.0[n].load(Ordering::Relaxed);
-        (packed != u64::MAX).then(|| (f32::from_bits((packed >> 32) as u32), packed as u32))
-    }
-
-    fn set(&self, n: usize, d: f32, t: u32) {
-        self.0[n].store(pack(d, t), Ordering::Relaxed);
-    }
-
-    /// Keeps the nearer of what voxel `n` has and `d` (unsigned) to triangle `t`.
-    fn offer(&self, n: usize, d: f32, t: u32) {
-        self.0[n].fetch_min(pack(d, t), Ordering::Relaxed);
-    }
-
-    /// Each voxel's signed distance, NaN where unknown.
-    fn distances(&self) -> [f32; 512] {
-        std::array::from_fn(|n| self.get(n).map_or(f32::NAN, |(d, _)| d))
-    }
-}
-
-fn pack(d: f32, t: u32) -> u64 {
-    (u64::from(d.to_bits()) << 32) | u64::from(t)
-}
-
 impl LevelSet {
     /// The level set of `mesh` (closed, wound counter-clockwise from outside) on voxels of
     /// edge `voxel`. Errors for a voxel that is not a positive number, a triangle naming a
@@ -152,59 +109,24 @@ impl LevelSet {
             bail_input!("mesh vertex {v} is not finite: {}", mesh.vertices[v]);
         }
         let half_width = HALF_WIDTH_VOXELS * voxel;
-        let (origins, work) = seeds(mesh, voxel, half_width);
-        let index: FxHashMap<[i32; 3], usize> =
-            origins.iter().enumerate().map(|(i, &o)| (o, i)).collect();
+        let cones = Cones::new(mesh);
         let fans = Fans::new(mesh);
-        let near = Near { mesh, fans: &fans };
-        // The seeds' signs, from the pseudonormals of the triangles around their nearest one.
-        origins.par_iter().zip(&work).for_each(|(&origin, w)| {
-            for n in 0..512 {
-                if let Some((_, t)) = w.get(n) {
-                    let p = position(origin, n, voxel);
-                    let around = mesh.triangles[t as usize]
-                        .into_iter()
-                        .flat_map(|v| fans.around(v));
-                    let d =
-                        signed_distance_among(p, around.copied(), &mesh.vertices, &mesh.triangles)
-                            .expect("a triangle around its own corners");
-                    w.set(n, d, t);
-                }
-            }
-        });
-        for _ in 0..LAYERS {
-            let found: Vec<Vec<(usize, f32, u32)>> = origins
-                .par_iter()
-                .enumerate()
-                .map(|(i, &origin)| grow(i, origin, &index, &work, &near, voxel))
-                .collect();
-            if found.iter().all(Vec::is_empty) {
-                break;
-            }
-            for (w, found) in work.iter().zip(found) {
-                for (n, d, t) in found {
-                    w.set(n, d, t);
-                }
-            }
-        }
-        let leaves: Vec<(VdbLeaf, Vec<f32>)> = origins
+        let band = scan::band(mesh, &cones, &fans, voxel, half_width);
+        let signs = Signs {
+            mesh,
+            cones: &cones,
+            fans: &fans,
+        };
+        // In the file's order, as the band's leaves are.
+        let (leaves, values): (Vec<VdbLeaf>, Vec<Vec<f32>>) = band
+            .origins
             .par_iter()
-            .zip(work)
-            .filter_map(|(&origin, w)| leaf(origin, &w.distances(), half_width))
-            .collect();
-        let mut values_of: FxHashMap<[i32; 3], Vec<f32>> = FxHashMap::default();
-        let mut plain = Vec::with_capacity(leaves.len());
-        for (l, v) in leaves {
-            values_of.insert(l.origin, v);
-            plain.push(l);
-        }
-        let mut tree = VdbTree::new(plain);
+            .zip(band.leaves)
+            .filter_map(|(&origin, work)| leaf(origin, &*work.into_inner()?, &signs, voxel))
+            .unzip();
+        let mut tree = VdbTree::new(leaves);
         tiles::fill_signs(&mut tree);
-        let values = tree
-            .leaves
-            .iter()
-            .flat_map(|l| values_of.remove(&l.origin).unwrap_or_default())
-            .collect();
+        let values = values.concat();
         Ok(LevelSet {
             voxel,
             half_width,
@@ -265,185 +187,42 @@ impl LevelSet {
     }
 }
 
-/// The leaves within the band of some triangle (every triangle's box grown by `half_width`),
-/// sorted, with the unsigned distance to the nearest triangle and that triangle at every voxel
-/// within [`SEED_VOXELS`] of one: each triangle offers its distance to the voxels of its box
-/// grown by that much, and each voxel keeps the least.
-fn seeds(mesh: &TriMesh, voxel: f32, half_width: f32) -> (Vec<[i32; 3]>, Vec<Work>) {
-    let boxes = |grow: f32| {
-        mesh.triangles
-            .par_iter()
-            .enumerate()
-            .filter_map(move |(i, t)| {
-                let [a, b, c] = t.map(|i| mesh.vertices[i as usize]);
-                let lo = ((a.min(b).min(c) - grow) / voxel).ceil();
-                let hi = ((a.max(b).max(c) + grow) / voxel).floor();
-                // Voxel indices are i32 (OpenVDB's Coord); farther triangles have no voxels.
-                let fits = |v: Vec3| v.abs().max_element() < (i32::MAX - 16) as f32;
-                (fits(lo) && fits(hi)).then(|| (i as u32, lo.as_ivec3(), hi.as_ivec3()))
-            })
-    };
-    let leaves: FxHashSet<[i32; 3]> = boxes(half_width)
-        .fold(
-            FxHashSet::default,
-            |mut set, (_, lo, hi): (u32, IVec3, IVec3)| {
-                set.extend(cells_between(lo >> 3i32, hi >> 3i32).map(|l| (l << 3i32).to_array()));
-                set
-            },
-        )
-        .reduce(FxHashSet::default, |a, b| {
-            let (small, mut large) = if a.len() < b.len() { (a, b) } else { (b, a) };
-            large.extend(small);
-            large
-        });
-    let mut origins: Vec<[i32; 3]> = leaves.into_iter().collect();
-    origins.par_sort_unstable();
-    let index: FxHashMap<[i32; 3], usize> =
-        origins.iter().enumerate().map(|(i, &o)| (o, i)).collect();
-    let work: Vec<Work> = (0..origins.len()).map(|_| Work::new()).collect();
-    let reach = SEED_VOXELS * voxel;
-    boxes(reach).for_each(|(t, lo, hi): (u32, IVec3, IVec3)| {
-        let tri = mesh.triangles[t as usize];
-        let [a, b, c] = tri.map(|i| mesh.vertices[i as usize]);
-        // Only voxels near the triangle's plane can be near the triangle.
-        let normal = (b - a).cross(c - a).normalize_or_zero();
-        // Leaf by leaf (a box meets one or two), the box's voxels in each.
-        for leaf in cells_between(lo >> 3i32, hi >> 3i32) {
-            let origin = leaf << 3i32;
-            let Some(&i) = index.get(&origin.to_array()) else {
-                continue;
-            };
-            for v in cells_between(lo.max(origin), hi.min(origin + 7)) {
-                let p = v.as_vec3() * voxel;
-                if (p - a).dot(normal).abs() > reach {
-                    continue;
-                }
-                let d = triangle_distance(p, tri, &mesh.vertices);
-                if d <= reach {
-                    work[i].offer(voxel_bit(v), d, t);
-                }
-            }
-        }
-    });
-    (origins, work)
-}
-
-/// What finds a voxel's nearest triangle from its neighbours'.
-struct Near<'a> {
+/// What signs a voxel's distance from its nearest triangle.
+struct Signs<'a> {
     mesh: &'a TriMesh,
+    cones: &'a Cones,
     fans: &'a Fans,
 }
 
-impl Near<'_> {
-    /// From triangle `t` at distance `d` from `p`, the nearest triangle reached by stepping to
-    /// a nearer one across an edge, then (where the nearest point is a corner, which edges can
-    /// walk around without getting nearer) to one around a corner; and its distance.
-    fn descend(&self, p: Vec3, mut t: u32, mut d: f32) -> (f32, u32) {
-        let triangles = &self.mesh.triangles;
-        let mut corners = true;
-        for _ in 0..DESCENT {
-            let tri = triangles[t as usize];
-            let mut best = (d, t);
-            let offer = |u: u32, best: &mut (f32, u32)| {
-                let e = triangle_distance(p, triangles[u as usize], &self.mesh.vertices);
-                if e < best.0 || (e == best.0 && u < best.1) {
-                    *best = (e, u);
-                }
-            };
-            for k in 0..3 {
-                let (a, b) = (tri[k], tri[(k + 1) % 3]);
-                // The triangles across edge ab: those around a that also have b.
-                let across = self
-                    .fans
-                    .around(a)
-                    .iter()
-                    .filter(|&&u| u != t && triangles[u as usize].contains(&b));
-                across.for_each(|&u| offer(u, &mut best));
-            }
-            if best.1 == t && corners {
-                corners = false;
-                for &v in &tri {
-                    self.fans
-                        .around(v)
-                        .iter()
-                        .for_each(|&u| offer(u, &mut best));
-                }
-            }
-            if best.1 == t {
-                break;
-            }
-            (d, t) = best;
+impl Signs<'_> {
+    /// The distance `d` from `p` to the mesh, nearest to triangle `t`, signed: by `t`'s normal
+    /// where the cones are narrow at `t` (`cones.rs`: a point nearest to `t` then lies within
+    /// 90° of its normal on its own side), else by the pseudonormals of the triangles around `t`.
+    fn signed(&self, p: Vec3, d: f32, t: u32) -> f32 {
+        let (vertices, triangles) = (&self.mesh.vertices, &self.mesh.triangles);
+        let tri = triangles[t as usize];
+        let n = face_normal(&tri, vertices);
+        if n != Vec3::ZERO && self.cones.narrow(tri, n) {
+            let inside = (p - nearest_on_triangle(p, tri, vertices)).dot(n) < 0.0;
+            return if inside { -d } else { d };
         }
-        (d, t)
+        let around = tri.into_iter().flat_map(|v| self.fans.around(v));
+        signed_distance_among(p, around.copied(), vertices, triangles)
+            .expect("a triangle around its own corners")
     }
 }
 
-/// The unknown voxels of leaf `i` next to a known one within the band: each the nearest
-/// triangle reached from its known neighbours' nearest ones, with their sign.
-fn grow(
-    i: usize,
-    origin: [i32; 3],
-    index: &FxHashMap<[i32; 3], usize>,
-    work: &[Work],
-    near: &Near,
-    voxel: f32,
-) -> Vec<(usize, f32, u32)> {
-    let band = HALF_WIDTH_VOXELS * voxel;
-    let mut found = Vec::new();
-    let here = &work[i];
-    for n in 0..512 {
-        if here.get(n).is_some() {
-            continue;
-        }
-        let v = IVec3::from(origin) + offset(n);
-        let p = position(origin, n, voxel);
-        let mut best: Option<(f32, u32, bool)> = None;
-        let mut tried = [u32::MAX; 6];
-        for (k, step) in STEPS.into_iter().enumerate() {
-            let u = v + step;
-            let leaf = if (u & !7) == IVec3::from(origin) {
-                here
-            } else {
-                match index.get(&(u & !7).to_array()) {
-                    Some(&j) => &work[j],
-                    None => continue,
-                }
-            };
-            // A voxel beyond the band leads nowhere the band's nearer voxels do not.
-            let Some((d, t)) = leaf.get(voxel_bit(u)).filter(|(d, _)| d.abs() < band) else {
-                continue;
-            };
-            if tried[..k].contains(&t) {
-                continue;
-            }
-            tried[k] = t;
-            let e = triangle_distance(p, near.mesh.triangles[t as usize], &near.mesh.vertices);
-            if best.is_none_or(|(b, bt, _)| e < b || (e == b && t < bt)) {
-                best = Some((e, t, d < 0.0));
-            }
-        }
-        if let Some((e, t, inside)) = best {
-            let (e, t) = near.descend(p, t, e);
-            found.push((n, if inside { -e } else { e }, t));
-        }
-    }
-    found
-}
-
-/// The leaf at `origin` from its voxels' distances (NaN: unknown, beyond the band): active
-/// where within the band, the others signed by their known neighbours within the leaf; None
-/// when no voxel is active.
-fn leaf(origin: [i32; 3], distance: &[f32; 512], half_width: f32) -> Option<(VdbLeaf, Vec<f32>)> {
+/// The leaf at `origin` from its voxels' distances and nearest triangles: active within the
+/// band, the others signed by their neighbours within the leaf; None when no voxel is active.
+fn leaf(origin: [i32; 3], work: &Work, signs: &Signs, voxel: f32) -> Option<(VdbLeaf, Vec<f32>)> {
     let mut active = [0u64; 8];
     let mut values = Vec::new();
     // Signs: 1 outside, -1 inside, 0 unknown.
     let mut sign = [0i8; 512];
-    for (n, &d) in distance.iter().enumerate() {
-        if d.is_nan() {
-            continue;
-        }
-        sign[n] = if d < 0.0 { -1 } else { 1 };
-        if d.abs() < half_width {
+    for n in 0..512 {
+        if let Some((d, t)) = work.get(n) {
+            let d = signs.signed(position(origin, n, voxel), d, t);
+            sign[n] = if d < 0.0 { -1 } else { 1 };
             active[n >> 6] |= 1 << (n & 63);
             values.push(d);
         }
@@ -451,9 +230,10 @@ fn leaf(origin: [i32; 3], distance: &[f32; 512], half_width: f32) -> Option<(Vdb
     if values.is_empty() {
         return None;
     }
-    // Unknown voxels lie beyond the band, as do their known neighbours (by more than a voxel):
-    // a flood from the known ones within the leaf signs them all (the leaf is connected, so
-    // every unknown region borders a known voxel).
+    // Unknown voxels lie beyond the band, three voxels or more from the surface, which so
+    // passes between no unknown voxel and its neighbours: a flood from the known ones within
+    // the leaf signs them all (the leaf is connected, so every unknown region borders a known
+    // voxel).
     let mut queue: Vec<usize> = (0..512).filter(|&n| sign[n] != 0).collect();
     while let Some(n) = queue.pop() {
         let v = offset(n);
@@ -483,13 +263,6 @@ fn leaf(origin: [i32; 3], distance: &[f32; 512], half_width: f32) -> Option<(Vdb
         },
         values,
     ))
-}
-
-/// The points of the box from `lo` to `hi`, both included.
-fn cells_between(lo: IVec3, hi: IVec3) -> impl Iterator<Item = IVec3> {
-    (lo.x..=hi.x).flat_map(move |x| {
-        (lo.y..=hi.y).flat_map(move |y| (lo.z..=hi.z).map(move |z| IVec3::new(x, y, z)))
-    })
 }
 
 /// Bit `n` of a leaf's mask is voxel `(n >> 6, (n >> 3) & 7, n & 7)` from its origin.

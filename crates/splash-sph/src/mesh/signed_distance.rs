@@ -200,7 +200,12 @@ pub fn signed_distance_among(
 
 /// The unsigned distance from `p` to the triangle `tri` of `vertices`.
 pub fn triangle_distance(p: Vec3, tri: [u32; 3], vertices: &[Vec3]) -> f32 {
-    p.distance(closest_on_triangle(p, tri, vertices).0)
+    p.distance(nearest_on_triangle(p, tri, vertices))
+}
+
+/// The point of the triangle `tri` of `vertices` nearest to `p`.
+pub fn nearest_on_triangle(p: Vec3, tri: [u32; 3], vertices: &[Vec3]) -> Vec3 {
+    closest_on_triangle(p, tri, vertices).0
 }
 
 /// The distance of `best`, negative when `p` lies behind its pseudonormal.

@@ -34,7 +34,9 @@ pub(crate) use usd_stage_write::{
 pub use usd_write::USD_PRIM;
 pub(crate) use usd_write::UsdFrame;
 pub use vdb_write::{VDB_LEAF_DIM, VdbGrid, VdbLeaf, VdbNode, VdbTree, VdbValues, write_vdb};
-pub(crate) use vdb_write::{node_origin as vdb_node_origin, slot as vdb_slot};
+pub(crate) use vdb_write::{
+    file_order as vdb_file_order, node_origin as vdb_node_origin, slot as vdb_slot,
+};
 pub use vertex_attributes::VertexAttributes;
 
 /// Writes `mesh` in `format`. `normals` must be empty or have one entry per vertex; without

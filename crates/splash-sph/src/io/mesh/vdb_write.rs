@@ -184,7 +184,7 @@ pub fn slot(p: [i32; 3], child_log2: u32, log2: u32) -> usize {
 }
 
 /// A leaf's place in the file: its 32³ node's origin (the root's order), then its slots.
-fn file_order(origin: [i32; 3]) -> ([i32; 3], usize, usize) {
+pub(crate) fn file_order(origin: [i32; 3]) -> ([i32; 3], usize, usize) {
     (
         node_origin(origin, VOXELS_LOG2_NODE5),
         slot(origin, VOXELS_LOG2_NODE4, LOG2_NODE5),
