@@ -6,8 +6,9 @@
 //! triangle offers its exact distance to the voxels of its face's prism and of the wedges and
 //! cones of the edges and vertices it owns (the lowest-numbered triangle around each), and
 //! each voxel keeps the least: every voxel within the band gets its exact distance and nearest
-//! triangle, no other voxel gets any, and each voxel is visited about once (more only where
-//! the surface is concave).
+//! triangle, and no other voxel gets any. A voxel is visited once where one surface alone is
+//! within the band and smooth, more where it is concave or two sides are within the band of
+//! each other (4.1 times on average on cbd-large frame 23 at r/2, a splash of thin sheets).
 
 use std::sync::OnceLock;
 use std::sync::atomic::{AtomicU64, Ordering};
