@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Paired wall time and peak memory of splash against splashsurf (if one is on the PATH) on
 # particle frames, with the same parameters: density field, compact support 2r, iso 0.6,
-# normals on, binary PLY, the same thread count. Runs alternate (splash, splashsurf, splash,
+# normals on, binary PLY, the same thread count, and `--raw` for splash (splashsurf
+# post-processes nothing by default). Runs alternate (splash, splashsurf, splash,
 # …) so that a shared machine's drift hits both; the table gives medians over the runs and the
 # median of the per-pair ratios. Installs nothing.
 #
@@ -51,7 +52,7 @@ row() { # frame cell
         if (n == 2) k /= p[2]; print 2 * k }')
     for _ in $(seq "$runs"); do
         read -r a b < <(timed "$splash" recon "$f" --spacing "$spacing" --field density \
-            --cell "$cell" --normals field --threads "$threads" -o "$out/splash.ply" -q)
+            --cell "$cell" --normals field --raw --threads "$threads" -o "$out/splash.ply" -q)
         ss+=("$a"); sm+=("$b")
         if [ -n "$peer" ]; then
             read -r a b < <(timed "$peer" reconstruct "$f" -r "$(awk -v r="$spacing" 'BEGIN{print r/2}')" \
