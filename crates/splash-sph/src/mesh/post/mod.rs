@@ -417,14 +417,6 @@ fn smooth_and_restore(
     for _ in 0..config.volume_rounds {
         let scratch = measures.scratch(vertices.len());
         taubin(vertices, scratch, &rings, 1, lambda, mu);
-        normals_and_measures(
-            vertices,
-            triangles,
-            rings.faces(),
-            &components,
-            normals,
-            &mut measures,
-        );
         restore(
             vertices,
             normals,
@@ -470,14 +462,6 @@ fn smooth_and_restore(
         0.5,
     );
     let rings = rings.into_faces();
-    normals_and_measures(
-        vertices,
-        triangles,
-        &rings,
-        &components,
-        normals,
-        &mut measures,
-    );
     restore(
         vertices,
         normals,
@@ -491,7 +475,7 @@ fn smooth_and_restore(
         config.volume_steps,
         max_step,
     );
-    if wants_normals && config.volume_steps > 0 {
+    if wants_normals {
         normals_and_measures(
             vertices,
             triangles,
@@ -500,8 +484,7 @@ fn smooth_and_restore(
             normals,
             &mut measures,
         );
-    }
-    if !wants_normals {
+    } else {
         *normals = Vec::new();
     }
 }

@@ -365,10 +365,10 @@ fn crosses_above(q: DVec3, p: [DVec3; 3]) -> bool {
 
 /// Offsets each component (or, for [`VolumeScope::Frame`], the whole mesh) along its unit
 /// vertex normals by (target − volume)/area, the first-order change, at most `max_step` and
-/// as far as each vertex's `clearance` lets it, `steps` times; `normals` and `measures` must be
-/// those of `vertices` ([`normals_and_measures`]) and are recomputed between the steps but not
-/// after the last (the caller smooths again, or recomputes them once). The curvature's error of
-/// one step falls to a fraction of a percent after three. No targets: nothing to do.
+/// as far as each vertex's `clearance` lets it, `steps` times, `normals` and `measures`
+/// ([`normals_and_measures`]) made before each step but not after the last (the caller smooths
+/// again, or recomputes them once). The curvature's error of one step falls to a fraction of a
+/// percent after three. No targets: nothing to do.
 #[allow(clippy::too_many_arguments)]
 pub fn restore(
     vertices: &mut [Vec3],
@@ -386,10 +386,8 @@ pub fn restore(
     if targets.is_empty() {
         return;
     }
-    for step in 0..steps {
-        if step > 0 {
-            normals_and_measures(vertices, triangles, rings, components, normals, measures);
-        }
+    for _ in 0..steps {
+        normals_and_measures(vertices, triangles, rings, components, normals, measures);
         let offsets: Vec<f32> = first_order_offsets(&components.sums(measures), targets, scope)
             .into_iter()
             .map(|o| o.clamp(-max_step, max_step))
