@@ -98,42 +98,31 @@ fn follow(
     let frame_time = pipeline.frame_time();
     let followed = neighbour(at.checked_sub(1), "before").and_then(|before| {
         let after = neighbour(Some(at + 1), "after")?;
-        let moves = |other: &Prepared, steps| {
-            own.motion
-                .displacements(&other.motion, steps, frame_time)
-                .ok_or_else(|| {
-                    own.ids_warning.clone().unwrap_or_else(|| {
-                        "the particles have no ids (and post.frame_time is not set to carry \
-                         them by their velocities)"
-                            .to_string()
-                    })
-                })
-        };
-        let (back, ahead) = (moves(before, -1)?, moves(after, 1)?);
         let mut mesh = own.mesh.clone();
-        let neighbours = [
-            Neighbour {
-                mesh: &before.mesh,
-                displacements: &back,
-            },
-            Neighbour {
-                mesh: &after.mesh,
-                displacements: &ahead,
-            },
-        ];
+        let neighbours = [before, after].map(|p| Neighbour {
+            mesh: &p.mesh,
+            motion: &p.motion,
+        });
         pipeline
             .prepared_reconstructor()
             .install(|| {
                 follow_fluid(
                     &mut mesh,
-                    &own.motion.positions,
+                    &own.motion,
                     neighbours,
-                    spacing,
+                    frame_time,
                     spacing,
                     cell,
                 )
             })
-            .map_err(|e| e.to_string())?;
+            .map_err(|e| e.to_string())?
+            .ok_or_else(|| {
+                own.ids_warning.clone().unwrap_or_else(|| {
+                    "the particles have no ids (and post.frame_time is not set to carry them \
+                     by their velocities)"
+                        .to_string()
+                })
+            })?;
         Ok(mesh)
     });
     followed.unwrap_or_else(|why| {

@@ -94,38 +94,19 @@ pub fn surface_following(
     let mut mesh = rec.mesh;
     let mut followed = Followed::default();
     if !reconstructor.config().post.raw && !mesh.triangles.is_empty() {
-        let side = |k: usize| -> Result<(TriMesh, Vec<Option<Vec3>>)> {
-            let other = reconstructor
+        let side = |k: usize| -> Result<TriMesh> {
+            Ok(reconstructor
                 .reconstruct(&motions[k].positions)
-                .map_err(|e| e.context(format!("reconstruction of {} failed", NAMES[k])))?;
-            let steps = k as i32 - 1;
-            let moves = own
-                .displacements(&motions[k], steps, None)
-                .expect("both frames have ids");
-            Ok((other.mesh, moves))
+                .map_err(|e| e.context(format!("reconstruction of {} failed", NAMES[k])))?
+                .mesh)
         };
         let (before, after) = (side(0)?, side(2)?);
-        let neighbours = [
-            Neighbour {
-                mesh: &before.0,
-                displacements: &before.1,
-            },
-            Neighbour {
-                mesh: &after.0,
-                displacements: &after.1,
-            },
-        ];
+        let neighbours = [(&before, &motions[0]), (&after, &motions[2])]
+            .map(|(mesh, motion)| Neighbour { mesh, motion });
         let (spacing, cell) = (rec.stats.spacing, rec.stats.cell);
-        followed = reconstructor.install(|| {
-            follow_fluid(
-                &mut mesh,
-                &own.positions,
-                neighbours,
-                spacing,
-                spacing,
-                cell,
-            )
-        })?;
+        followed = reconstructor
+            .install(|| follow_fluid(&mut mesh, own, neighbours, None, spacing, cell))?
+            .expect("frames with ids carry their particles");
     }
     let start = Instant::now();
     let attributes = reconstructor.interpolate_all(&mesh, &own.positions, attributes)?;

@@ -4,18 +4,17 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::motion::mean_motion;
+use super::motion::{FrameMotion, mean_motion};
 use crate::error::Result;
 use crate::mesh::{SignedDistance, TriMesh, area_weighted_normals, self_intersecting_faces};
 
-/// Frame t's neighbours for [`follow_fluid`]: a neighbour's mesh and, per particle of frame t,
-/// its displacement to that frame (None where a particle has no match).
+/// Frame t's neighbours for [`follow_fluid`]: a neighbour frame's mesh and particles.
 #[derive(Debug, Clone, Copy)]
 pub struct Neighbour<'a> {
     /// The neighbour's mesh, post-processed as frame t's was.
     pub mesh: &'a TriMesh,
-    /// Per particle of frame t: its position in the neighbour frame minus at t.
-    pub displacements: &'a [Option<Vec3>],
+    /// The neighbour's particles, which frame t's are matched with.
+    pub motion: &'a FrameMotion,
 }
 
 /// What following the fluid did to a frame's surface (`post.temporal` in a sequence,
@@ -41,26 +40,34 @@ pub struct Followed {
     pub max: f32,
 }
 
-/// Moves the vertices of `mesh` (frame t, with `particles` its particles) towards the surfaces
-/// of `neighbours` (frames t−1 and t+1) carried to time t, as [`Followed`] says, and
+/// Moves the vertices of `mesh` (frame t, with `own` its particles) towards the surfaces of
+/// `neighbours` (frames t−1 and t+1) carried to time t by the displacements of `own`'s
+/// particles to each (matched by id, else velocity × `frame_time`), as [`Followed`] says, and
 /// recomputes its normals when it has them. `spacing`: r; the motion's kernel has support 2r,
-/// the neighbours count within `reach`.
+/// the neighbours count within r. None, with nothing moved, when the particles cannot be
+/// carried (no ids, and no velocities with a frame time).
 pub fn follow_fluid(
     mesh: &mut TriMesh,
-    particles: &[Vec3],
+    own: &FrameMotion,
     neighbours: [Neighbour<'_>; 2],
+    frame_time: Option<f32>,
     spacing: f32,
-    reach: f32,
     cell: f32,
-) -> Result<Followed> {
+) -> Result<Option<Followed>> {
+    let (Some(back), Some(ahead)) = (
+        own.displacements(neighbours[0].motion, -1, frame_time),
+        own.displacements(neighbours[1].motion, 1, frame_time),
+    ) else {
+        return Ok(None);
+    };
     if mesh.triangles.is_empty() {
-        return Ok(Followed::default());
+        return Ok(Some(Followed::default()));
     }
     let normals = area_weighted_normals(&mesh.vertices, &mesh.triangles);
-    let support = 2.0 * spacing;
+    let (support, reach) = (2.0 * spacing, spacing);
     let mut offsets = vec![0.0f32; mesh.vertices.len()];
-    for n in neighbours {
-        let carried = mean_motion(&mesh.vertices, particles, n.displacements, support, cell)?;
+    for (n, moves) in neighbours.iter().zip([&back, &ahead]) {
+        let carried = mean_motion(&mesh.vertices, &own.positions, moves, support, cell)?;
         let surface = SignedDistance::new(&n.mesh.vertices, &n.mesh.triangles, reach);
         offsets
             .par_iter_mut()
@@ -91,7 +98,7 @@ pub fn follow_fluid(
     if !mesh.normals.is_empty() {
         mesh.normals = area_weighted_normals(&mesh.vertices, &mesh.triangles);
     }
-    Ok(followed)
+    Ok(Some(followed))
 }
 
 /// Where following the neighbours made faces cross (two sheets pulled towards different
