@@ -220,17 +220,17 @@ def neighbour_frames(source, positions):
     steps = [b - a for a, b in zip(numbers, numbers[1:]) if b > a]
     if steps and max(numbers[i] - numbers[i - 1], numbers[i + 1] - numbers[i]) > min(steps):
         return "a gap in the frame numbers beside it"
-    splash_sph = vendor.splash_sph()
     frames = []
     for p in paths[i - 1 : i + 2]:
+        # Through the sequence's cache: frames rendered in order read each file once.
         try:
-            particles = splash_sph.read_particles(p)
-        except (ValueError, OSError) as e:
+            xyz, _, _, attributes, _ = sequence.read(p, particles=True)
+        except (sequence.SequenceError, OSError) as e:
             return f"cannot read '{os.path.basename(p)}': {e}"
-        if "id" not in particles:
+        if "id" not in attributes:
             return f"'{os.path.basename(p)}' has no particle ids"
-        xyz = np.ascontiguousarray(particles.positions, dtype=np.float32)
-        frames.append((xyz, particles["id"].astype(np.int64)))
+        ids = attributes["id"].astype(np.int64)
+        frames.append((np.ascontiguousarray(xyz, dtype=np.float32), ids))
     if not np.array_equal(frames[1][0], positions):
         return "the object's particles are not its file's"
     return frames
