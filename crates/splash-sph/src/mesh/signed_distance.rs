@@ -23,14 +23,14 @@ pub struct SignedDistance<'a> {
     shells: i32,
     /// Triangles by cell: a range of `binned` per non-empty cell.
     cells: FxHashMap<[i32; 3], (u32, u32)>,
-    binned: Vec<Binned>,
+    binned: Vec<u32>,
+    /// Per triangle, the sphere around it (centroid and radius) that lets a query pass it by
+    /// without finding its nearest point: kept once, not in every cell the triangle meets.
+    spheres: Vec<Sphere>,
 }
 
-/// A triangle in a bin, with the sphere around it (centroid and radius) that lets a query
-/// pass it by without finding its nearest point.
 #[derive(Debug, Clone, Copy)]
-struct Binned {
-    triangle: u32,
+struct Sphere {
     centre: Vec3,
     radius: f32,
 }
@@ -108,17 +108,17 @@ impl<'a> SignedDistance<'a> {
                 start = i + 1;
             }
         }
-        let binned = pairs
-            .into_par_iter()
-            .map(|(_, t)| {
-                let [a, b, c] = triangles[t as usize].map(|i| vertices[i as usize]);
+        let binned: Vec<u32> = pairs.into_iter().map(|(_, t)| t).collect();
+        let spheres = triangles
+            .par_iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|i| vertices[i as usize]);
                 let centre = (a + b + c) / 3.0;
                 let radius = centre
                     .distance(a)
                     .max(centre.distance(b))
                     .max(centre.distance(c));
-                Binned {
-                    triangle: t,
+                Sphere {
                     centre,
                     // A hair more, so that rounding never passes by the nearest triangle.
                     radius: radius * (1.0 + 1e-5),
@@ -133,6 +133,7 @@ impl<'a> SignedDistance<'a> {
             shells,
             cells,
             binned,
+            spheres,
         }
     }
 
@@ -157,8 +158,9 @@ impl<'a> SignedDistance<'a> {
                             continue;
                         }
                         if let Some(&(s, e)) = self.cells.get(&key.to_array()) {
-                            for b in &self.binned[s as usize..e as usize] {
+                            for &t in &self.binned[s as usize..e as usize] {
                                 if let Some(n) = &best {
+                                    let b = self.spheres[t as usize];
                                     let gap = p.distance(b.centre) - b.radius;
                                     if gap > 0.0
                                         && gap * gap > n.d2 * (1.0 + TIE) + f32::MIN_POSITIVE
@@ -166,7 +168,7 @@ impl<'a> SignedDistance<'a> {
                                         continue;
                                     }
                                 }
-                                let t = std::iter::once(b.triangle);
+                                let t = std::iter::once(t);
                                 nearest_in(p, t, self.vertices, self.triangles, &mut best);
                             }
                         }

@@ -141,7 +141,9 @@ fn repeated(ids: &[u32]) -> Option<u32> {
 }
 
 /// The cubic-spline mean (support `support`, Shepard-normalised) of the displacements
-/// `moves` of `particles` at every point (zero where no matched particle is within reach).
+/// `moves` of `particles` at every point; None where no matched particle is within reach (a
+/// vertex of a cavity's wall more than 2r from every particle: its motion is unknown, and
+/// taking it as zero would read the fluid's motion there as the surface's own).
 /// `cell`: the points' spacing, as for attribute interpolation.
 pub fn mean_motion(
     points: &[Vec3],
@@ -149,16 +151,28 @@ pub fn mean_motion(
     moves: &[Option<Vec3>],
     support: f32,
     cell: f32,
-) -> Result<Vec<Vec3>> {
+) -> Result<Vec<Option<Vec3>>> {
     let (at, moved): (Vec<Vec3>, Vec<Vec3>) = particles
         .iter()
         .zip(moves)
         .filter_map(|(p, m)| m.map(|m| (*p, m)))
         .unzip();
     let kernel = RadialKernel::CubicSpline { support };
-    let mut out = interpolate(points, &at, &[&Attribute::Vector(moved)], &kernel, cell)?;
-    match out.pop() {
-        Some(Attribute::Vector(v)) => Ok(v),
-        _ => unreachable!("one vector attribute in, one out"),
+    // The Shepard mean of ones is 1 wherever a particle weighs, 0 elsewhere.
+    let ones = Attribute::Scalar(vec![1.0; at.len()]);
+    let out = interpolate(
+        points,
+        &at,
+        &[&Attribute::Vector(moved), &ones],
+        &kernel,
+        cell,
+    )?;
+    match &out[..] {
+        [Attribute::Vector(v), Attribute::Scalar(w)] => Ok(v
+            .iter()
+            .zip(w)
+            .map(|(&v, &w)| (w > 0.5).then_some(v))
+            .collect()),
+        _ => unreachable!("one vector and one scalar attribute in, as many out"),
     }
 }
