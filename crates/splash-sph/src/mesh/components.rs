@@ -103,7 +103,7 @@ mod tests {
             spacing: Some(r),
             cell: Length::parse("r/2").unwrap(),
             // The field's exact isosurface, whose droplet is swollen (the default post-processing
-            // gives it r³: tests/post.rs).
+            // gives it r³: tests/post/shapes.rs).
             post: crate::mesh::post::PostConfig {
                 raw: true,
                 ..Default::default()

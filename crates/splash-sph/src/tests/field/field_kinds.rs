@@ -1,7 +1,7 @@
 //! Every kind of scalar field on shapes with known answers, and every preset in configs/.
 
-use super::common::reconstruct;
-use super::common::{field_params, fixture, lattice_ball, repository};
+use crate::tests::common::reconstruct;
+use crate::tests::common::{field_params, fixture, lattice_ball, repository};
 use crate::Engine;
 use crate::config::{Config, Normals, Params};
 use crate::field::FieldConfig;

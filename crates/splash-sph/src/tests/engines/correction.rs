@@ -3,7 +3,7 @@
 //! own says; it stays on its cube edge; the triangles, the engines' agreement and the
 //! independence of the thread count stay as they were.
 
-use super::common::{Jitter, field_params, fixture, lattice_ball, reconstruct, same_mesh};
+use crate::tests::common::{Jitter, field_params, fixture, lattice_ball, reconstruct, same_mesh};
 use crate::Engine;
 use crate::config::Params;
 use crate::mesh::TriMesh;

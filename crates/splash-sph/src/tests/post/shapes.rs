@@ -4,7 +4,7 @@
 
 use glam::Vec3;
 
-use super::common::{lattice_ball, shared_data, torus};
+use crate::tests::common::{lattice_ball, shared_data, torus};
 use crate::mesh::post::{PostConfig, Volumes, postprocess_mesh};
 use crate::mesh::topology::{component_volumes, normal_agreement, signed_volume, topology};
 use crate::mesh::{TriMesh, VolumeScope, self_intersecting_faces};

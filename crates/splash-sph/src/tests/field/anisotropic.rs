@@ -1,9 +1,9 @@
 //! The anisotropic kernels of Yu & Turk 2010 keep a thin, irregular sheet of particles as one
 //! sheet, where the isotropic kernel sums pinch it into beads or tear holes in it.
 
-use super::common::{Jitter, field_params};
+use crate::tests::common::{Jitter, field_params};
 
-use super::common::reconstruct;
+use crate::tests::common::reconstruct;
 use crate::Engine;
 use crate::mesh::TriMesh;
 use crate::mesh::topology::{Topology, topology};

@@ -1,7 +1,7 @@
 //! Field sampling (Sec. 4.1): the field gathered per brick equals a brute-force sum over all
 //! particles.
 
-use super::common::lattice_ball;
+use crate::tests::common::lattice_ball;
 use crate::field::ScalarField;
 use crate::field::ssp07::Ssp07;
 use crate::neighbours::handler_array::HandlerArray;

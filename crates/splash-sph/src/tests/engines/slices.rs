@@ -1,8 +1,8 @@
 //! The Marching Slices engine (Rosenberg & Birdwell 2008) gives the narrow band's mesh, for
 //! any block size and thread count, visits each cube once and keeps few slices.
 
-use super::common::reconstruct;
-use super::common::{field_params, fixture, lattice_ball, offsets, same_mesh, shared_data};
+use crate::tests::common::reconstruct;
+use crate::tests::common::{field_params, fixture, lattice_ball, offsets, same_mesh, shared_data};
 use crate::Engine;
 use crate::config::Params;
 use crate::mesh::TriMesh;
@@ -37,7 +37,7 @@ fn slices(ps: &[Vec3], p: &Params, threads: usize) -> (Reconstruction, SlicesRep
 
 /// The narrow band's mesh up to float rounding: the engines gather each corner's particles in
 /// another order and relative to another point, so field values differ in the last bits.
-/// As for the scatter engine (tests/engines.rs): every vertex within 1e-2 cells, 99% within
+/// As for the scatter engine (tests/engines/agreement.rs): every vertex within 1e-2 cells, 99% within
 /// 1e-4 cells, the same triangles on the matched vertices.
 fn assert_same_surface(a: &TriMesh, b: &TriMesh, cell: f32, what: &str) {
     same_mesh(a, b, 1e-2 * cell).unwrap_or_else(|e| panic!("{what}: {e}"));

@@ -2,7 +2,7 @@
 //! blocks with 3D arrays, and with hash maps) give the slices engine's mesh to the bit: the
 //! same vertices in the same order, normals, and triangles, in any thread count.
 
-use super::common::{field_params, fixture, shared_data};
+use crate::tests::common::{field_params, fixture, shared_data};
 use super::slices::sorted;
 use crate::config::Baseline;
 use crate::config::{Normals, Params};

@@ -13,7 +13,7 @@ use std::time::Instant;
 
 use glam::Vec3;
 
-use super::common::fixture;
+use crate::tests::common::fixture;
 use crate::mesh::adjacency::{Neighbours, VertexFaces};
 use crate::mesh::post::refinement::refine_bends;
 use crate::mesh::post::smoothing::{relax_tangentially, taubin};

@@ -1,8 +1,8 @@
 //! The narrow-band reconstructor against shapes with known answers, against the full grid, and
 //! on real frames.
 
-use super::common::reconstruct;
-use super::common::{fixture, lattice_ball, params, shared_data};
+use crate::tests::common::reconstruct;
+use crate::tests::common::{fixture, lattice_ball, params, shared_data};
 use crate::Engine;
 use crate::mesh::TriMesh;
 use crate::mesh::topology::{component_volumes, normal_agreement, signed_volume, topology};

@@ -7,7 +7,7 @@ use std::collections::BTreeMap;
 use glam::{IVec3, Vec3};
 use rustc_hash::FxHashSet;
 
-use super::common::{Jitter, fixture};
+use crate::tests::common::{Jitter, fixture};
 use crate::io::{Attribute, read_particles};
 use crate::iso::quantity::{Derived, IsoRequest, interpolant};
 use crate::iso::seed_cells::seed_cells;

@@ -270,7 +270,7 @@ fn a_broken_neighbour_degrades_its_neighbours_only() {
 /// cross (1,207 faces in 37 of the 40 frames before crossing faces were put back).
 #[test]
 fn following_real_frames_leaves_no_face_crossing() {
-    let Some(dir) = super::common::shared_data("dense-dambreak") else {
+    let Some(dir) = crate::tests::common::shared_data("dense-dambreak") else {
         return;
     };
     let inputs: Vec<PathBuf> = (120..=124)

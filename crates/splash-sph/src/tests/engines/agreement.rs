@@ -3,7 +3,7 @@
 
 use glam::Vec3;
 
-use super::common::{fixture, lattice_ball, offsets, params, reconstruct, same_mesh};
+use crate::tests::common::{fixture, lattice_ball, offsets, params, reconstruct, same_mesh};
 use crate::Engine;
 use crate::config::Params;
 

@@ -1,6 +1,6 @@
 //! Every field's analytic gradient against central differences of its value.
 
-use super::common::{Jitter, lattice_ball};
+use crate::tests::common::{Jitter, lattice_ball};
 use crate::field::{FieldConfig, ScalarField};
 use crate::neighbours::handler_array::HandlerArray;
 use crate::neighbours::neighbourhood::Neighbourhood;
