@@ -3,9 +3,9 @@
 
 use glam::Vec3;
 
-use crate::tests::common::{fixture, lattice_ball, offsets, params, reconstruct, same_mesh};
 use crate::Engine;
 use crate::config::Params;
+use crate::tests::common::{fixture, lattice_ball, offsets, params, reconstruct, same_mesh};
 
 const R: f32 = 0.01;
 

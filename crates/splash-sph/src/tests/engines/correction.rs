@@ -3,7 +3,6 @@
 //! own says; it stays on its cube edge; the triangles, the engines' agreement and the
 //! independence of the thread count stay as they were.
 
-use crate::tests::common::{Jitter, field_params, fixture, lattice_ball, reconstruct, same_mesh};
 use crate::Engine;
 use crate::config::Params;
 use crate::mesh::TriMesh;
@@ -12,6 +11,7 @@ use crate::neighbours::handler_array::HandlerArray;
 use crate::neighbours::neighbourhood::Neighbourhood;
 use crate::recon::stages::vertex_correction::edge_of;
 use crate::report::CorrectionFigures;
+use crate::tests::common::{Jitter, field_params, fixture, lattice_ball, reconstruct, same_mesh};
 use glam::Vec3;
 
 fn corrected(p: &Params, n: u32) -> Params {

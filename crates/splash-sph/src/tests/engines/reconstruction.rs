@@ -1,11 +1,11 @@
 //! The narrow-band reconstructor against shapes with known answers, against the full grid, and
 //! on real frames.
 
-use crate::tests::common::reconstruct;
-use crate::tests::common::{fixture, lattice_ball, params, shared_data};
 use crate::Engine;
 use crate::mesh::TriMesh;
 use crate::mesh::topology::{component_volumes, normal_agreement, signed_volume, topology};
+use crate::tests::common::reconstruct;
+use crate::tests::common::{fixture, lattice_ball, params, shared_data};
 use glam::Vec3;
 
 const R: f32 = 0.01;

@@ -1,8 +1,6 @@
 //! The Marching Slices engine (Rosenberg & Birdwell 2008) gives the narrow band's mesh, for
 //! any block size and thread count, visits each cube once and keeps few slices.
 
-use crate::tests::common::reconstruct;
-use crate::tests::common::{field_params, fixture, lattice_ball, offsets, same_mesh, shared_data};
 use crate::Engine;
 use crate::config::Params;
 use crate::mesh::TriMesh;
@@ -10,6 +8,8 @@ use crate::mesh::topology::{component_volumes, topology};
 use crate::recon::Reconstruction;
 use crate::recon::engines::marching_slices::{self, Checks, SlicesReport};
 use crate::report::{FrameStats, Stages};
+use crate::tests::common::reconstruct;
+use crate::tests::common::{field_params, fixture, lattice_ball, offsets, same_mesh, shared_data};
 use glam::Vec3;
 
 fn params(field: &str, cell: &str, r: f32, block: u32) -> Params {

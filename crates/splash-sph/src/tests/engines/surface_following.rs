@@ -2,11 +2,11 @@
 //! blocks with 3D arrays, and with hash maps) give the slices engine's mesh to the bit: the
 //! same vertices in the same order, normals, and triangles, in any thread count.
 
-use crate::tests::common::{field_params, fixture, shared_data};
 use super::slices::sorted;
 use crate::config::Baseline;
 use crate::config::{Normals, Params};
 use crate::recon::Reconstruction;
+use crate::tests::common::{field_params, fixture, shared_data};
 use crate::{Engine, Vec3};
 
 fn run(ps: &[Vec3], p: &Params, baseline: Option<Baseline>, threads: usize) -> Reconstruction {

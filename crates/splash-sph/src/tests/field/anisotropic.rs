@@ -3,10 +3,10 @@
 
 use crate::tests::common::{Jitter, field_params};
 
-use crate::tests::common::reconstruct;
 use crate::Engine;
 use crate::mesh::TriMesh;
 use crate::mesh::topology::{Topology, topology};
+use crate::tests::common::reconstruct;
 use glam::Vec3;
 
 const R: f32 = 0.01;

@@ -1,13 +1,13 @@
 //! Every kind of scalar field on shapes with known answers, and every preset in configs/.
 
-use crate::tests::common::reconstruct;
-use crate::tests::common::{field_params, fixture, lattice_ball, repository};
 use crate::Engine;
 use crate::config::{Config, Normals, Params};
 use crate::field::FieldConfig;
 use crate::length::Length;
 use crate::mesh::TriMesh;
 use crate::mesh::topology::{component_volumes, normal_agreement, topology};
+use crate::tests::common::reconstruct;
+use crate::tests::common::{field_params, fixture, lattice_ball, repository};
 use glam::Vec3;
 
 const R: f32 = 0.01;

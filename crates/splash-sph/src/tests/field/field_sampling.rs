@@ -1,13 +1,13 @@
 //! Field sampling (Sec. 4.1): the field gathered per brick equals a brute-force sum over all
 //! particles.
 
-use crate::tests::common::lattice_ball;
 use crate::field::ScalarField;
 use crate::field::ssp07::Ssp07;
 use crate::neighbours::handler_array::HandlerArray;
 use crate::neighbours::neighbourhood::Neighbourhood;
 use crate::recon::bricks::band::{BRICK, Band, local_index};
 use crate::recon::stages::field_sampling::{sample_field, vertex_position};
+use crate::tests::common::lattice_ball;
 use glam::{IVec3, Vec3};
 
 #[test]

@@ -1,9 +1,9 @@
 //! Every field's analytic gradient against central differences of its value.
 
-use crate::tests::common::{Jitter, lattice_ball};
 use crate::field::{FieldConfig, ScalarField};
 use crate::neighbours::handler_array::HandlerArray;
 use crate::neighbours::neighbourhood::Neighbourhood;
+use crate::tests::common::{Jitter, lattice_ball};
 use glam::Vec3;
 
 /// Spacing 1, so that values and gradients are of order 1 and f32 rounding stays far below the

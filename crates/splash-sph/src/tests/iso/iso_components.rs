@@ -7,7 +7,6 @@ use std::collections::BTreeMap;
 use glam::{IVec3, Vec3};
 use rustc_hash::FxHashSet;
 
-use crate::tests::common::{Jitter, fixture};
 use crate::io::{Attribute, read_particles};
 use crate::iso::quantity::{Derived, IsoRequest, interpolant};
 use crate::iso::seed_cells::seed_cells;
@@ -15,6 +14,7 @@ use crate::iso::sph_interpolant::Interpolant;
 use crate::iso::surface_following::{Following, case_of, follow};
 use crate::iso::virtual_grid::VirtualGrid;
 use crate::mesh::marching_cubes::corner_offset;
+use crate::tests::common::{Jitter, fixture};
 
 /// Crossed cells of the full grid over the particles' box widened by the support.
 fn full_grid(it: &Interpolant, grid: &VirtualGrid, run: &Following) -> FxHashSet<IVec3> {

@@ -13,12 +13,12 @@ use std::time::Instant;
 
 use glam::Vec3;
 
-use crate::tests::common::fixture;
 use crate::mesh::adjacency::{Neighbours, VertexFaces};
 use crate::mesh::post::refinement::refine_bends;
 use crate::mesh::post::smoothing::{relax_tangentially, taubin};
 use crate::mesh::post::volume::{Components, Measures, normals_and_measures, particles_inside};
 use crate::mesh::post::{PostConfig, postprocess};
+use crate::tests::common::fixture;
 use crate::{Config, Length, Reconstructor, read_particles};
 
 /// The process's CPU time, in ms.

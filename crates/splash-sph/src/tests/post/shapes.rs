@@ -4,10 +4,10 @@
 
 use glam::Vec3;
 
-use crate::tests::common::{lattice_ball, shared_data, torus};
 use crate::mesh::post::{PostConfig, Volumes, postprocess_mesh};
 use crate::mesh::topology::{component_volumes, normal_agreement, signed_volume, topology};
 use crate::mesh::{TriMesh, VolumeScope, self_intersecting_faces};
+use crate::tests::common::{lattice_ball, shared_data, torus};
 use crate::{Config, Length, Reconstructor};
 
 const R: f32 = 0.1;
