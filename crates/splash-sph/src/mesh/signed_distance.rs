@@ -8,15 +8,24 @@
 //! surface visits a few dozen triangles, and the structure grows with the surface, not the
 //! volume it encloses.
 
+use std::borrow::Cow;
+
 use glam::{IVec3, Vec3};
 use rayon::prelude::*;
 use rustc_hash::FxHashMap;
 
-/// A mesh prepared for signed-distance queries up to `reach` away.
+/// A mesh prepared for signed-distance queries up to `reach` away: its [`SurfaceBins`], built
+/// here or kept by the caller (a sequence keeps a frame's for both frames beside it).
 #[derive(Debug)]
 pub struct SignedDistance<'a> {
     vertices: &'a [Vec3],
     triangles: &'a [[u32; 3]],
+    bins: Cow<'a, SurfaceBins>,
+}
+
+/// The triangles of a mesh binned for [`SignedDistance`], without the mesh itself.
+#[derive(Debug, Clone)]
+pub struct SurfaceBins {
     reach: f32,
     /// The bins' edge, and how many shells of bins cover the reach.
     cell: f32,
@@ -24,15 +33,20 @@ pub struct SignedDistance<'a> {
     /// Triangles by cell: a range of `binned` per non-empty cell.
     cells: FxHashMap<[i32; 3], (u32, u32)>,
     binned: Vec<u32>,
-    /// Per triangle, the sphere around it (centroid and radius) that lets a query pass it by
-    /// without finding its nearest point: kept once, not in every cell the triangle meets.
-    spheres: Vec<Sphere>,
 }
 
-#[derive(Debug, Clone, Copy)]
-struct Sphere {
-    centre: Vec3,
-    radius: f32,
+/// The sphere around triangle `tri` (centroid and radius) that lets a query pass it by without
+/// finding its nearest point; made when wanted (a sequence keeps three frames' bins, and 16
+/// bytes a triangle would be half their size).
+fn sphere(tri: [u32; 3], vertices: &[Vec3]) -> (Vec3, f32) {
+    let [a, b, c] = tri.map(|i| vertices[i as usize]);
+    let centre = (a + b + c) / 3.0;
+    let radius = centre
+        .distance(a)
+        .max(centre.distance(b))
+        .max(centre.distance(c));
+    // A hair more, so that rounding never passes by the nearest triangle.
+    (centre, radius * (1.0 + 1e-5))
 }
 
 /// Which part of a triangle a point is nearest to.
@@ -59,6 +73,31 @@ struct Nearest {
 impl<'a> SignedDistance<'a> {
     /// Bins `triangles` (of `vertices`) for queries within `reach` (a positive length).
     pub fn new(vertices: &'a [Vec3], triangles: &'a [[u32; 3]], reach: f32) -> Self {
+        let bins = Cow::Owned(SurfaceBins::new(vertices, triangles, reach));
+        SignedDistance {
+            vertices,
+            triangles,
+            bins,
+        }
+    }
+
+    /// Queries on `vertices` and `triangles` with the `bins` made of them.
+    pub fn with_bins(
+        vertices: &'a [Vec3],
+        triangles: &'a [[u32; 3]],
+        bins: &'a SurfaceBins,
+    ) -> Self {
+        SignedDistance {
+            vertices,
+            triangles,
+            bins: Cow::Borrowed(bins),
+        }
+    }
+}
+
+impl SurfaceBins {
+    /// Bins `triangles` (of `vertices`) for queries within `reach` (a positive length).
+    pub fn new(vertices: &[Vec3], triangles: &[[u32; 3]], reach: f32) -> Self {
         // Bins about a triangle wide: a point near the surface then visits a few dozen.
         let edges: f64 = triangles
             .par_iter()
@@ -108,42 +147,28 @@ impl<'a> SignedDistance<'a> {
                 start = i + 1;
             }
         }
-        let binned: Vec<u32> = pairs.into_iter().map(|(_, t)| t).collect();
-        let spheres = triangles
-            .par_iter()
-            .map(|t| {
-                let [a, b, c] = t.map(|i| vertices[i as usize]);
-                let centre = (a + b + c) / 3.0;
-                let radius = centre
-                    .distance(a)
-                    .max(centre.distance(b))
-                    .max(centre.distance(c));
-                Sphere {
-                    centre,
-                    // A hair more, so that rounding never passes by the nearest triangle.
-                    radius: radius * (1.0 + 1e-5),
-                }
-            })
-            .collect();
-        SignedDistance {
-            vertices,
-            triangles,
+        // Collected afresh, not in place: in place would keep the pairs' four times larger buffer.
+        let binned: Vec<u32> = pairs.iter().map(|&(_, t)| t).collect();
+        drop(pairs);
+        SurfaceBins {
             reach,
             cell,
             shells,
             cells,
             binned,
-            spheres,
         }
     }
+}
 
+impl SignedDistance<'_> {
     /// The signed distance from `p` to the mesh (negative inside), or None when no triangle
     /// lies within the reach. The triangles are visited in a fixed order, so that the answer
     /// does not depend on the thread.
     pub fn at(&self, p: Vec3) -> Option<f32> {
-        let home = (p / self.cell).floor().as_ivec3();
+        let bins = &*self.bins;
+        let home = (p / bins.cell).floor().as_ivec3();
         let mut best: Option<Nearest> = None;
-        for shell in 0..=self.shells {
+        for shell in 0..=bins.shells {
             for dz in -shell..=shell {
                 for dy in -shell..=shell {
                     for dx in -shell..=shell {
@@ -152,16 +177,17 @@ impl<'a> SignedDistance<'a> {
                         }
                         let key = home + IVec3::new(dx, dy, dz);
                         // A cell whose box is farther than the nearest triangle holds no nearer one.
-                        let lo = key.as_vec3() * self.cell;
-                        let gap = (lo - p).max(p - (lo + self.cell)).max(Vec3::ZERO);
+                        let lo = key.as_vec3() * bins.cell;
+                        let gap = (lo - p).max(p - (lo + bins.cell)).max(Vec3::ZERO);
                         if best.is_some_and(|b| gap.length_squared() > b.d2 * (1.0 + TIE)) {
                             continue;
                         }
-                        if let Some(&(s, e)) = self.cells.get(&key.to_array()) {
-                            for &t in &self.binned[s as usize..e as usize] {
+                        if let Some(&(s, e)) = bins.cells.get(&key.to_array()) {
+                            for &t in &bins.binned[s as usize..e as usize] {
                                 if let Some(n) = &best {
-                                    let b = self.spheres[t as usize];
-                                    let gap = p.distance(b.centre) - b.radius;
+                                    let (centre, radius) =
+                                        sphere(self.triangles[t as usize], self.vertices);
+                                    let gap = p.distance(centre) - radius;
                                     if gap > 0.0
                                         && gap * gap > n.d2 * (1.0 + TIE) + f32::MIN_POSITIVE
                                     {
@@ -176,13 +202,13 @@ impl<'a> SignedDistance<'a> {
                 }
             }
             // Cells beyond this shell lie at least `shell` cells away.
-            let bound = shell as f32 * self.cell;
+            let bound = shell as f32 * bins.cell;
             if best.is_some_and(|b| b.d2 * (1.0 + TIE) < bound * bound) {
                 break;
             }
         }
         let b = best?;
-        (b.d2.sqrt() <= self.reach).then(|| signed(p, &b))
+        (b.d2.sqrt() <= bins.reach).then(|| signed(p, &b))
     }
 }
 

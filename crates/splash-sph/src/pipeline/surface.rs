@@ -13,7 +13,7 @@ use crate::io::Attribute;
 use crate::mesh::TriMesh;
 use crate::reconstructor::Reconstructor;
 use crate::report::{FrameStats, Observer};
-use crate::temporal::{Followed, FrameMotion, Neighbour, follow_fluid};
+use crate::temporal::{Followed, FrameMotion, Neighbour, follow_fluid, neighbour_bins};
 
 /// A frame's surface: its mesh, the attributes asked for (one value per vertex each, in the
 /// order asked), and its figures.
@@ -100,10 +100,14 @@ pub fn surface_following(
                 .map_err(|e| e.context(format!("reconstruction of {} failed", NAMES[k])))?
                 .mesh)
         };
-        let (before, after) = (side(0)?, side(2)?);
-        let neighbours = [(&before, &motions[0]), (&after, &motions[2])]
-            .map(|(mesh, motion)| Neighbour { mesh, motion });
         let (spacing, cell) = (rec.stats.spacing, rec.stats.cell);
+        let meshes = [side(0)?, side(2)?];
+        let bins = [&meshes[0], &meshes[1]].map(|m| neighbour_bins(m, spacing));
+        let neighbours = [0, 1].map(|k| Neighbour {
+            mesh: &meshes[k],
+            bins: &bins[k],
+            motion: &motions[2 * k],
+        });
         followed = reconstructor
             .install(|| follow_fluid(&mut mesh, own, neighbours, None, spacing, cell))?
             .expect("frames with ids carry their particles");

@@ -1,18 +1,24 @@
 //! Surfaces that follow the fluid from frame to frame (issue 38): [`follow_fluid`], by the
 //! method [`Followed`] describes.
 
-use glam::Vec3;
+use glam::{IVec3, Vec3};
 use rayon::prelude::*;
+use rustc_hash::FxHashMap;
 
-use super::motion::{FrameMotion, mean_motion};
+use super::motion::{FrameMotion, mean_motions};
 use crate::error::Result;
-use crate::mesh::{SignedDistance, TriMesh, area_weighted_normals, self_intersecting_faces};
+use crate::mesh::{
+    SignedDistance, SurfaceBins, TriMesh, area_weighted_normals, self_intersecting_faces,
+};
 
 /// Frame t's neighbours for [`follow_fluid`]: a neighbour frame's mesh and particles.
 #[derive(Debug, Clone, Copy)]
 pub struct Neighbour<'a> {
     /// The neighbour's mesh, post-processed as frame t's was.
     pub mesh: &'a TriMesh,
+    /// Its triangles binned by [`neighbour_bins`] (a sequence keeps them for both frames
+    /// beside it).
+    pub bins: &'a SurfaceBins,
     /// The neighbour's particles, which frame t's are matched with.
     pub motion: &'a FrameMotion,
 }
@@ -39,6 +45,11 @@ pub struct Followed {
     pub rms: f64,
     /// The largest move.
     pub max: f32,
+}
+
+/// A neighbour's mesh binned for [`follow_fluid`] at spacing `spacing` (r).
+pub fn neighbour_bins(mesh: &TriMesh, spacing: f32) -> SurfaceBins {
+    SurfaceBins::new(&mesh.vertices, &mesh.triangles, spacing)
 }
 
 /// Each neighbour's share of the mean: the three frames weigh alike. Measured on
@@ -73,13 +84,19 @@ pub fn follow_fluid(
     let normals = area_weighted_normals(&mesh.vertices, &mesh.triangles);
     let (support, reach) = (2.0 * spacing, spacing);
     let mut offsets = vec![0.0f32; mesh.vertices.len()];
-    for (n, moves) in neighbours.iter().zip([&back, &ahead]) {
-        let carried = mean_motion(&mesh.vertices, &own.positions, moves, support, cell)?;
-        let surface = SignedDistance::new(&n.mesh.vertices, &n.mesh.triangles, reach);
+    let motions = mean_motions(
+        &mesh.vertices,
+        &own.positions,
+        &[&back, &ahead],
+        support,
+        cell,
+    )?;
+    for (n, carried) in neighbours.iter().zip(&motions) {
+        let surface = SignedDistance::with_bins(&n.mesh.vertices, &n.mesh.triangles, n.bins);
         offsets
             .par_iter_mut()
             .zip(&mesh.vertices)
-            .zip(&carried)
+            .zip(carried)
             .for_each(|((offset, &x), &a)| {
                 // Where no particle says how the fluid moves, the vertex keeps its place.
                 let Some(a) = a else { return };
@@ -113,11 +130,23 @@ pub fn follow_fluid(
 /// Where following the neighbours made faces cross (two sheets pulled towards different
 /// neighbours' surfaces), the vertices of those faces and a ring around them go back to their
 /// own frame's places (`own`, with `offsets` zeroed), up to ROUNDS times: a surface that did
-/// not cross before following does not after.
+/// not cross before following does not after. The first round tests every face; later ones
+/// only the faces near those whose corners went back, as no other pair changed.
 fn untangle(mesh: &mut TriMesh, own: &[Vec3], offsets: &mut [f32]) {
     const ROUNDS: usize = 3;
+    let mut near: Option<Vec<u32>> = None;
     for _ in 0..ROUNDS {
-        let crossing = self_intersecting_faces(&mesh.vertices, &mesh.triangles);
+        let crossing = match &near {
+            None => self_intersecting_faces(&mesh.vertices, &mesh.triangles),
+            Some(faces) => {
+                let some: Vec<[u32; 3]> =
+                    faces.iter().map(|&f| mesh.triangles[f as usize]).collect();
+                self_intersecting_faces(&mesh.vertices, &some)
+                    .into_iter()
+                    .map(|k| faces[k as usize])
+                    .collect()
+            }
+        };
         let mut back = vec![false; own.len()];
         for &f in &crossing {
             for v in mesh.triangles[f as usize] {
@@ -132,12 +161,14 @@ fn untangle(mesh: &mut TriMesh, own: &[Vec3], offsets: &mut [f32]) {
             .flatten()
             .copied()
             .collect();
+        let mut went_back = vec![false; own.len()];
         let mut moved = false;
         for v in ring {
             let v = v as usize;
             if offsets[v] != 0.0 {
                 mesh.vertices[v] = own[v];
                 offsets[v] = 0.0;
+                went_back[v] = true;
                 moved = true;
             }
         }
@@ -145,5 +176,59 @@ fn untangle(mesh: &mut TriMesh, own: &[Vec3], offsets: &mut [f32]) {
             // Nothing left to put back: what still crosses crossed in the frame's own mesh.
             return;
         }
+        near = Some(faces_near(mesh, &went_back));
     }
+}
+
+/// The faces whose bounding boxes meet the box of a face with a corner in `moved`: the only
+/// faces that can meet those faces.
+fn faces_near(mesh: &TriMesh, moved: &[bool]) -> Vec<u32> {
+    let bounds = |t: &[u32; 3]| {
+        let [a, b, c] = t.map(|i| mesh.vertices[i as usize]);
+        (a.min(b).min(c), a.max(b).max(c))
+    };
+    let boxes: Vec<(Vec3, Vec3)> = mesh
+        .triangles
+        .iter()
+        .filter(|t| t.iter().any(|&v| moved[v as usize]))
+        .map(bounds)
+        .collect();
+    // Cells as wide as the widest moved box: each of those boxes meets at most 8.
+    let size = boxes
+        .iter()
+        .map(|(lo, hi)| (*hi - *lo).max_element())
+        .fold(0.0f32, f32::max)
+        .max(f32::MIN_POSITIVE);
+    let cell_of = |p: Vec3| (p / size).floor().as_ivec3();
+    let cells = |lo: Vec3, hi: Vec3| {
+        let (a, b) = (cell_of(lo), cell_of(hi));
+        (a.z..=b.z).flat_map(move |z| {
+            (a.y..=b.y).flat_map(move |y| (a.x..=b.x).map(move |x| IVec3::new(x, y, z)))
+        })
+    };
+    let mut grid: FxHashMap<IVec3, Vec<u32>> = FxHashMap::default();
+    for (k, &(lo, hi)) in boxes.iter().enumerate() {
+        for c in cells(lo, hi) {
+            grid.entry(c).or_default().push(k as u32);
+        }
+    }
+    let meets = |(lo, hi): (Vec3, Vec3)| {
+        // A face far wider than the moved ones is kept rather than walked cell by cell.
+        let span = cell_of(hi) - cell_of(lo);
+        span.max_element() > 8
+            || cells(lo, hi).any(|c| {
+                grid.get(&c).is_some_and(|ks| {
+                    ks.iter().any(|&k| {
+                        let (l, h) = boxes[k as usize];
+                        lo.cmple(h).all() && l.cmple(hi).all()
+                    })
+                })
+            })
+    };
+    mesh.triangles
+        .iter()
+        .enumerate()
+        .filter(|(_, t)| meets(bounds(t)))
+        .map(|(f, _)| f as u32)
+        .collect()
 }

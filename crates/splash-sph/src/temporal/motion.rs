@@ -152,27 +152,53 @@ pub fn mean_motion(
     support: f32,
     cell: f32,
 ) -> Result<Vec<Option<Vec3>>> {
-    let (at, moved): (Vec<Vec3>, Vec<Vec3>) = particles
-        .iter()
-        .zip(moves)
-        .filter_map(|(p, m)| m.map(|m| (*p, m)))
-        .unzip();
-    let kernel = RadialKernel::CubicSpline { support };
-    // The Shepard mean of ones is 1 wherever a particle weighs, 0 elsewhere.
-    let ones = Attribute::Scalar(vec![1.0; at.len()]);
-    let out = interpolate(
-        points,
-        &at,
-        &[&Attribute::Vector(moved), &ones],
-        &kernel,
-        cell,
-    )?;
-    match &out[..] {
-        [Attribute::Vector(v), Attribute::Scalar(w)] => Ok(v
+    Ok(mean_motions(points, particles, &[moves], support, cell)?.remove(0))
+}
+
+/// [`mean_motion`] of each of `moves`: in one pass over the particles when the same particles
+/// are matched in all (a sequence whose frames keep their particles), else one pass each.
+pub fn mean_motions(
+    points: &[Vec3],
+    particles: &[Vec3],
+    moves: &[&[Option<Vec3>]],
+    support: f32,
+    cell: f32,
+) -> Result<Vec<Vec<Option<Vec3>>>> {
+    let matched = |m: &[Option<Vec3>]| m.iter().map(Option::is_some).collect::<Vec<bool>>();
+    let first = moves.first().map(|m| matched(m)).unwrap_or_default();
+    if moves.iter().skip(1).any(|m| matched(m) != first) {
+        return moves
             .iter()
-            .zip(w)
-            .map(|(&v, &w)| (w > 0.5).then_some(v))
-            .collect()),
-        _ => unreachable!("one vector and one scalar attribute in, as many out"),
+            .map(|m| Ok(mean_motions(points, particles, &[m], support, cell)?.remove(0)))
+            .collect();
     }
+    let at: Vec<Vec3> = particles
+        .iter()
+        .zip(&first)
+        .filter(|(_, m)| **m)
+        .map(|(p, _)| *p)
+        .collect();
+    let mut channels: Vec<Attribute> = moves
+        .iter()
+        .map(|m| Attribute::Vector(m.iter().flatten().copied().collect()))
+        .collect();
+    // The Shepard mean of ones is 1 wherever a particle weighs, 0 elsewhere.
+    channels.push(Attribute::Scalar(vec![1.0; at.len()]));
+    let kernel = RadialKernel::CubicSpline { support };
+    let refs: Vec<&Attribute> = channels.iter().collect();
+    let mut out = interpolate(points, &at, &refs, &kernel, cell)?;
+    let Some(Attribute::Scalar(weighed)) = out.pop() else {
+        unreachable!("the ones come out last, as a scalar")
+    };
+    Ok(out
+        .into_iter()
+        .map(|a| match a {
+            Attribute::Vector(v) => v
+                .into_iter()
+                .zip(&weighed)
+                .map(|(v, &w)| (w > 0.5).then_some(v))
+                .collect(),
+            Attribute::Scalar(_) => unreachable!("displacements are vectors"),
+        })
+        .collect())
 }
