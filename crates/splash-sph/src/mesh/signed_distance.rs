@@ -167,14 +167,25 @@ impl SignedDistance<'_> {
     pub fn at(&self, p: Vec3) -> Option<f32> {
         let bins = &*self.bins;
         let home = (p / bins.cell).floor().as_ivec3();
+        // How far p lies inside its home cell: the searched cells reach this much beyond
+        // their shells, so that a point near its cell's middle stops after the cell itself.
+        let corner = home.as_vec3() * bins.cell;
+        let inside = (p - corner)
+            .min(corner + Vec3::splat(bins.cell) - p)
+            .min_element()
+            .max(0.0);
         let mut best: Option<Nearest> = None;
         for shell in 0..=bins.shells {
             for dz in -shell..=shell {
                 for dy in -shell..=shell {
-                    for dx in -shell..=shell {
-                        if dx.abs().max(dy.abs()).max(dz.abs()) != shell {
-                            continue;
-                        }
+                    // Inside the shell's faces in z and y, only its two cells in x.
+                    let side = dz.abs().max(dy.abs()) == shell;
+                    let step = if side || shell == 0 {
+                        1
+                    } else {
+                        2 * shell as usize
+                    };
+                    for dx in (-shell..=shell).step_by(step) {
                         let key = home + IVec3::new(dx, dy, dz);
                         // A cell whose box is farther than the nearest triangle holds no nearer one.
                         let lo = key.as_vec3() * bins.cell;
@@ -201,9 +212,10 @@ impl SignedDistance<'_> {
                     }
                 }
             }
-            // Cells beyond this shell lie at least `shell` cells away.
-            let bound = shell as f32 * bins.cell;
-            if best.is_some_and(|b| b.d2 * (1.0 + TIE) < bound * bound) {
+            // Cells beyond this shell lie at least `shell` cells and `inside` away: past the
+            // reach, or past the nearest triangle, none can give an answer.
+            let bound = shell as f32 * bins.cell + inside;
+            if bound > bins.reach || best.is_some_and(|b| b.d2 * (1.0 + TIE) < bound * bound) {
                 break;
             }
         }
