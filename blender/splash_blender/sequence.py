@@ -26,6 +26,8 @@ from . import meshdata, vendor
 log = logging.getLogger("splash_blender")
 
 EXTENSIONS = (".obj", ".ply", ".vtu", ".vtp")
+# Level sets (`--format vdb`): Blender's own Volume sequence shows them.
+VOLUME_EXTENSION = ".vdb"
 # What splash_sph.read_particles reads.
 PARTICLE_EXTENSIONS = (".ply", ".csv", ".txt", ".bin", ".raw", ".vtk", ".vtu", ".vtp", ".bgeo",
                        ".bgeo.gz", ".xyz")  # fmt: skip
@@ -45,17 +47,17 @@ def _extension(name):
     return os.path.splitext(name)[1].lower()
 
 
-def frame_files(directory, particles=False):
-    """[(frame number, path)] of the mesh (or particle) files in `directory`, in number
-    order."""
+def frame_files(directory, particles=False, extensions=None):
+    """[(frame number, path)] of the mesh (or particle, or `extensions`) files in
+    `directory`, in number order."""
     directory = bpy.path.abspath(directory)
-    extensions = PARTICLE_EXTENSIONS if particles else EXTENSIONS
+    extensions = extensions or (PARTICLE_EXTENSIONS if particles else EXTENSIONS)
     try:
         stamp = os.stat(directory).st_mtime_ns
         names = os.listdir(directory)
     except OSError as e:
         raise SequenceError(f"cannot list '{directory}': {e.strerror}") from None
-    cached = _files_cache.get((directory, particles))
+    cached = _files_cache.get((directory, particles, extensions))
     if cached and cached[0] == stamp:
         return cached[1]
     try:
@@ -75,7 +77,7 @@ def frame_files(directory, particles=False):
         raise SequenceError(f"'{directory}' has no numbered {what} files ({', '.join(extensions)})")
     ext = Counter(e for _, e, _ in found).most_common(1)[0][0]
     files = sorted((n, p) for n, e, p in found if e == ext)
-    _files_cache[(directory, particles)] = (stamp, files)
+    _files_cache[(directory, particles, extensions)] = (stamp, files)
     return files
 
 
@@ -144,9 +146,41 @@ def load(obj, frame):
     return False
 
 
+def _has_volumes(directory):
+    """Whether `directory` holds level sets (`.vdb`) and no meshes."""
+    try:
+        names = os.listdir(bpy.path.abspath(directory))
+    except OSError:
+        return False
+    extensions = {_extension(n) for n in names if not n.startswith(".")}
+    return VOLUME_EXTENSION in extensions and not extensions & set(EXTENSIONS)
+
+
+def import_volumes(context, directory, up_axis="Y", name=None):
+    """A new Volume object showing the level sets (`splash recon --format vdb`) in
+    `directory` as Blender's own sequence, turned upright like a mesh sequence; raises
+    SequenceError."""
+    files = frame_files(directory, extensions=(VOLUME_EXTENSION,))
+    folder = os.path.dirname(files[0][1])
+    names = [os.path.basename(p) for _, p in files]
+    result = bpy.ops.object.volume_import(
+        filepath=files[0][1], directory=folder, files=[{"name": n} for n in names],
+        use_sequence_detection=len(names) > 1,
+    )  # fmt: skip
+    obj = context.view_layer.objects.active
+    if "FINISHED" not in result or obj is None or obj.type != "VOLUME":
+        raise SequenceError(f"Blender could not import the level sets in '{folder}'")
+    obj.name = name or os.path.basename(os.path.normpath(folder)) or "fluid"
+    obj.splash_sequence.up_axis = up_axis
+    orient(obj)
+    return obj, files
+
+
 def import_sequence(context, directory, up_axis="Y", name=None, particles=False):
-    """A new object showing the sequence of meshes (or of particles: vertices only) in
-    `directory`; raises SequenceError."""
+    """A new object showing the sequence of meshes (or of particles: vertices only; or of
+    level sets: a Volume) in `directory`; raises SequenceError."""
+    if not particles and _has_volumes(directory):
+        return import_volumes(context, directory, up_axis, name)
     files = frame_files(directory, particles)
     name = name or os.path.basename(os.path.normpath(bpy.path.abspath(directory))) or "fluid"
     obj = bpy.data.objects.new(name, bpy.data.meshes.new(name))

@@ -162,7 +162,7 @@ class _ImportDirectory(ImportHelper):
 
 class SPLASH_OT_import_sequence(_ImportDirectory, bpy.types.Operator):
     """Import a directory of splash recon meshes (OBJ, PLY, VTU, VTP) as one object whose
-    mesh follows the frame"""
+    mesh follows the frame, or of level sets (VDB) as a Volume sequence"""
 
     bl_idname = "splash.import_sequence"
     bl_label = "Import splash sequence"

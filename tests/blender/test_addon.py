@@ -211,10 +211,12 @@ def test_sequences(sequence, particles):
     return seqs
 
 
-def test_vdb(particles, seqs):
+def test_vdb(particles, seqs, sequence):
     """The VDB sequence splash writes, imported as Blender's own Volume object (no add-on
     involved): its grids, its frames, a bounding box around the PLY mesh of the same frame,
-    and the Volume to Mesh modifier's mesh of the level set enclosing the PLY mesh's volume."""
+    and the Volume to Mesh modifier's mesh of the level set enclosing the PLY mesh's volume.
+    Then imported by the add-on ("Import splash sequence" of the directory): the same Volume
+    sequence, turned upright like the mesh sequences."""
     directory = recon(particles, "vdb")
     names = sorted(os.listdir(directory))
     check(names == [f"frame_{k:04d}.vdb" for k in (1, 2, 3)], f"vdb: three files ({names})")
@@ -258,6 +260,23 @@ def test_vdb(particles, seqs):
     ours, theirs = volume(v.astype(np.float64), f), volume(lv, lt)
     check(abs(theirs / ours - 1) < 0.02, f"vdb frame 3: volume {theirs} against the mesh's {ours}")
     evaluated.to_mesh_clear()
+
+    obj, files = sequence.import_sequence(bpy.context, directory, "Y", name="fluid_vdb")
+    check([n for n, _ in files] == [1, 2, 3], "vdb add-on import: three frames listed")
+    check(obj.type == "VOLUME" and obj.data.is_sequence and obj.data.frame_duration == 3,
+          "vdb add-on import: a Volume sequence of three frames")  # fmt: skip
+    bpy.context.view_layer.update()
+    world = np.array(obj.matrix_world)[:3, :3]
+    check(np.allclose(world @ [0, 1, 0], [0, 0, 1], atol=1e-6), "vdb add-on import: Y-up upright")
+    obj.data.grids.load()
+    check({g.name for g in obj.data.grids} == {"surface", "v"}, "vdb add-on import: its grids")
+    box = np.array([list(c) for c in obj.bound_box])
+    check(np.allclose(box, corners, atol=1e-6), f"vdb add-on import: frame 3's box {box.min(0)}")
+    result = bpy.ops.splash.import_sequence(directory=directory)
+    active = bpy.context.view_layer.objects.active
+    check("FINISHED" in result and active.type == "VOLUME", "vdb: the import operator")
+    for o in (obj, active):  # upright, they would stand in the renders' view
+        bpy.data.objects.remove(o)
     # Out of the way of the renders.
     for obj in (host, vol):
         bpy.data.objects.remove(obj)
@@ -827,7 +846,7 @@ def main():
     check(splash_sph.__file__.startswith(origin), f"the bundled package ({splash_sph.__file__})")
     particles = make_particles()
     seqs = test_sequences(sequence, particles)
-    test_vdb(particles, seqs)
+    test_vdb(particles, seqs, sequence)
     test_errors(sequence)
     test_live(live, splash_sph, command, ui)
     test_post(live, splash_sph, command, ui)
