@@ -103,17 +103,18 @@ impl Clearance {
                     .filter_map(|d| cells.get(&(c + IVec3::from_array(d)).to_array()).copied())
                     .collect();
                 let order = &order;
+                // Only candidates whose normal can face some vertex of this cell's: within
+                // FACING's angle less the cell's own spread of normals, none can.
+                let facing = facing_candidates(&order[s..e], &near, order, normals);
                 (s..e).map(move |i| {
                     let v = order[i].1 as usize;
                     let (p, n, dir) = (vertices[v], normals[v], side(v));
                     let mut nearest = f32::INFINITY;
-                    for &(s, e) in &near {
-                        for &(_, u) in &order[s..e] {
-                            let q = vertices[u as usize];
-                            let d = q - p;
-                            if dir * d.dot(n) > 0.0 && n.dot(normals[u as usize]) < FACING {
-                                nearest = nearest.min(d.length_squared());
-                            }
+                    for &u in &facing {
+                        let q = vertices[u as usize];
+                        let d = q - p;
+                        if dir * d.dot(n) > 0.0 && n.dot(normals[u as usize]) < FACING {
+                            nearest = nearest.min(d.length_squared());
                         }
                     }
                     let nearest = nearest.sqrt();
@@ -197,4 +198,37 @@ impl Clearance {
                 *p += moved * *n;
             });
     }
+}
+
+/// The vertices of the cells `near` (runs of `order`) whose normals could face the normal of
+/// some vertex of `run`, in the cells' order: those whose angle to the run's mean normal
+/// exceeds FACING's angle less the run's spread (the largest angle of a normal of the run to
+/// that mean) and a margin for rounding; all of them where the run's normals spread too far.
+/// The rest cannot pass the facing test, so the nearest facing vertex is the same.
+fn facing_candidates(
+    run: &[(IVec3, u32)],
+    near: &[(usize, usize)],
+    order: &[(IVec3, u32)],
+    normals: &[Vec3],
+) -> Vec<u32> {
+    let all = || {
+        near.iter()
+            .flat_map(|&(s, e)| order[s..e].iter().map(|&(_, u)| u))
+    };
+    let sum: Vec3 = run.iter().map(|&(_, v)| normals[v as usize]).sum();
+    let mean = sum.normalize_or_zero();
+    let spread = run
+        .iter()
+        .map(|&(_, v)| normals[v as usize])
+        .filter(|n| *n != Vec3::ZERO)
+        .map(|n| mean.dot(n).clamp(-1.0, 1.0).acos())
+        .fold(0.0f32, f32::max);
+    let angle = FACING.acos() - spread - 0.01;
+    if mean == Vec3::ZERO || angle <= 0.0 {
+        return all().collect();
+    }
+    let most = angle.cos();
+    all()
+        .filter(|&u| mean.dot(normals[u as usize]) < most)
+        .collect()
 }
