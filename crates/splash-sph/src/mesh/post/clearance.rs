@@ -217,12 +217,14 @@ fn facing_candidates(
     };
     let sum: Vec3 = run.iter().map(|&(_, v)| normals[v as usize]).sum();
     let mean = sum.normalize_or_zero();
+    // The widest angle is the least cosine's.
     let spread = run
         .iter()
         .map(|&(_, v)| normals[v as usize])
         .filter(|n| *n != Vec3::ZERO)
-        .map(|n| mean.dot(n).clamp(-1.0, 1.0).acos())
-        .fold(0.0f32, f32::max);
+        .map(|n| mean.dot(n).clamp(-1.0, 1.0))
+        .fold(1.0f32, f32::min)
+        .acos();
     let angle = FACING.acos() - spread - 0.01;
     if mean == Vec3::ZERO || angle <= 0.0 {
         return all().collect();
