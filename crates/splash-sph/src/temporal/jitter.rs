@@ -17,7 +17,7 @@
 use glam::Vec3;
 use rayon::prelude::*;
 
-use super::motion::{FrameMotion, mean_motion};
+use super::motion::{FrameMotion, mean_motions};
 use crate::error::Result;
 use crate::mesh::{SignedDistance, TriMesh, area_weighted_normals};
 
@@ -109,11 +109,14 @@ pub fn frame_jitter(window: &Window<'_>, spacing: f32) -> Result<Jitter> {
     let normals = area_weighted_normals(&mesh.vertices, &mesh.triangles);
     let positions = &window.particles.positions;
     let support = 2.0 * spacing;
-    let (ahead, behind) = rayon::join(
-        || mean_motion(&mesh.vertices, positions, window.forward, support, 0.0),
-        || mean_motion(&mesh.vertices, positions, window.backward, support, 0.0),
-    );
-    let (ahead, behind) = (ahead?, behind?);
+    let motions = mean_motions(
+        &mesh.vertices,
+        positions,
+        &[window.forward, window.backward],
+        support,
+        0.0,
+    )?;
+    let [ahead, behind] = <[_; 2]>::try_from(motions).expect("one mean per displacement");
     let (to_prev, to_next) = rayon::join(
         || SignedDistance::new(&prev.vertices, &prev.triangles, reach),
         || SignedDistance::new(&next.vertices, &next.triangles, reach),

@@ -140,23 +140,13 @@ fn repeated(ids: &[u32]) -> Option<u32> {
     sorted.windows(2).find(|w| w[0] == w[1]).map(|w| w[0])
 }
 
-/// The cubic-spline mean (support `support`, Shepard-normalised) of the displacements
+/// The cubic-spline mean (support `support`, Shepard-normalised) of each of the displacements
 /// `moves` of `particles` at every point; None where no matched particle is within reach (a
 /// vertex of a cavity's wall more than 2r from every particle: its motion is unknown, and
-/// taking it as zero would read the fluid's motion there as the surface's own).
-/// `cell`: the points' spacing, as for attribute interpolation.
-pub fn mean_motion(
-    points: &[Vec3],
-    particles: &[Vec3],
-    moves: &[Option<Vec3>],
-    support: f32,
-    cell: f32,
-) -> Result<Vec<Option<Vec3>>> {
-    Ok(mean_motions(points, particles, &[moves], support, cell)?.remove(0))
-}
-
-/// [`mean_motion`] of each of `moves`: in one pass over the particles when the same particles
-/// are matched in all (a sequence whose frames keep their particles), else one pass each.
+/// taking it as zero would read the fluid's motion there as the surface's own). `cell`: the
+/// points' spacing, as for attribute interpolation. In one pass over the particles when the
+/// same particles are matched in all (a sequence whose frames keep their particles), else one
+/// pass each.
 pub fn mean_motions(
     points: &[Vec3],
     particles: &[Vec3],
@@ -164,9 +154,9 @@ pub fn mean_motions(
     support: f32,
     cell: f32,
 ) -> Result<Vec<Vec<Option<Vec3>>>> {
-    let matched = |m: &[Option<Vec3>]| m.iter().map(Option::is_some).collect::<Vec<bool>>();
-    let first = moves.first().map(|m| matched(m)).unwrap_or_default();
-    if moves.iter().skip(1).any(|m| matched(m) != first) {
+    let first = moves.first().copied().unwrap_or_default();
+    let same = |m: &[Option<Vec3>]| m.iter().zip(first).all(|(a, b)| a.is_some() == b.is_some());
+    if !moves.iter().all(|m| same(m)) {
         return moves
             .iter()
             .map(|m| Ok(mean_motions(points, particles, &[m], support, cell)?.remove(0)))
@@ -174,8 +164,8 @@ pub fn mean_motions(
     }
     let at: Vec<Vec3> = particles
         .iter()
-        .zip(&first)
-        .filter(|(_, m)| **m)
+        .zip(first)
+        .filter(|(_, m)| m.is_some())
         .map(|(p, _)| *p)
         .collect();
     let mut channels: Vec<Attribute> = moves

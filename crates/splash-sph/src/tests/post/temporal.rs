@@ -12,6 +12,7 @@ use glam::Vec3;
 use crate::config::Config;
 use crate::frames::{Output, Shard};
 use crate::io::{MeshFormat, read_mesh};
+use crate::mesh::TriMesh;
 use crate::pipeline::{Batch, FrameOutcome, Progress};
 use crate::temporal::{FrameMotion, Jitter, Window, frame_jitter};
 
@@ -91,6 +92,10 @@ fn bytes(dir: &Path, f: u32) -> Vec<u8> {
     fs::read(dir.join(format!("f_{f:04}.ply"))).unwrap()
 }
 
+fn mesh(dir: &Path, f: u32) -> TriMesh {
+    read_mesh(&dir.join(format!("f_{f:04}.ply"))).unwrap().mesh
+}
+
 fn scratch(name: &str) -> PathBuf {
     let dir = std::env::temp_dir().join(format!("splash-temporal-{name}-{}", std::process::id()));
     let _ = fs::remove_dir_all(&dir);
@@ -107,11 +112,7 @@ fn jitter(inputs: &[PathBuf], out: &Path) -> Jitter {
     let mut sum = Jitter::default();
     for t in 1..inputs.len() - 1 {
         let [a, b, c] = [t - 1, t, t + 1].map(|k| load(&inputs[k]));
-        let meshes = [t - 1, t, t + 1].map(|k| {
-            read_mesh(&out.join(format!("f_{:04}.ply", k + 1)))
-                .unwrap()
-                .mesh
-        });
+        let meshes = [t - 1, t, t + 1].map(|k| mesh(out, k as u32 + 1));
         let forward = b.displacements(&c, 1, None).unwrap();
         let backward: Vec<_> = b
             .displacements(&a, -1, None)
@@ -222,11 +223,7 @@ fn a_rigid_step_of_whole_cells_is_followed_exactly() {
         t.carried_rms()
     );
     for f in 2..=4 {
-        let [s, t] = ["s", "t"].map(|name| {
-            read_mesh(&dir.join(name).join(format!("f_{f:04}.ply")))
-                .unwrap()
-                .mesh
-        });
+        let [s, t] = ["s", "t"].map(|name| mesh(&dir.join(name), f));
         let moved = s
             .vertices
             .iter()
