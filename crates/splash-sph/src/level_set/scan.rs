@@ -21,6 +21,7 @@ use super::cones::{Cones, face_normal};
 use super::{Fans, voxel_bit};
 use crate::data::TriMesh;
 use crate::io::vdb_file_order;
+use crate::mesh::cells_between;
 use crate::mesh::signed_distance::triangle_distance;
 
 /// Slack, in voxels, on every side of a region: rounding never leaves a voxel out.
@@ -406,11 +407,4 @@ fn voxel_box(lo: Vec3, hi: Vec3) -> Option<(IVec3, IVec3)> {
     let (lo, hi) = (lo.ceil(), hi.floor());
     let fits = |v: Vec3| v.abs().max_element() < (i32::MAX - 16) as f32;
     (fits(lo) && fits(hi)).then(|| (lo.as_ivec3(), hi.as_ivec3()))
-}
-
-/// The points of the box from `lo` to `hi`, both included.
-fn cells_between(lo: IVec3, hi: IVec3) -> impl Iterator<Item = IVec3> {
-    (lo.x..=hi.x).flat_map(move |x| {
-        (lo.y..=hi.y).flat_map(move |y| (lo.z..=hi.z).map(move |z| IVec3::new(x, y, z)))
-    })
 }

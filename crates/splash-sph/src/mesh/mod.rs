@@ -26,3 +26,11 @@ pub use topology::{Topology, component_volumes, signed_volume, topology};
 
 #[doc(no_inline)]
 pub use crate::data::TriMesh;
+
+/// The cells of the box from `lo` to `hi`, both included, z slowest: the grid walks of the
+/// binned searches (signed distances, following's crossing test, the level set's scan).
+pub(crate) fn cells_between(lo: glam::IVec3, hi: glam::IVec3) -> impl Iterator<Item = glam::IVec3> {
+    (lo.z..=hi.z).flat_map(move |z| {
+        (lo.y..=hi.y).flat_map(move |y| (lo.x..=hi.x).map(move |x| glam::IVec3::new(x, y, z)))
+    })
+}

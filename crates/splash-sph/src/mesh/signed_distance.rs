@@ -14,6 +14,8 @@ use glam::{IVec3, Vec3};
 use rayon::prelude::*;
 use rustc_hash::FxHashMap;
 
+use super::cells_between;
+
 /// A mesh prepared for signed-distance queries up to `reach` away: its [`SurfaceBins`], built
 /// here or kept by the caller (a sequence keeps a frame's for both frames beside it).
 #[derive(Debug)]
@@ -119,10 +121,7 @@ impl SurfaceBins {
             .flat_map_iter(|(t, tri)| {
                 let [a, b, c] = tri.map(|i| vertices[i as usize]);
                 let (lo, hi) = (cell_of(a.min(b).min(c)), cell_of(a.max(b).max(c)));
-                (lo.z..=hi.z).flat_map(move |z| {
-                    (lo.y..=hi.y)
-                        .flat_map(move |y| (lo.x..=hi.x).map(move |x| ([x, y, z], t as u32)))
-                })
+                cells_between(lo, hi).map(move |c| (c.to_array(), t as u32))
             })
             .collect();
         let low = vertices.iter().fold(IVec3::MAX, |m, &v| m.min(cell_of(v)));

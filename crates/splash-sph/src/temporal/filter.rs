@@ -8,7 +8,8 @@ use rustc_hash::FxHashMap;
 use super::motion::{FrameMotion, mean_motions};
 use crate::error::Result;
 use crate::mesh::{
-    SignedDistance, SurfaceBins, TriMesh, area_weighted_normals, self_intersecting_faces,
+    SignedDistance, SurfaceBins, TriMesh, area_weighted_normals, cells_between,
+    self_intersecting_faces,
 };
 
 /// Frame t's neighbours for [`follow_fluid`]: a neighbour frame's mesh and particles.
@@ -200,12 +201,7 @@ fn faces_near(mesh: &TriMesh, moved: &[bool]) -> Vec<u32> {
         .fold(0.0f32, f32::max)
         .max(f32::MIN_POSITIVE);
     let cell_of = |p: Vec3| (p / size).floor().as_ivec3();
-    let cells = |lo: Vec3, hi: Vec3| {
-        let (a, b) = (cell_of(lo), cell_of(hi));
-        (a.z..=b.z).flat_map(move |z| {
-            (a.y..=b.y).flat_map(move |y| (a.x..=b.x).map(move |x| IVec3::new(x, y, z)))
-        })
-    };
+    let cells = |lo: Vec3, hi: Vec3| cells_between(cell_of(lo), cell_of(hi));
     let mut grid: FxHashMap<IVec3, Vec<u32>> = FxHashMap::default();
     for (k, &(lo, hi)) in boxes.iter().enumerate() {
         for c in cells(lo, hi) {
