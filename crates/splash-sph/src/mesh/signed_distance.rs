@@ -32,8 +32,10 @@ pub struct SurfaceBins {
     /// The bins' edge, and how many shells of bins cover the reach.
     cell: f32,
     shells: i32,
+    /// The cells' numbering: [`CellKeys`].
+    keys: CellKeys,
     /// Triangles by cell: a range of `binned` per non-empty cell.
-    cells: FxHashMap<[i32; 3], (u32, u32)>,
+    cells: FxHashMap<u64, (u32, u32)>,
     binned: Vec<u32>,
 }
 
@@ -107,55 +109,102 @@ impl SurfaceBins {
             .sum();
         let mean_edge = (edges / triangles.len().max(1) as f64) as f32;
         let cell = (1.5 * mean_edge).clamp(reach / 8.0, reach);
-        let cell = if cell.is_finite() && cell > 0.0 {
+        let mut cell = if cell.is_finite() && cell > 0.0 {
             cell
         } else {
             reach
         };
+        let keys = loop {
+            match CellKeys::new(vertices, cell) {
+                Some(keys) => break keys,
+                // A mesh millions of cells across: wider cells, as many found by fewer.
+                None => cell *= 2.0,
+            }
+        };
         let shells = (reach / cell).ceil() as i32 + 1;
         let cell_of = |p: Vec3| (p / cell).floor().as_ivec3();
-        // (cell, triangle) for every cell a triangle's box meets, sorted by cell.
-        let mut pairs: Vec<([i32; 3], u32)> = triangles
-            .par_iter()
+        // (cell, triangle) for every cell a triangle's box meets, in triangle order, then
+        // sorted by cell, stably: each cell lists its triangles in order.
+        let mut pairs: Vec<(u64, u32)> = triangles
+            .par_chunks(CHUNK)
             .enumerate()
-            .flat_map_iter(|(t, tri)| {
-                let [a, b, c] = tri.map(|i| vertices[i as usize]);
-                let (lo, hi) = (cell_of(a.min(b).min(c)), cell_of(a.max(b).max(c)));
-                cells_between(lo, hi).map(move |c| (c.to_array(), t as u32))
+            .map(|(chunk, tris)| {
+                let mut pairs = Vec::with_capacity(4 * tris.len());
+                for (k, tri) in tris.iter().enumerate() {
+                    let [a, b, c] = tri.map(|i| vertices[i as usize]);
+                    let (lo, hi) = (cell_of(a.min(b).min(c)), cell_of(a.max(b).max(c)));
+                    let t = (chunk * CHUNK + k) as u32;
+                    pairs.extend(cells_between(lo, hi).map(|c| (keys.packed(c), t)));
+                }
+                pairs
             })
-            .collect();
-        let low = vertices.iter().fold(IVec3::MAX, |m, &v| m.min(cell_of(v)));
-        let span = vertices.iter().fold(IVec3::MIN, |m, &v| m.max(cell_of(v))) - low;
-        if span.max_element() < 1 << 21 {
-            // Cells packed into 63 bits: a radix sort.
-            radsort::sort_by_key(&mut pairs, |&(c, t)| {
-                let c = (IVec3::from_array(c) - low).as_uvec3();
-                (
-                    (u64::from(c.z) << 42) | (u64::from(c.y) << 21) | u64::from(c.x),
-                    t,
-                )
-            });
-        } else {
-            pairs.par_sort_unstable();
-        }
+            .collect::<Vec<_>>()
+            .concat();
+        radsort::sort_by_key(&mut pairs, |&(k, _)| k);
         let mut cells = FxHashMap::default();
+        cells.reserve(pairs.len() / 8);
         let mut start = 0;
-        for (i, &(c, _)) in pairs.iter().enumerate() {
-            if i + 1 == pairs.len() || pairs[i + 1].0 != c {
-                cells.insert(c, (start as u32, i as u32 + 1));
+        for (i, &(k, _)) in pairs.iter().enumerate() {
+            if i + 1 == pairs.len() || pairs[i + 1].0 != k {
+                cells.insert(k, (start as u32, i as u32 + 1));
                 start = i + 1;
             }
         }
-        // Collected afresh, not in place: in place would keep the pairs' four times larger buffer.
+        // Collected afresh, not in place: in place would keep the pairs' larger buffer.
         let binned: Vec<u32> = pairs.iter().map(|&(_, t)| t).collect();
         drop(pairs);
         SurfaceBins {
             reach,
             cell,
             shells,
+            keys,
             cells,
             binned,
         }
+    }
+}
+
+/// Triangles a task bins at once.
+const CHUNK: usize = 8192;
+
+/// Cells numbered from the lowest a mesh's vertices meet, their three coordinates packed into
+/// one key as few bits wide as the mesh's span needs: a radix sort then takes a few passes, and
+/// a lookup hashes one word.
+#[derive(Debug, Clone, Copy)]
+struct CellKeys {
+    low: IVec3,
+    high: IVec3,
+    /// Where the y and z coordinates start.
+    y: u32,
+    z: u32,
+}
+
+impl CellKeys {
+    /// The numbering of the cells `cell` wide that `vertices` meet, or None when it needs more
+    /// than 63 bits.
+    fn new(vertices: &[Vec3], cell: f32) -> Option<CellKeys> {
+        let cell_of = |p: Vec3| (p / cell).floor().as_ivec3();
+        let low = vertices.iter().fold(IVec3::MAX, |m, &v| m.min(cell_of(v)));
+        let high = vertices.iter().fold(IVec3::MIN, |m, &v| m.max(cell_of(v)));
+        let span = (high.as_i64vec3() - low.as_i64vec3()).max(glam::I64Vec3::ZERO);
+        let bits = span.to_array().map(|s| 64 - (s as u64).leading_zeros());
+        (bits.iter().sum::<u32>() < 64).then_some(CellKeys {
+            low,
+            high: high.max(low),
+            y: bits[0],
+            z: bits[0] + bits[1],
+        })
+    }
+
+    /// The key of cell `c`, which lies within the mesh's cells.
+    fn packed(&self, c: IVec3) -> u64 {
+        let c = (c - self.low).as_uvec3();
+        (u64::from(c.z) << self.z) | (u64::from(c.y) << self.y) | u64::from(c.x)
+    }
+
+    /// The key of cell `c`, or None when it lies beyond the mesh's cells (and so is empty).
+    fn key(&self, c: IVec3) -> Option<u64> {
+        (c.cmpge(self.low).all() && c.cmple(self.high).all()).then(|| self.packed(c))
     }
 }
 
@@ -192,7 +241,8 @@ impl SignedDistance<'_> {
                         if best.is_some_and(|b| gap.length_squared() > b.d2 * (1.0 + TIE)) {
                             continue;
                         }
-                        if let Some(&(s, e)) = bins.cells.get(&key.to_array()) {
+                        let cell = bins.keys.key(key).and_then(|k| bins.cells.get(&k));
+                        if let Some(&(s, e)) = cell {
                             for &t in &bins.binned[s as usize..e as usize] {
                                 if let Some(n) = &best {
                                     let (centre, radius) =
