@@ -21,8 +21,8 @@ use super::cones::{Cones, face_normal};
 use super::{Fans, voxel_bit};
 use crate::data::TriMesh;
 use crate::io::vdb_file_order;
-use crate::mesh::cells_between;
 use crate::mesh::signed_distance::triangle_distance;
+use crate::mesh::{cells_between, floor_i32};
 
 /// Slack, in voxels, on every side of a region: rounding never leaves a voxel out.
 const SLACK: f32 = 0.01;
@@ -382,7 +382,7 @@ impl<const N: usize> Region<N> {
                 if from > to {
                     continue;
                 }
-                for z in ceil(from)..=floor(to) {
+                for z in ceil(from)..=floor_i32(to) {
                     column[k] = z;
                     f(column);
                 }
@@ -391,15 +391,11 @@ impl<const N: usize> Region<N> {
     }
 }
 
-/// `x.ceil()` and `x.floor()` for a coordinate within i32's reach, without a call into libm.
+/// `x.ceil()` for a coordinate within i32's reach, without a call into libm (as
+/// [`floor_i32`] floors).
 fn ceil(x: f32) -> i32 {
     let i = x as i32;
     if (i as f32) < x { i + 1 } else { i }
-}
-
-fn floor(x: f32) -> i32 {
-    let i = x as i32;
-    if (i as f32) > x { i - 1 } else { i }
 }
 
 /// The voxels from `lo` to `hi` (index space), None beyond the reach of i32 indices.

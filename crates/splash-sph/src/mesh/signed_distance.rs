@@ -14,7 +14,7 @@ use glam::{IVec3, Vec3};
 use rayon::prelude::*;
 use rustc_hash::FxHashMap;
 
-use super::cells_between;
+use super::floor_cell;
 
 /// A mesh prepared for signed-distance queries up to `reach` away: its [`SurfaceBins`], built
 /// here or kept by the caller (a sequence keeps a frame's for both frames beside it).
@@ -35,7 +35,7 @@ pub struct SurfaceBins {
     /// The cells' numbering: [`CellKeys`].
     keys: CellKeys,
     /// Triangles by cell: a range of `binned` per non-empty cell.
-    cells: FxHashMap<u64, (u32, u32)>,
+    cells: FxHashMap<u32, (u32, u32)>,
     binned: Vec<u32>,
 }
 
@@ -117,42 +117,50 @@ impl SurfaceBins {
         let keys = loop {
             match CellKeys::new(vertices, cell) {
                 Some(keys) => break keys,
-                // A mesh millions of cells across: wider cells, as many found by fewer.
+                // A mesh thousands of cells across in every direction: wider cells, as many
+                // triangles found by fewer.
                 None => cell *= 2.0,
             }
         };
         let shells = (reach / cell).ceil() as i32 + 1;
-        let cell_of = |p: Vec3| (p / cell).floor().as_ivec3();
-        // (cell, triangle) for every cell a triangle's box meets, in triangle order, then
-        // sorted by cell, stably: each cell lists its triangles in order.
-        let mut pairs: Vec<(u64, u32)> = triangles
+        let cell_of = |p: Vec3| floor_cell(p / cell);
+        // `cell << 32 | triangle` for every cell a triangle's box meets, in triangle order,
+        // then sorted by cell, stably: each cell lists its triangles in order.
+        let mut entries: Vec<u64> = triangles
             .par_chunks(CHUNK)
             .enumerate()
             .map(|(chunk, tris)| {
-                let mut pairs = Vec::with_capacity(4 * tris.len());
+                let mut entries = Vec::with_capacity(4 * tris.len());
                 for (k, tri) in tris.iter().enumerate() {
                     let [a, b, c] = tri.map(|i| vertices[i as usize]);
                     let (lo, hi) = (cell_of(a.min(b).min(c)), cell_of(a.max(b).max(c)));
-                    let t = (chunk * CHUNK + k) as u32;
-                    pairs.extend(cells_between(lo, hi).map(|c| (keys.packed(c), t)));
+                    let t = (chunk * CHUNK + k) as u64;
+                    for z in lo.z..=hi.z {
+                        for y in lo.y..=hi.y {
+                            for x in lo.x..=hi.x {
+                                let key = keys.packed(IVec3::new(x, y, z));
+                                entries.push(u64::from(key) << 32 | t);
+                            }
+                        }
+                    }
                 }
-                pairs
+                entries
             })
             .collect::<Vec<_>>()
             .concat();
-        radsort::sort_by_key(&mut pairs, |&(k, _)| k);
+        radsort::sort_by_key(&mut entries, |&e| (e >> 32) as u32);
         let mut cells = FxHashMap::default();
-        cells.reserve(pairs.len() / 8);
+        cells.reserve(entries.len() / 8);
         let mut start = 0;
-        for (i, &(k, _)) in pairs.iter().enumerate() {
-            if i + 1 == pairs.len() || pairs[i + 1].0 != k {
-                cells.insert(k, (start as u32, i as u32 + 1));
+        for (i, &e) in entries.iter().enumerate() {
+            if i + 1 == entries.len() || entries[i + 1] >> 32 != e >> 32 {
+                cells.insert((e >> 32) as u32, (start as u32, i as u32 + 1));
                 start = i + 1;
             }
         }
-        // Collected afresh, not in place: in place would keep the pairs' larger buffer.
-        let binned: Vec<u32> = pairs.iter().map(|&(_, t)| t).collect();
-        drop(pairs);
+        // Collected afresh, not in place: in place would keep the entries' larger buffer.
+        let binned: Vec<u32> = entries.iter().map(|&e| e as u32).collect();
+        drop(entries);
         SurfaceBins {
             reach,
             cell,
@@ -168,8 +176,8 @@ impl SurfaceBins {
 const CHUNK: usize = 8192;
 
 /// Cells numbered from the lowest a mesh's vertices meet, their three coordinates packed into
-/// one key as few bits wide as the mesh's span needs: a radix sort then takes a few passes, and
-/// a lookup hashes one word.
+/// one 32-bit key as few bits wide as the mesh's span needs: a radix sort then takes three or
+/// four passes, and a lookup hashes one word.
 #[derive(Debug, Clone, Copy)]
 struct CellKeys {
     low: IVec3,
@@ -181,29 +189,37 @@ struct CellKeys {
 
 impl CellKeys {
     /// The numbering of the cells `cell` wide that `vertices` meet, or None when it needs more
-    /// than 63 bits.
+    /// than 32 bits.
     fn new(vertices: &[Vec3], cell: f32) -> Option<CellKeys> {
-        let cell_of = |p: Vec3| (p / cell).floor().as_ivec3();
-        let low = vertices.iter().fold(IVec3::MAX, |m, &v| m.min(cell_of(v)));
-        let high = vertices.iter().fold(IVec3::MIN, |m, &v| m.max(cell_of(v)));
+        let (lo, hi) = vertices
+            .iter()
+            .fold((Vec3::MAX, Vec3::MIN), |(lo, hi), &v| {
+                (lo.min(v), hi.max(v))
+            });
+        // The floor is monotone: the cells of the lowest and highest coordinates.
+        let (low, high) = (
+            floor_cell(lo / cell),
+            floor_cell(hi / cell).max(floor_cell(lo / cell)),
+        );
         let span = (high.as_i64vec3() - low.as_i64vec3()).max(glam::I64Vec3::ZERO);
         let bits = span.to_array().map(|s| 64 - (s as u64).leading_zeros());
-        (bits.iter().sum::<u32>() < 64).then_some(CellKeys {
+        (bits.iter().sum::<u32>() <= 32).then_some(CellKeys {
             low,
-            high: high.max(low),
+            high,
             y: bits[0],
             z: bits[0] + bits[1],
         })
     }
 
     /// The key of cell `c`, which lies within the mesh's cells.
-    fn packed(&self, c: IVec3) -> u64 {
+    fn packed(&self, c: IVec3) -> u32 {
         let c = (c - self.low).as_uvec3();
-        (u64::from(c.z) << self.z) | (u64::from(c.y) << self.y) | u64::from(c.x)
+        // A span of 32 bits in x alone leaves nothing to shift in.
+        c.z.checked_shl(self.z).unwrap_or(0) | c.y.checked_shl(self.y).unwrap_or(0) | c.x
     }
 
     /// The key of cell `c`, or None when it lies beyond the mesh's cells (and so is empty).
-    fn key(&self, c: IVec3) -> Option<u64> {
+    fn key(&self, c: IVec3) -> Option<u32> {
         (c.cmpge(self.low).all() && c.cmple(self.high).all()).then(|| self.packed(c))
     }
 }
@@ -214,7 +230,7 @@ impl SignedDistance<'_> {
     /// does not depend on the thread.
     pub fn at(&self, p: Vec3) -> Option<f32> {
         let bins = &*self.bins;
-        let home = (p / bins.cell).floor().as_ivec3();
+        let home = floor_cell(p / bins.cell);
         // How far p lies inside its home cell: the searched cells reach this much beyond
         // their shells, so that a point near its cell's middle stops after the cell itself.
         let corner = home.as_vec3() * bins.cell;
