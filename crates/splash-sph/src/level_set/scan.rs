@@ -21,8 +21,9 @@ use super::cones::{Cones, face_normal};
 use super::{Fans, voxel_bit};
 use crate::data::TriMesh;
 use crate::io::vdb_file_order;
+use crate::mesh::cells_between;
 use crate::mesh::signed_distance::triangle_distance;
-use crate::mesh::{cells_between, floor_i32};
+use crate::neighbours::floor_i32;
 
 /// Slack, in voxels, on every side of a region: rounding never leaves a voxel out.
 const SLACK: f32 = 0.01;

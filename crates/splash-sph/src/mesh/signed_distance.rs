@@ -14,7 +14,7 @@ use glam::{IVec3, Vec3};
 use rayon::prelude::*;
 use rustc_hash::FxHashMap;
 
-use super::floor_cell;
+use crate::neighbours::cell_of;
 
 /// A mesh prepared for signed-distance queries up to `reach` away: its [`SurfaceBins`], built
 /// here or kept by the caller (a sequence keeps a frame's for both frames beside it).
@@ -123,7 +123,6 @@ impl SurfaceBins {
             }
         };
         let shells = (reach / cell).ceil() as i32 + 1;
-        let cell_of = |p: Vec3| floor_cell(p / cell);
         // `cell << 32 | triangle` for every cell a triangle's box meets, in triangle order,
         // then sorted by cell, stably: each cell lists its triangles in order.
         let mut entries: Vec<u64> = triangles
@@ -133,7 +132,10 @@ impl SurfaceBins {
                 let mut entries = Vec::with_capacity(4 * tris.len());
                 for (k, tri) in tris.iter().enumerate() {
                     let [a, b, c] = tri.map(|i| vertices[i as usize]);
-                    let (lo, hi) = (cell_of(a.min(b).min(c)), cell_of(a.max(b).max(c)));
+                    let (lo, hi) = (
+                        cell_of(a.min(b).min(c), cell),
+                        cell_of(a.max(b).max(c), cell),
+                    );
                     let t = (chunk * CHUNK + k) as u64;
                     for z in lo.z..=hi.z {
                         for y in lo.y..=hi.y {
@@ -197,10 +199,8 @@ impl CellKeys {
                 (lo.min(v), hi.max(v))
             });
         // The floor is monotone: the cells of the lowest and highest coordinates.
-        let (low, high) = (
-            floor_cell(lo / cell),
-            floor_cell(hi / cell).max(floor_cell(lo / cell)),
-        );
+        let low = cell_of(lo, cell);
+        let high = cell_of(hi, cell).max(low);
         let span = (high.as_i64vec3() - low.as_i64vec3()).max(glam::I64Vec3::ZERO);
         let bits = span.to_array().map(|s| 64 - (s as u64).leading_zeros());
         (bits.iter().sum::<u32>() <= 32).then_some(CellKeys {
@@ -230,7 +230,7 @@ impl SignedDistance<'_> {
     /// does not depend on the thread.
     pub fn at(&self, p: Vec3) -> Option<f32> {
         let bins = &*self.bins;
-        let home = floor_cell(p / bins.cell);
+        let home = cell_of(p, bins.cell);
         // How far p lies inside its home cell: the searched cells reach this much beyond
         // their shells, so that a point near its cell's middle stops after the cell itself.
         let corner = home.as_vec3() * bins.cell;

@@ -372,16 +372,19 @@ impl Handlers {
 
 /// The cell of size `size` holding `p`, ⌊p / size⌋ on each axis saturated at i32's range, as
 /// `(p / size).floor().as_ivec3()` gives it, but without a call to libm's `floorf` per
-/// coordinate (x86-64 has no inline floor before SSE4.1): truncated, then one less where that
-/// rounded up (a negative fraction).
+/// coordinate (x86-64 has no inline floor before SSE4.1).
 #[inline]
-fn cell_of(p: Vec3, size: f32) -> IVec3 {
-    let floor = |v: f32| {
-        let t = v as i32;
-        t.saturating_sub(i32::from(t as f32 > v))
-    };
+pub(crate) fn cell_of(p: Vec3, size: f32) -> IVec3 {
     let q = p / size;
-    IVec3::new(floor(q.x), floor(q.y), floor(q.z))
+    IVec3::new(floor_i32(q.x), floor_i32(q.y), floor_i32(q.z))
+}
+
+/// `v.floor() as i32` without libm: truncated, then one less where that rounded up (a
+/// negative fraction).
+#[inline]
+pub(crate) fn floor_i32(v: f32) -> i32 {
+    let t = v as i32;
+    t.saturating_sub(i32::from(t as f32 > v))
 }
 
 /// Z-order id of a non-negative cell coordinate (eq. 8), by bit spreading instead of the
@@ -403,6 +406,36 @@ fn spread(v: u32) -> u64 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The libm-free floor is libm's, saturating as `as` does, at the edges that matter.
+    #[test]
+    fn floor_is_libms() {
+        for x in [
+            0.0,
+            -0.0,
+            0.5,
+            -0.5,
+            1.0,
+            -1.0,
+            2.999_999_8,
+            -2.999_999_8,
+            1e-30,
+            -1e-30,
+            16_777_217.0,
+            -16_777_217.0,
+            2_147_483_520.0,
+            -2_147_483_648.0,
+            3e9,
+            -3e9,
+            f32::MAX,
+            f32::MIN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            f32::NAN,
+        ] {
+            assert_eq!(floor_i32(x), x.floor() as i32, "{x}");
+        }
+    }
 
     #[test]
     fn morton_interleaves_bits() {

@@ -11,6 +11,7 @@ use crate::mesh::{
     SignedDistance, SurfaceBins, TriMesh, area_weighted_normals, cells_between,
     self_intersecting_faces,
 };
+use crate::neighbours::cell_of;
 
 /// Frame t's neighbours for [`follow_fluid`]: a neighbour frame's mesh and particles.
 #[derive(Debug, Clone, Copy)]
@@ -200,7 +201,7 @@ fn faces_near(mesh: &TriMesh, moved: &[bool]) -> Vec<u32> {
         .map(|(lo, hi)| (*hi - *lo).max_element())
         .fold(0.0f32, f32::max)
         .max(f32::MIN_POSITIVE);
-    let cell_of = |p: Vec3| (p / size).floor().as_ivec3();
+    let cell_of = |p: Vec3| cell_of(p, size);
     let cells = |lo: Vec3, hi: Vec3| cells_between(cell_of(lo), cell_of(hi));
     let mut grid: FxHashMap<IVec3, Vec<u32>> = FxHashMap::default();
     for (k, &(lo, hi)) in boxes.iter().enumerate() {
@@ -222,7 +223,8 @@ fn faces_near(mesh: &TriMesh, moved: &[bool]) -> Vec<u32> {
             })
     };
     mesh.triangles
-        .iter()
+        .par_iter()
+        .with_min_len(4096)
         .enumerate()
         .filter(|(_, t)| meets(bounds(t)))
         .map(|(f, _)| f as u32)

@@ -14,6 +14,7 @@ use rayon::prelude::*;
 use rustc_hash::FxHashMap;
 
 use crate::mesh::adjacency::Neighbours;
+use crate::neighbours::cell_of;
 
 /// Normals that turn more than this against each other face each other (120°).
 const FACING: f32 = -0.5;
@@ -75,7 +76,7 @@ impl Clearance {
             u32::MAX => 0.0,
             c => towards[c as usize],
         };
-        let cell_of = |p: Vec3| (p / reach).floor().as_ivec3();
+        let cell_of = |p: Vec3| cell_of(p, reach);
         // Vertices sorted by cell, and each occupied cell's run of them.
         let mut order: Vec<(IVec3, u32)> = (0..vertices.len() as u32)
             .into_par_iter()
