@@ -161,7 +161,18 @@ impl Batch {
         let report = if pipeline.follows_fluid() && self.inputs.len() > 1 {
             run_following(&self.inputs, plan, self.fail_fast, progress, &mut pipeline)
         } else {
-            run_overlapped(plan, self.fail_fast, progress, &mut pipeline)
+            let reading: Vec<PathBuf> = plan.frames.iter().map(|(i, _)| i.clone()).collect();
+            run_overlapped(
+                plan,
+                self.fail_fast,
+                progress,
+                &mut pipeline,
+                &reading,
+                |pipeline, input, reads, progress| {
+                    let loaded = reads.next()?;
+                    pipeline.make(input, loaded, progress)
+                },
+            )
         };
         let outputs = self.outputs()?;
         if let Some(stage) = self.usd_stage(&outputs) {

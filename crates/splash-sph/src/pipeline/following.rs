@@ -4,8 +4,9 @@
 //! reconstructed too, also where another job writes them (`--shard`) or their output exists
 //! (`skip_existing`), so that every job writes the bytes one run over the whole sequence
 //! writes. At most three prepared frames are held at once, with their triangles binned for
-//! distance queries (each frame's once, for both frames beside it). A frame without both neighbours (the
-//! ends of the selection, a gap in its frame numbers, a neighbour that fails or has no
+//! distance queries (each frame's once, for both frames beside it), and one file read ahead
+//! while the last mesh is written, as frames meshed alone are. A frame without both neighbours
+//! (the ends of the selection, a gap in its frame numbers, a neighbour that fails or has no
 //! particles, particles that cannot be matched) is post-processed alone, with a warning.
 
 use std::collections::BTreeMap;
@@ -13,14 +14,16 @@ use std::collections::btree_map::Entry;
 use std::path::PathBuf;
 
 use super::frame::{Prepared, Ready};
-use super::{FramePipeline, Plan, Progress, RunReport, run_plan};
+use super::overlap::{Reads, run_overlapped};
+use super::{FramePipeline, Plan, Progress, RunReport};
 use crate::error::{Error, Result};
 use crate::frames::path_frame_number;
 use crate::mesh::SurfaceBins;
 use crate::temporal::{Neighbour, follow_fluid, neighbour_bins};
 
 /// Runs the plan's frames of the selection `inputs`, each following the fluid from its
-/// neighbours; see the module's header.
+/// neighbours, the next file read and the last mesh written on threads of their own
+/// ([`run_overlapped`]); see the module's header.
 pub(super) fn run_following(
     inputs: &[PathBuf],
     plan: Plan,
@@ -29,28 +32,33 @@ pub(super) fn run_following(
     pipeline: &mut FramePipeline,
 ) -> RunReport {
     let selection = Selection::new(inputs);
-    let (loader, writer) = (pipeline.loader(), pipeline.writer());
-    // The frames' positions in the selection, in the order run_plan takes them.
+    let reading: Vec<PathBuf> = read_order(&plan.positions, inputs.len())
+        .into_iter()
+        .map(|j| inputs[j].clone())
+        .collect();
+    // The frames' positions in the selection, in the order the plan takes them.
     let mut positions = plan.positions.clone().into_iter();
     // Frames prepared, by position in the selection.
     let mut held: BTreeMap<usize, Result<Ready>> = BTreeMap::new();
     // Their triangles binned as neighbours, each once for both frames beside it.
     let mut bins: BTreeMap<usize, SurfaceBins> = BTreeMap::new();
-    run_plan(plan, fail_fast, progress, |_, output, progress| {
+    let make = |pipeline: &mut FramePipeline,
+                _: &std::path::Path,
+                reads: &mut dyn Reads,
+                progress: &mut dyn Progress| {
         let at = positions.next().expect("one position per frame to do");
-        held.retain(|&j, _| j + 1 >= at);
-        bins.retain(|&j, _| j + 1 >= at);
-        let near = at.saturating_sub(1)..(at + 2).min(inputs.len());
-        for (j, path) in near.clone().zip(&inputs[near]) {
+        held.retain(|&j, _| kept(j, at));
+        bins.retain(|&j, _| kept(j, at));
+        for j in near(at, inputs.len()) {
             if let Entry::Vacant(slot) = held.entry(j) {
-                let prepared = loader
-                    .load(path)
-                    .and_then(|loaded| pipeline.prepare(path, loaded, progress));
+                let prepared = reads
+                    .next()
+                    .and_then(|loaded| pipeline.prepare(&inputs[j], loaded, progress));
                 slot.insert(prepared);
             }
         }
         // The frame's own error stays its outcome; its neighbours keep only its message.
-        let made = match held.remove(&at).expect("prepared above") {
+        match held.remove(&at).expect("prepared above") {
             Ok(Ready::Surface(p)) => {
                 let mesh = follow(pipeline, &selection, at, &p, &held, &mut bins, progress);
                 let made = pipeline.finish(&p, mesh);
@@ -66,9 +74,31 @@ pub(super) fn run_following(
                 held.insert(at, Err(Error::input(e.to_string())));
                 Err(e)
             }
-        };
-        made.and_then(|made| writer.write(output, made))
-    })
+        }
+    };
+    run_overlapped(plan, fail_fast, progress, pipeline, &reading, make)
+}
+
+/// The frames of the selection that making frame `at` needs prepared: it and those beside it.
+fn near(at: usize, frames: usize) -> std::ops::Range<usize> {
+    at.saturating_sub(1)..(at + 2).min(frames)
+}
+
+/// Whether frame `j` is still held when frame `at` is made (frames are made in order).
+fn kept(j: usize, at: usize) -> bool {
+    j + 1 >= at
+}
+
+/// The frames read, in order, to make the frames at `positions` of a selection of `frames`:
+/// each the first time a frame made needs it while it is not held.
+fn read_order(positions: &[usize], frames: usize) -> Vec<usize> {
+    let mut held = std::collections::BTreeSet::new();
+    let mut order = Vec::new();
+    for &at in positions {
+        held.retain(|&j| kept(j, at));
+        order.extend(near(at, frames).filter(|&j| held.insert(j)));
+    }
+    order
 }
 
 /// Frame `at`'s surface moved towards its neighbours', or its own where it cannot follow them

@@ -102,7 +102,9 @@ impl FramePipeline {
         }
     }
 
-    /// Reads `input`, writes its mesh to `output`, and returns the frame's figures.
+    /// Reads `input`, writes its mesh to `output`, and returns the frame's figures: a frame
+    /// alone, for the tests that compare runs with it.
+    #[cfg(test)]
     pub fn frame(
         &mut self,
         input: &Path,

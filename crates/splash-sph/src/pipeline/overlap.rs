@@ -1,27 +1,63 @@
-//! A sequence's frames in a three-stage software pipeline: while frame k is reconstructed on
-//! the caller's workers, frame k+1 is read on one thread and frame k−1's mesh written on
+//! A sequence's frames in a three-stage software pipeline: while frame k is made on the
+//! caller's workers, the next file is read on one thread and frame k−1's mesh written on
 //! another, so that neither the parsing nor the formatting nor the disk's fsync holds the
-//! workers up. At most one frame read ahead and one mesh being written are held besides the
-//! current frame. The caller is told of every frame in frame order, with the messages, outcomes
-//! and files that [`run_plan`] gives frame after frame.
+//! workers up. At most one file read ahead and one mesh being written are held besides what the
+//! make step keeps. The caller is told of every frame in frame order, with the messages,
+//! outcomes and files that [`run_plan`] gives frame after frame.
 
 use std::path::{Path, PathBuf};
 use std::sync::mpsc;
 use std::thread;
 
-use super::frame::Made;
+use super::frame::{Loaded, Loader, Made};
 use super::{FrameOutcome, FramePipeline, Plan, Progress, RunReport, run_plan};
-use crate::error::Result;
+use crate::error::{Error, Result};
 use crate::frames::path_frame_number;
 use crate::report::{FrameStats, Observer};
 
-/// Runs `pipeline` on the plan's frames, overlapped; see the module's header.
+/// The files a run reads, handed to its make step in the order of the run's list.
+pub(super) trait Reads {
+    /// The next file of the list, read.
+    fn next(&mut self) -> Result<Loaded>;
+}
+
+/// Files read on the reader's thread, one ahead.
+struct Ahead<'a>(&'a mpsc::Receiver<Result<Loaded>>);
+
+impl Reads for Ahead<'_> {
+    fn next(&mut self) -> Result<Loaded> {
+        // Only a panic of the reader ends the channel early; the scope raises it again.
+        self.0
+            .recv()
+            .unwrap_or_else(|_| Err(Error::input("the reader thread stopped")))
+    }
+}
+
+/// Files read when the make step asks (a run without its writer's thread).
+struct InPlace<'a> {
+    loader: Loader,
+    files: std::slice::Iter<'a, PathBuf>,
+}
+
+impl Reads for InPlace<'_> {
+    fn next(&mut self) -> Result<Loaded> {
+        let file = self.files.next().expect("no more reads than the list");
+        self.loader.load(file)
+    }
+}
+
+/// Runs the plan's frames, overlapped (see the module's header): `reading` are the files to
+/// read, in the order that `make(pipeline, input, reads, progress)` takes them when making
+/// the plan's frames one after the other; a frame's own particles are read for it alone.
 pub(super) fn run_overlapped(
     plan: Plan,
     fail_fast: bool,
     progress: &mut dyn Progress,
     pipeline: &mut FramePipeline,
+    reading: &[PathBuf],
+    mut make: impl FnMut(&mut FramePipeline, &Path, &mut dyn Reads, &mut dyn Progress) -> Result<Made>,
 ) -> RunReport {
+    let (loader, writer) = (pipeline.loader(), pipeline.writer());
     // The writer formats on one thread of its own: the caller's workers are reconstructing,
     // and a pool of one keeps a text writer from reaching for rayon's global pool.
     let Ok(write_pool) = rayon::ThreadPoolBuilder::new()
@@ -29,20 +65,24 @@ pub(super) fn run_overlapped(
         .thread_name(|_| "splash-writer".into())
         .build()
     else {
+        let mut reads = InPlace {
+            loader,
+            files: reading.iter(),
+        };
         return run_plan(plan, fail_fast, progress, |input, output, progress| {
-            pipeline.frame(input, output, progress)
+            let made = make(pipeline, input, &mut reads, progress)?;
+            writer.write(output, made)
         });
     };
-    let (loader, writer) = (pipeline.loader(), pipeline.writer());
     let total = plan.frames.len();
     let mut outcomes = Vec::with_capacity(total);
     let mut not_attempted = 0;
     thread::scope(|s| {
         let frames = &plan.frames;
-        // A rendezvous: the reader holds one frame until the loop takes it.
+        // A rendezvous: the reader holds one file until the make step takes it.
         let (read, reads) = mpsc::sync_channel(0);
         s.spawn(move || {
-            for (input, _) in frames {
+            for input in reading {
                 if read.send(loader.load(input)).is_err() {
                     return;
                 }
@@ -71,15 +111,13 @@ pub(super) fn run_overlapped(
                 not_attempted = total - k;
                 break;
             }
-            // Only a panic of the reader ends the channel early; the scope raises it again.
-            let Ok(loaded) = reads.recv() else { break };
             // The messages of frame k wait for frame k−1's end, as they would frame after frame.
             let mut deferred = Deferred {
                 progress: &mut *progress,
                 held: writing.is_some(),
                 messages: Vec::new(),
             };
-            let made = loaded.and_then(|loaded| pipeline.make(input, loaded, &mut deferred));
+            let made = make(pipeline, input, &mut Ahead(&reads), &mut deferred);
             let messages = deferred.messages;
             if let Some(previous) = writing.take() {
                 let Ok(result) = written.recv() else { break };
