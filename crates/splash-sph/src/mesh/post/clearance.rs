@@ -137,6 +137,9 @@ impl Clearance {
         // same on any number) until nothing changes, the least room over the mesh's paths, or
         // SWEEPS have run: on cbd-large f23 and cbd-small f40 all of them run without settling,
         // so the room is an upper bound of that least room where it spreads far.
+        // A vertex is visited only while a neighbour's room has changed since its last visit
+        // (`stale`): a visit of any other finds every bound as it was, and changes nothing.
+        let mut stale = vec![true; room.len()];
         for sweep in 0..SWEEPS {
             let mut changed = false;
             for k in 0..room.len() {
@@ -145,12 +148,22 @@ impl Clearance {
                 } else {
                     room.len() - 1 - k
                 };
+                if !std::mem::take(&mut stale[v]) {
+                    continue;
+                }
+                let mut lowered = false;
                 for &u in rings.of(v) {
                     let bound =
                         room[u as usize] + SLOPE * vertices[v].distance(vertices[u as usize]);
                     if bound < room[v] {
                         room[v] = bound;
-                        changed = true;
+                        lowered = true;
+                    }
+                }
+                if lowered {
+                    changed = true;
+                    for &u in rings.of(v) {
+                        stale[u as usize] = true;
                     }
                 }
             }
