@@ -25,6 +25,7 @@ import zipfile
 import bpy
 import numpy as np
 from mathutils import Vector
+from mathutils.bvhtree import BVHTree
 
 ZIP = os.environ["SPLASH_ADDON_ZIP"]
 SPLASH = os.environ["SPLASH_BIN"]
@@ -259,6 +260,25 @@ def test_vdb(particles, seqs, sequence):
 
     ours, theirs = volume(v.astype(np.float64), f), volume(lv, lt)
     check(abs(theirs / ours - 1) < 0.02, f"vdb frame 3: volume {theirs} against the mesh's {ours}")
+
+    def farthest(points, p, t):
+        """The largest distance from `points` to the surface of triangles `t` over `p`."""
+        tree = BVHTree.FromPolygons(p.tolist(), t.tolist())
+        return max(tree.find_nearest(q)[3] for q in points.tolist())
+
+    # Blender's Volume to Mesh puts voxel ijk's value at (ijk + 1/2) voxels, where OpenVDB
+    # (vdb_tool, Houdini) and the file's transform put it at ijk: its mesh of the ball comes
+    # out half a voxel higher on every axis (Blender 3.4 and 4.5 alike), the grid's own
+    # zero crossing being where splash's mesh is (tests/vdb_cli.rs meshes it with vdb_tool).
+    shift = 0.5 * cell
+    moved = (lv.min(0) + lv.max(0)) / 2 - (v.min(0) + v.max(0)) / 2
+    check(np.allclose(moved, shift, atol=0.1 * cell), f"vdb frame 3: Blender's half voxel {moved}")
+    # Two-sided Hausdorff at the vertices, that half voxel taken back: each surface within
+    # half a cell of the other.
+    there, back = farthest(v, lv - shift, lt), farthest(lv - shift, v, f)
+    check(max(there, back) < 0.5 * cell,
+          f"vdb frame 3: Hausdorff {there / cell:.3f} (mesh to level set), "
+          f"{back / cell:.3f} (back) cells")  # fmt: skip
     evaluated.to_mesh_clear()
 
     obj, files = sequence.import_sequence(bpy.context, directory, "Y", name="fluid_vdb")
