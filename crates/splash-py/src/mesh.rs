@@ -9,6 +9,7 @@ use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use splash_sph::io::{self, VertexAttributes};
+use splash_sph::level_set::LevelSet;
 use splash_sph::mesh::Edges;
 use splash_sph::{Attribute, MeshFormat, TriMesh, UpAxis};
 
@@ -112,24 +113,28 @@ impl Mesh {
     /// creating missing directories.
     ///
     /// ``format``: ``"obj"``, ``"ply"`` (binary), ``"ply-ascii"``, ``"pov"``, ``"vtk"``,
-    /// ``"vtu"``, ``"vtp"`` or ``"usd"`` (a ``.usda`` layer); by default the configuration's
-    /// ``output.format``, else the one the extension implies (``.obj``, ``.ply``, ``.inc``,
-    /// ``.vtk``, ``.vtu``, ``.vtp``, ``.usda``), else OBJ. ``up_axis``: ``"z"`` or ``"y"``
-    /// turns the written coordinates so that that axis is up (the arrays are left as they
-    /// are); by default the configuration's ``output.up_axis``. PLY, VTK and USD files get
-    /// every attribute of the mesh (``velocity`` as the PLY properties ``vx vy vz``, USD's
-    /// ``velocities``); OBJ and POV-Ray files leave them out. The GIL is released while
-    /// writing.
+    /// ``"vtu"``, ``"vtp"``, ``"usd"`` (a ``.usda`` layer) or ``"vdb"``; by default the
+    /// configuration's ``output.format``, else the one the extension implies (``.obj``,
+    /// ``.ply``, ``.inc``, ``.vtk``, ``.vtu``, ``.vtp``, ``.usda``, ``.vdb``), else OBJ.
+    /// ``up_axis``: ``"z"`` or ``"y"`` turns the written coordinates so that that axis is up
+    /// (the arrays are left as they are); by default the configuration's ``output.up_axis``.
+    /// PLY, VTK and USD files get every attribute of the mesh (``velocity`` as the PLY
+    /// properties ``vx vy vz``, USD's ``velocities``); OBJ and POV-Ray files leave them out. A
+    /// VDB file holds the mesh's level set alone (``write_vdb`` also writes grids), on voxels
+    /// of edge ``voxel``: by default the cell of the reconstruction that made the mesh. The
+    /// GIL is released while writing.
     ///
     /// Raises OSError when the file cannot be written, ValueError for an unknown format or
-    /// one that contradicts the extension.
-    #[pyo3(signature = (path, format=None, up_axis=None))]
+    /// one that contradicts the extension, and for a VDB file without ``voxel`` of a mesh whose
+    /// report has no cell.
+    #[pyo3(signature = (path, format=None, up_axis=None, voxel=None))]
     fn write(
         &self,
         py: Python<'_>,
         path: PathBuf,
         format: Option<&str>,
         up_axis: Option<&str>,
+        voxel: Option<f32>,
     ) -> PyResult<()> {
         let format = self.format_for(&path, format)?;
         let up_axis = match up_axis {
@@ -137,6 +142,28 @@ impl Mesh {
             None => self.up_axis,
         };
         let mut mesh = self.arrays(py)?;
+        if format == MeshFormat::Vdb {
+            let cell = self.report.bind(py).get_item("cell")?;
+            let cell = cell.filter(|c| !c.is_none());
+            let voxel = match (voxel, cell) {
+                (Some(v), _) => v,
+                (None, Some(cell)) => cell.extract()?,
+                (None, None) => {
+                    return Err(PyValueError::new_err(
+                        "a .vdb file holds the mesh's level set: give voxel=, the voxels' \
+                         edge (the mesh's report has no reconstruction cell)",
+                    ));
+                }
+            };
+            return py
+                .detach(|| {
+                    if let Some(axis) = up_axis {
+                        axis.rotate_mesh(&mut mesh, &mut []);
+                    }
+                    LevelSet::of_mesh(&mesh, voxel)?.write_file(&path, &[])
+                })
+                .map_err(to_py);
+        }
         // Every attribute, where the format has room for them: (V,) arrays as numbers, (V, 3)
         // arrays as vectors.
         let mut named: Vec<(String, Attribute)> = Vec::new();

@@ -57,3 +57,20 @@ def test_write_vdb_with_grids_and_bad_input(tmp_path):
     listing = subprocess.run(["vdb_print", "-l", str(path)], capture_output=True, text=True, check=True).stdout
     for expected in ["Name: surface", "class: level set", "Name: v", "Name: speed", f"file_voxel_count: {n}"]:
         assert expected in listing, listing
+
+
+def test_mesh_write_vdb_is_write_vdb_at_the_cell(tmp_path):
+    """``Mesh.write`` of a ``.vdb`` path writes the level set on the reconstruction's cell, the
+    same bytes as ``write_vdb`` at that voxel; a mesh without a cell needs ``voxel=``."""
+    particles, r = ball()
+    mesh = splash_sph.reconstruct(particles, spacing=r, cell="r/2")
+    mesh.write(tmp_path / "ball.vdb")
+    splash_sph.write_vdb(tmp_path / "direct.vdb", mesh, r / 2)
+    assert (tmp_path / "ball.vdb").read_bytes() == (tmp_path / "direct.vdb").read_bytes()
+    mesh.write(tmp_path / "coarse.dat", format="vdb", voxel=r)
+    splash_sph.write_vdb(tmp_path / "coarse.vdb", mesh, r)
+    assert (tmp_path / "coarse.dat").read_bytes() == (tmp_path / "coarse.vdb").read_bytes()
+    alone = splash_sph.postprocess((mesh.vertices, mesh.faces), spacing=r)
+    with pytest.raises(ValueError, match="voxel="):
+        alone.write(tmp_path / "alone.vdb")
+    assert not (tmp_path / "alone.vdb").exists()

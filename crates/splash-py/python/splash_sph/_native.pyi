@@ -93,22 +93,26 @@ class Mesh:
         path: _Path,
         format: Optional[str] = None,
         up_axis: Optional[str] = None,
+        voxel: Optional[float] = None,
     ) -> None:
         """Writes the mesh to ``path`` atomically (a reader sees the old file or the new one),
         creating missing directories.
 
         ``format``: ``"obj"``, ``"ply"`` (binary), ``"ply-ascii"``, ``"pov"``, ``"vtk"``,
-        ``"vtu"``, ``"vtp"`` or ``"usd"`` (a ``.usda`` layer); by default the configuration's
-        ``output.format``, else the one the extension implies (``.obj``, ``.ply``, ``.inc``,
-        ``.vtk``, ``.vtu``, ``.vtp``, ``.usda``), else OBJ. ``up_axis``: ``"z"`` or ``"y"``
-        turns the written coordinates so that that axis is up (the arrays are left as they
-        are); by default the configuration's ``output.up_axis``. PLY, VTK and USD files get
-        every attribute of the mesh (``velocity`` as the PLY properties ``vx vy vz``, USD's
-        ``velocities``); OBJ and POV-Ray files leave them out. The GIL is released while
-        writing.
+        ``"vtu"``, ``"vtp"``, ``"usd"`` (a ``.usda`` layer) or ``"vdb"``; by default the
+        configuration's ``output.format``, else the one the extension implies (``.obj``,
+        ``.ply``, ``.inc``, ``.vtk``, ``.vtu``, ``.vtp``, ``.usda``, ``.vdb``), else OBJ.
+        ``up_axis``: ``"z"`` or ``"y"`` turns the written coordinates so that that axis is up
+        (the arrays are left as they are); by default the configuration's ``output.up_axis``.
+        PLY, VTK and USD files get every attribute of the mesh (``velocity`` as the PLY
+        properties ``vx vy vz``, USD's ``velocities``); OBJ and POV-Ray files leave them out. A
+        VDB file holds the mesh's level set alone (``write_vdb`` also writes grids), on voxels
+        of edge ``voxel``: by default the cell of the reconstruction that made the mesh. The
+        GIL is released while writing.
 
         Raises OSError when the file cannot be written, ValueError for an unknown format or
-        one that contradicts the extension.
+        one that contradicts the extension, and for a VDB file without ``voxel`` of a mesh whose
+        report has no cell.
         """
 
 def read_particles(path: _Path, format: Optional[str] = None) -> Particles:
