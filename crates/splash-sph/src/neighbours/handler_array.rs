@@ -407,36 +407,6 @@ fn spread(v: u32) -> u64 {
 mod tests {
     use super::*;
 
-    /// The libm-free floor is libm's, saturating as `as` does, at the edges that matter.
-    #[test]
-    fn floor_is_libms() {
-        for x in [
-            0.0,
-            -0.0,
-            0.5,
-            -0.5,
-            1.0,
-            -1.0,
-            2.999_999_8,
-            -2.999_999_8,
-            1e-30,
-            -1e-30,
-            16_777_217.0,
-            -16_777_217.0,
-            2_147_483_520.0,
-            -2_147_483_648.0,
-            3e9,
-            -3e9,
-            f32::MAX,
-            f32::MIN,
-            f32::INFINITY,
-            f32::NEG_INFINITY,
-            f32::NAN,
-        ] {
-            assert_eq!(floor_i32(x), x.floor() as i32, "{x}");
-        }
-    }
-
     #[test]
     fn morton_interleaves_bits() {
         assert_eq!(morton(IVec3::new(1, 0, 0)), 1);
