@@ -46,9 +46,10 @@ impl Reads for InPlace<'_> {
     }
 }
 
-/// Runs the plan's frames, overlapped (see the module's header): `reading` are the files to
-/// read, in the order that `make(pipeline, input, reads, progress)` takes them when making
-/// the plan's frames one after the other; a frame's own particles are read for it alone.
+/// Runs the plan's frames, overlapped (see the module's header): `make(pipeline, input,
+/// reads, progress)` makes each frame of the plan in turn, taking from `reads` the files of
+/// `reading` in their order (one per frame when frames are meshed alone; a following sequence
+/// reads its neighbours too).
 pub(super) fn run_overlapped(
     plan: Plan,
     fail_fast: bool,
