@@ -61,16 +61,15 @@ enum Feature {
     Vertex(u32),
 }
 
-/// The nearest triangles so far: the squared distance, the nearest point, and the
-/// pseudonormal summed over every triangle that reaches that point (the faces of an edge or a
-/// vertex all do: ties within a hair of the distance).
+/// The nearest triangles so far: the squared distance, the nearest point, and every triangle
+/// that reaches that point (the faces of an edge or a vertex all do: ties within a hair of the
+/// distance) with the feature it reaches it by, whose pseudonormals [`signed`] sums.
 #[derive(Debug, Clone, Copy)]
 struct Nearest {
     d2: f32,
     point: Vec3,
-    normal: Vec3,
-    /// The triangles summed (a triangle binned in several cells is met again).
-    faces: [u32; 16],
+    /// The triangles tied (a triangle binned in several cells is met again), in the order met.
+    faces: [(u32, Feature); 16],
     count: usize,
 }
 
@@ -285,7 +284,7 @@ impl SignedDistance<'_> {
             }
         }
         let b = best?;
-        (b.d2.sqrt() <= bins.reach).then(|| signed(p, &b))
+        (b.d2.sqrt() <= bins.reach).then(|| signed(p, &b, self.vertices, self.triangles))
     }
 }
 
@@ -300,7 +299,7 @@ pub fn signed_distance_among(
 ) -> Option<f32> {
     let mut best = None;
     nearest_in(p, candidates, vertices, triangles, &mut best);
-    best.map(|b| signed(p, &b))
+    best.map(|b| signed(p, &b, vertices, triangles))
 }
 
 /// The unsigned distance from `p` to the triangle `tri` of `vertices`.
@@ -313,10 +312,28 @@ pub fn nearest_on_triangle(p: Vec3, tri: [u32; 3], vertices: &[Vec3]) -> Vec3 {
     closest_on_triangle(p, tri, vertices).0
 }
 
-/// The distance of `best`, negative when `p` lies behind its pseudonormal.
-fn signed(p: Vec3, best: &Nearest) -> f32 {
+/// The distance of `best`, negative when `p` lies behind its pseudonormal: the sum of its
+/// tied triangles' shares, made once the nearest are known.
+fn signed(p: Vec3, best: &Nearest, vertices: &[Vec3], triangles: &[[u32; 3]]) -> f32 {
     let d = best.d2.sqrt();
-    if (p - best.point).dot(best.normal) < 0.0 {
+    let share = |&(t, feature): &(u32, Feature)| {
+        let tri = triangles[t as usize];
+        let [a, b, c] = tri.map(|i| vertices[i as usize]);
+        let face = (b - a).cross(c - a).normalize_or_zero();
+        // Bærentzen & Aanæs's pseudonormals: an edge's is the sum of its faces' normals, a
+        // vertex's the sum weighted by each face's angle there.
+        match feature {
+            Feature::Face | Feature::Edge => face,
+            Feature::Vertex(v) => {
+                let k = tri.iter().position(|&i| i == v).unwrap_or(0);
+                let [o, u, w] = [k, (k + 1) % 3, (k + 2) % 3].map(|i| [a, b, c][i]);
+                face * (u - o).angle_between(w - o)
+            }
+        }
+    };
+    let tied = &best.faces[..best.count];
+    let normal = tied[1..].iter().fold(share(&tied[0]), |sum, f| sum + share(f));
+    if (p - best.point).dot(normal) < 0.0 {
         -d
     } else {
         d
@@ -324,7 +341,7 @@ fn signed(p: Vec3, best: &Nearest) -> f32 {
 }
 
 /// Folds `candidates` into `best`: a nearer one replaces it, one as near (a face of the same
-/// edge or vertex, or a duplicate visit) adds its pseudonormal share.
+/// edge or vertex, or a duplicate visit) joins its ties.
 fn nearest_in(
     p: Vec3,
     candidates: impl IntoIterator<Item = u32>,
@@ -336,43 +353,25 @@ fn nearest_in(
         let tri = triangles[t as usize];
         let (q, feature) = closest_on_triangle(p, tri, vertices);
         let d2 = p.distance_squared(q);
-        if best.is_some_and(|n| d2 > n.d2 * (1.0 + TIE) + f32::MIN_POSITIVE) {
-            // Farther than the nearest so far: no pseudonormal to make.
-            continue;
-        }
-        let [a, b, c] = tri.map(|i| vertices[i as usize]);
-        let face = (b - a).cross(c - a).normalize_or_zero();
-        // Bærentzen & Aanæs's pseudonormals: an edge's is the sum of its faces' normals, a
-        // vertex's the sum weighted by each face's angle there.
-        let normal = match feature {
-            Feature::Face | Feature::Edge => face,
-            Feature::Vertex(v) => {
-                let k = tri.iter().position(|&i| i == v).unwrap_or(0);
-                let [o, u, w] = [k, (k + 1) % 3, (k + 2) % 3].map(|i| [a, b, c][i]);
-                face * (u - o).angle_between(w - o)
-            }
-        };
         match best {
             Some(n) if d2 > n.d2 * (1.0 + TIE) + f32::MIN_POSITIVE => {}
             Some(n) if d2 >= n.d2 * (1.0 - TIE) => {
-                if n.faces[..n.count].contains(&t) || n.count == n.faces.len() {
+                if n.faces[..n.count].iter().any(|&(f, _)| f == t) || n.count == n.faces.len() {
                     continue;
                 }
-                n.faces[n.count] = t;
+                n.faces[n.count] = (t, feature);
                 n.count += 1;
                 if d2 < n.d2 {
                     n.d2 = d2;
                     n.point = q;
                 }
-                n.normal += normal;
             }
             _ => {
-                let mut faces = [0; 16];
-                faces[0] = t;
+                let mut faces = [(0, Feature::Face); 16];
+                faces[0] = (t, feature);
                 *best = Some(Nearest {
                     d2,
                     point: q,
-                    normal,
                     faces,
                     count: 1,
                 })
