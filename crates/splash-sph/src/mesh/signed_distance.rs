@@ -332,7 +332,9 @@ fn signed(p: Vec3, best: &Nearest, vertices: &[Vec3], triangles: &[[u32; 3]]) ->
         }
     };
     let tied = &best.faces[..best.count];
-    let normal = tied[1..].iter().fold(share(&tied[0]), |sum, f| sum + share(f));
+    let normal = tied[1..]
+        .iter()
+        .fold(share(&tied[0]), |sum, f| sum + share(f));
     if (p - best.point).dot(normal) < 0.0 {
         -d
     } else {

@@ -1,17 +1,13 @@
 //! Surfaces that follow the fluid from frame to frame (issue 38): [`follow_fluid`], by the
 //! method [`Followed`] describes.
 
-use glam::{IVec3, Vec3};
+use glam::Vec3;
 use rayon::prelude::*;
-use rustc_hash::FxHashMap;
 
 use super::motion::{FrameMotion, mean_motions};
 use crate::error::Result;
-use crate::mesh::{
-    SignedDistance, SurfaceBins, TriMesh, area_weighted_normals, cells_between,
-    self_intersecting_faces,
-};
-use crate::neighbours::cell_of;
+use crate::mesh::post::put_back_crossings;
+use crate::mesh::{SignedDistance, SurfaceBins, TriMesh, area_weighted_normals};
 
 /// Frame t's neighbours for [`follow_fluid`]: a neighbour frame's mesh and particles.
 #[derive(Debug, Clone, Copy)]
@@ -114,7 +110,13 @@ pub fn follow_fluid(
             *x += *n * offset;
         }
     }
-    untangle(mesh, &own, &mut offsets);
+    // Where following made faces cross (two sheets pulled towards different neighbours'
+    // surfaces), their corners and a ring keep their own frame's places.
+    let movable: Vec<bool> = offsets.iter().map(|&o| o != 0.0).collect();
+    let went_back = put_back_crossings(&mut mesh.vertices, &mesh.triangles, &own, &movable);
+    for (offset, _) in offsets.iter_mut().zip(&went_back).filter(|(_, b)| **b) {
+        *offset = 0.0;
+    }
     let mut followed = Followed::default();
     let mut squares = 0.0f64;
     for &offset in offsets.iter().filter(|&&o| o != 0.0) {
@@ -127,106 +129,4 @@ pub fn follow_fluid(
         mesh.normals = area_weighted_normals(&mesh.vertices, &mesh.triangles);
     }
     Ok(Some(followed))
-}
-
-/// Where following the neighbours made faces cross (two sheets pulled towards different
-/// neighbours' surfaces), the vertices of those faces and a ring around them go back to their
-/// own frame's places (`own`, with `offsets` zeroed), up to ROUNDS times: a surface that did
-/// not cross before following does not after. The first round tests every face; later ones
-/// only the faces near those whose corners went back, as no other pair changed.
-fn untangle(mesh: &mut TriMesh, own: &[Vec3], offsets: &mut [f32]) {
-    const ROUNDS: usize = 3;
-    let mut near: Option<Vec<u32>> = None;
-    for _ in 0..ROUNDS {
-        let crossing = match &near {
-            None => self_intersecting_faces(&mesh.vertices, &mesh.triangles),
-            Some(faces) => {
-                let some: Vec<[u32; 3]> =
-                    faces.iter().map(|&f| mesh.triangles[f as usize]).collect();
-                self_intersecting_faces(&mesh.vertices, &some)
-                    .into_iter()
-                    .map(|k| faces[k as usize])
-                    .collect()
-            }
-        };
-        let mut back = vec![false; own.len()];
-        for &f in &crossing {
-            for v in mesh.triangles[f as usize] {
-                back[v as usize] = true;
-            }
-        }
-        // One ring wider: every face touching a vertex going back takes its others along.
-        let ring: Vec<u32> = mesh
-            .triangles
-            .iter()
-            .filter(|t| t.iter().any(|&v| back[v as usize]))
-            .flatten()
-            .copied()
-            .collect();
-        let mut went_back = vec![false; own.len()];
-        let mut moved = false;
-        for v in ring {
-            let v = v as usize;
-            if offsets[v] != 0.0 {
-                mesh.vertices[v] = own[v];
-                offsets[v] = 0.0;
-                went_back[v] = true;
-                moved = true;
-            }
-        }
-        if !moved {
-            // Nothing left to put back: what still crosses crossed in the frame's own mesh.
-            return;
-        }
-        near = Some(faces_near(mesh, &went_back));
-    }
-}
-
-/// The faces whose bounding boxes meet the box of a face with a corner in `moved`: the only
-/// faces that can meet those faces.
-fn faces_near(mesh: &TriMesh, moved: &[bool]) -> Vec<u32> {
-    let bounds = |t: &[u32; 3]| {
-        let [a, b, c] = t.map(|i| mesh.vertices[i as usize]);
-        (a.min(b).min(c), a.max(b).max(c))
-    };
-    let boxes: Vec<(Vec3, Vec3)> = mesh
-        .triangles
-        .iter()
-        .filter(|t| t.iter().any(|&v| moved[v as usize]))
-        .map(bounds)
-        .collect();
-    // Cells as wide as the widest moved box: each of those boxes meets at most 8.
-    let size = boxes
-        .iter()
-        .map(|(lo, hi)| (*hi - *lo).max_element())
-        .fold(0.0f32, f32::max)
-        .max(f32::MIN_POSITIVE);
-    let cell_of = |p: Vec3| cell_of(p, size);
-    let cells = |lo: Vec3, hi: Vec3| cells_between(cell_of(lo), cell_of(hi));
-    let mut grid: FxHashMap<IVec3, Vec<u32>> = FxHashMap::default();
-    for (k, &(lo, hi)) in boxes.iter().enumerate() {
-        for c in cells(lo, hi) {
-            grid.entry(c).or_default().push(k as u32);
-        }
-    }
-    let meets = |(lo, hi): (Vec3, Vec3)| {
-        // A face far wider than the moved ones is kept rather than walked cell by cell.
-        let span = cell_of(hi) - cell_of(lo);
-        span.max_element() > 8
-            || cells(lo, hi).any(|c| {
-                grid.get(&c).is_some_and(|ks| {
-                    ks.iter().any(|&k| {
-                        let (l, h) = boxes[k as usize];
-                        lo.cmple(h).all() && l.cmple(hi).all()
-                    })
-                })
-            })
-    };
-    mesh.triangles
-        .par_iter()
-        .with_min_len(4096)
-        .enumerate()
-        .filter(|(_, t)| meets(bounds(t)))
-        .map(|(f, _)| f as u32)
-        .collect()
 }

@@ -11,12 +11,14 @@
 
 mod clearance;
 mod clipping;
+mod crossings;
 mod decimation;
 pub(crate) mod refinement;
 pub(crate) mod smoothing;
 pub(crate) mod volume;
 
 pub use clipping::clip_to_box;
+pub(crate) use crossings::put_back_crossings;
 pub use decimation::decimate;
 pub use volume::VolumeScope;
 

@@ -1,0 +1,119 @@
+//! Faces that moving the vertices made cross (following the fluid moves them towards the
+//! neighbours' surfaces): their corners, and a ring around them, go back to where they were
+//! before (`before`), until nothing crosses that did not before.
+//! Faces are tested exactly ([`self_intersecting_faces`]): the whole mesh once, then only the
+//! faces near those put back, as no other pair changed.
+
+use glam::{IVec3, Vec3};
+use rayon::prelude::*;
+use rustc_hash::FxHashMap;
+
+use crate::mesh::{cells_between, self_intersecting_faces};
+use crate::neighbours::cell_of;
+
+/// Rounds of putting back: each looks again only near the faces whose corners went back.
+const ROUNDS: usize = 3;
+
+/// Puts back the `movable` vertices (those that moved since `before`) whose faces
+/// cross another face, and a ring around them, to `before`, up to ROUNDS times: a mesh that
+/// did not cross at `before` does not after. Returns which vertices went back. What still
+/// crosses crossed at `before` too.
+pub(crate) fn put_back_crossings(
+    vertices: &mut [Vec3],
+    triangles: &[[u32; 3]],
+    before: &[Vec3],
+    movable: &[bool],
+) -> Vec<bool> {
+    let mut went_back = vec![false; vertices.len()];
+    let mut near: Option<Vec<u32>> = None;
+    for _ in 0..ROUNDS {
+        let crossing = match &near {
+            None => self_intersecting_faces(vertices, triangles),
+            Some(faces) => {
+                let some: Vec<[u32; 3]> = faces.iter().map(|&f| triangles[f as usize]).collect();
+                self_intersecting_faces(vertices, &some)
+                    .into_iter()
+                    .map(|k| faces[k as usize])
+                    .collect()
+            }
+        };
+        let mut back = vec![false; vertices.len()];
+        for &f in &crossing {
+            for v in triangles[f as usize] {
+                back[v as usize] = true;
+            }
+        }
+        // One ring wider: every face touching a vertex going back takes its others along.
+        let ring: Vec<u32> = triangles
+            .iter()
+            .filter(|t| t.iter().any(|&v| back[v as usize]))
+            .flatten()
+            .copied()
+            .collect();
+        let mut moved = vec![false; vertices.len()];
+        let mut any = false;
+        for v in ring {
+            let v = v as usize;
+            if movable[v] && !went_back[v] {
+                vertices[v] = before[v];
+                moved[v] = true;
+                went_back[v] = true;
+                any = true;
+            }
+        }
+        if !any {
+            // Nothing left to put back: what still crosses crossed before.
+            break;
+        }
+        near = Some(faces_near(vertices, triangles, &moved));
+    }
+    went_back
+}
+
+/// The faces whose bounding boxes meet the box of a face with a corner in `moved`: the only
+/// faces that can meet those faces.
+fn faces_near(vertices: &[Vec3], triangles: &[[u32; 3]], moved: &[bool]) -> Vec<u32> {
+    let bounds = |t: &[u32; 3]| {
+        let [a, b, c] = t.map(|i| vertices[i as usize]);
+        (a.min(b).min(c), a.max(b).max(c))
+    };
+    let boxes: Vec<(Vec3, Vec3)> = triangles
+        .iter()
+        .filter(|t| t.iter().any(|&v| moved[v as usize]))
+        .map(bounds)
+        .collect();
+    // Cells as wide as the widest moved box: each of those boxes meets at most 8.
+    let size = boxes
+        .iter()
+        .map(|(lo, hi)| (*hi - *lo).max_element())
+        .fold(0.0f32, f32::max)
+        .max(f32::MIN_POSITIVE);
+    let cell_of = |p: Vec3| cell_of(p, size);
+    let cells = |lo: Vec3, hi: Vec3| cells_between(cell_of(lo), cell_of(hi));
+    let mut grid: FxHashMap<IVec3, Vec<u32>> = FxHashMap::default();
+    for (k, &(lo, hi)) in boxes.iter().enumerate() {
+        for c in cells(lo, hi) {
+            grid.entry(c).or_default().push(k as u32);
+        }
+    }
+    let meets = |(lo, hi): (Vec3, Vec3)| {
+        // A face far wider than the moved ones is kept rather than walked cell by cell.
+        let span = cell_of(hi) - cell_of(lo);
+        span.max_element() > 8
+            || cells(lo, hi).any(|c| {
+                grid.get(&c).is_some_and(|ks| {
+                    ks.iter().any(|&k| {
+                        let (l, h) = boxes[k as usize];
+                        lo.cmple(h).all() && l.cmple(hi).all()
+                    })
+                })
+            })
+    };
+    triangles
+        .par_iter()
+        .with_min_len(4096)
+        .enumerate()
+        .filter(|(_, t)| meets(bounds(t)))
+        .map(|(f, _)| f as u32)
+        .collect()
+}
