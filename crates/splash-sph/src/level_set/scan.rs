@@ -23,7 +23,7 @@ use crate::data::TriMesh;
 use crate::io::vdb_file_order;
 use crate::mesh::cells_between;
 use crate::mesh::signed_distance::triangle_distance;
-use crate::neighbours::floor_i32;
+use crate::neighbours::{ceil_i32, floor_i32};
 
 /// Slack, in voxels, on every side of a region: rounding never leaves a voxel out.
 const SLACK: f32 = 0.01;
@@ -383,20 +383,13 @@ impl<const N: usize> Region<N> {
                 if from > to {
                     continue;
                 }
-                for z in ceil(from)..=floor_i32(to) {
+                for z in ceil_i32(from)..=floor_i32(to) {
                     column[k] = z;
                     f(column);
                 }
             }
         }
     }
-}
-
-/// `x.ceil()` for a coordinate within i32's reach, without a call into libm (as
-/// [`floor_i32`] floors).
-fn ceil(x: f32) -> i32 {
-    let i = x as i32;
-    if (i as f32) < x { i + 1 } else { i }
 }
 
 /// The voxels from `lo` to `hi` (index space), None beyond the reach of i32 indices.

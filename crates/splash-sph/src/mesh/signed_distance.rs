@@ -113,8 +113,13 @@ impl SurfaceBins {
         } else {
             reach
         };
+        let bounds = vertices
+            .iter()
+            .fold((Vec3::MAX, Vec3::MIN), |(lo, hi), &v| {
+                (lo.min(v), hi.max(v))
+            });
         let keys = loop {
-            match CellKeys::new(vertices, cell) {
+            match CellKeys::new(bounds, cell) {
                 Some(keys) => break keys,
                 // A mesh thousands of cells across in every direction: wider cells, as many
                 // triangles found by fewer.
@@ -189,14 +194,9 @@ struct CellKeys {
 }
 
 impl CellKeys {
-    /// The numbering of the cells `cell` wide that `vertices` meet, or None when it needs more
-    /// than 32 bits.
-    fn new(vertices: &[Vec3], cell: f32) -> Option<CellKeys> {
-        let (lo, hi) = vertices
-            .iter()
-            .fold((Vec3::MAX, Vec3::MIN), |(lo, hi), &v| {
-                (lo.min(v), hi.max(v))
-            });
+    /// The numbering of the cells `cell` wide that the box `(lo, hi)` around a mesh's vertices
+    /// meets, or None when it needs more than 32 bits.
+    fn new((lo, hi): (Vec3, Vec3), cell: f32) -> Option<CellKeys> {
         // The floor is monotone: the cells of the lowest and highest coordinates.
         let low = cell_of(lo, cell);
         let high = cell_of(hi, cell).max(low);

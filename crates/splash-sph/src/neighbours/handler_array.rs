@@ -387,6 +387,14 @@ pub(crate) fn floor_i32(v: f32) -> i32 {
     t.saturating_sub(i32::from(t as f32 > v))
 }
 
+/// `v.ceil() as i32` without libm, as [`floor_i32`] floors: one more where truncating rounded
+/// down (a positive fraction).
+#[inline]
+pub(crate) fn ceil_i32(v: f32) -> i32 {
+    let t = v as i32;
+    t.saturating_add(i32::from((t as f32) < v))
+}
+
 /// Z-order id of a non-negative cell coordinate (eq. 8), by bit spreading instead of the
 /// paper's lookup table.
 fn morton(c: IVec3) -> u64 {

@@ -6,8 +6,8 @@ pub(crate) mod box_filter;
 pub(crate) mod bucket_grid;
 mod counting_sort;
 pub(crate) mod handler_array;
-
-pub(crate) use handler_array::{cell_of, floor_i32};
 pub(crate) mod lane;
 pub(crate) mod lane_sums;
 pub(crate) mod neighbourhood;
+
+pub(crate) use handler_array::{ceil_i32, cell_of, floor_i32};

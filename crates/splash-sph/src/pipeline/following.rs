@@ -11,7 +11,7 @@
 
 use std::collections::BTreeMap;
 use std::collections::btree_map::Entry;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 use super::frame::{Prepared, Ready};
 use super::overlap::{Reads, run_overlapped};
@@ -43,7 +43,7 @@ pub(super) fn run_following(
     // Their triangles binned as neighbours, each once for both frames beside it.
     let mut bins: BTreeMap<usize, SurfaceBins> = BTreeMap::new();
     let make = |pipeline: &mut FramePipeline,
-                _: &std::path::Path,
+                _: &Path,
                 reads: &mut dyn Reads,
                 progress: &mut dyn Progress| {
         let at = positions.next().expect("one position per frame to do");
