@@ -4,10 +4,12 @@
 
 pub(crate) mod box_filter;
 pub(crate) mod bucket_grid;
+mod cell_keys;
 mod counting_sort;
 pub(crate) mod handler_array;
 pub(crate) mod lane;
 pub(crate) mod lane_sums;
 pub(crate) mod neighbourhood;
 
+pub(crate) use cell_keys::CellKeys;
 pub(crate) use handler_array::{ceil_i32, cell_of, floor_i32};

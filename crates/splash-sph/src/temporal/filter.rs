@@ -113,7 +113,7 @@ pub fn follow_fluid(
     // Where following made faces cross (two sheets pulled towards different neighbours'
     // surfaces), their corners and a ring keep their own frame's places.
     let movable: Vec<bool> = offsets.iter().map(|&o| o != 0.0).collect();
-    let went_back = put_back_crossings(&mut mesh.vertices, &mesh.triangles, &own, &movable);
+    let went_back = put_back_crossings(&mut mesh.vertices, &mesh.triangles, &own, &movable, None);
     for (offset, _) in offsets.iter_mut().zip(&went_back).filter(|(_, b)| **b) {
         *offset = 0.0;
     }

@@ -7,14 +7,16 @@
 //! and half the distance to the nearest vertex within the reach on that side whose normal
 //! faces its own, each less a margin; then no more than a tenth of the distance beyond a
 //! neighbour's room, so that the offset shears no triangle over another. Smoothing between
-//! the steps is not held to it, so it makes crossings rare, not impossible.
+//! the steps is not held to it, so it makes crossings rare, not impossible: the guard at the
+//! end (`crossings.rs`) tests the faces near two close sides (`close`) and puts back the few
+//! that still cross.
 
 use glam::{IVec3, Vec3};
 use rayon::prelude::*;
 use rustc_hash::FxHashMap;
 
 use crate::mesh::adjacency::Neighbours;
-use crate::neighbours::cell_of;
+use crate::neighbours::{CellKeys, cell_of};
 
 /// Normals that turn more than this against each other face each other (120°).
 const FACING: f32 = -0.5;
@@ -32,6 +34,9 @@ pub struct Clearance {
     /// Per component, the direction along the normals the volume steps move it: +1 out, −1 in,
     /// 0 not at all.
     towards: Vec<f32>,
+    /// Per vertex, whether a vertex of any component whose normal faces its own lies within
+    /// the reach, on either side.
+    close: Vec<bool>,
 }
 
 impl Clearance {
@@ -70,52 +75,79 @@ impl Clearance {
             })
             .collect();
         if !(reach.is_finite() && reach > 0.0) || vertices.is_empty() {
-            return Clearance { room, towards };
+            let close = vec![false; vertices.len()];
+            return Clearance {
+                room,
+                towards,
+                close,
+            };
         }
         let side = |v: usize| match of_vertex[v] {
             u32::MAX => 0.0,
             c => towards[c as usize],
         };
-        let cell_of = |p: Vec3| cell_of(p, reach);
-        // Vertices sorted by cell, and each occupied cell's run of them.
-        let mut order: Vec<(IVec3, u32)> = (0..vertices.len() as u32)
+        let used = |v: usize| of_vertex[v] != u32::MAX && vertices[v].is_finite();
+        let bounds = (0..vertices.len())
+            .filter(|&v| used(v))
+            .fold((Vec3::MAX, Vec3::MIN), |(lo, hi), v| {
+                (lo.min(vertices[v]), hi.max(vertices[v]))
+            });
+        // Cells at least the reach wide, wider where the span needs more than 32 bits of key:
+        // the 27 around a vertex's still hold all within the reach.
+        let mut cell = reach;
+        let keys = loop {
+            match CellKeys::new(bounds, cell) {
+                Some(keys) => break keys,
+                None => cell *= 2.0,
+            }
+        };
+        let cell_of = |p: Vec3| cell_of(p, cell);
+        // Vertices sorted by cell (`key << 32 | vertex`), and each occupied cell's run of them:
+        // those of components that do not move too, to find every vertex close to another
+        // (`close`).
+        let mut order: Vec<u64> = (0..vertices.len() as u32)
             .into_par_iter()
-            .filter(|&v| side(v as usize) != 0.0 && vertices[v as usize].is_finite())
-            .map(|v| (cell_of(vertices[v as usize]), v))
+            .filter(|&v| used(v as usize))
+            .map(|v| u64::from(keys.packed(cell_of(vertices[v as usize]))) << 32 | u64::from(v))
             .collect();
-        order.par_sort_unstable_by_key(|&(c, v)| (c.to_array(), v));
-        let mut runs: Vec<(IVec3, usize, usize)> = Vec::new();
-        for (i, &(c, _)) in order.iter().enumerate() {
+        order.par_sort_unstable();
+        let mut runs: Vec<(u32, usize, usize)> = Vec::new();
+        for (i, &e) in order.iter().enumerate() {
+            let key = (e >> 32) as u32;
             match runs.last_mut() {
-                Some(run) if run.0 == c => run.2 = i + 1,
-                _ => runs.push((c, i, i + 1)),
+                Some(run) if run.0 == key => run.2 = i + 1,
+                _ => runs.push((key, i, i + 1)),
             }
         }
-        let cells: FxHashMap<[i32; 3], (usize, usize)> = runs
-            .iter()
-            .map(|&(c, s, e)| (c.to_array(), (s, e)))
-            .collect();
-        let rooms: Vec<(u32, f32)> = runs
+        let cells: FxHashMap<u32, (usize, usize)> =
+            runs.iter().map(|&(k, s, e)| (k, (s, e))).collect();
+        let rooms: Vec<(u32, f32, bool)> = runs
             .par_iter()
-            .flat_map_iter(|&(c, s, e)| {
+            .flat_map_iter(|&(_, s, e)| {
                 // The 27 cells around this one, looked up once for all its vertices.
+                let c = cell_of(vertices[order[s] as u32 as usize]);
                 let near: Vec<(usize, usize)> = (-1..=1)
                     .flat_map(|z| (-1..=1).flat_map(move |y| (-1..=1).map(move |x| [x, y, z])))
-                    .filter_map(|d| cells.get(&(c + IVec3::from_array(d)).to_array()).copied())
+                    .filter_map(|d| keys.key(c + IVec3::from_array(d)))
+                    .filter_map(|k| cells.get(&k).copied())
                     .collect();
                 let order = &order;
                 // Only candidates whose normal can face some vertex of this cell's: within
                 // FACING's angle less the cell's own spread of normals, none can.
                 let facing = facing_candidates(&order[s..e], &near, order, normals);
                 (s..e).map(move |i| {
-                    let v = order[i].1 as usize;
+                    let v = order[i] as u32 as usize;
                     let (p, n, dir) = (vertices[v], normals[v], side(v));
-                    let mut nearest = f32::INFINITY;
+                    // The nearest facing vertex that moves, on the side this one moves to; and
+                    // the nearest of all.
+                    let (mut nearest, mut any) = (f32::INFINITY, f32::INFINITY);
                     for &u in &facing {
-                        let q = vertices[u as usize];
-                        let d = q - p;
-                        if dir * d.dot(n) > 0.0 && n.dot(normals[u as usize]) < FACING {
-                            nearest = nearest.min(d.length_squared());
+                        let d = vertices[u as usize] - p;
+                        if n.dot(normals[u as usize]) < FACING {
+                            any = any.min(d.length_squared());
+                            if dir * d.dot(n) > 0.0 && side(u as usize) != 0.0 {
+                                nearest = nearest.min(d.length_squared());
+                            }
                         }
                     }
                     let nearest = nearest.sqrt();
@@ -124,12 +156,14 @@ impl Clearance {
                     } else {
                         f32::INFINITY
                     };
-                    (v as u32, r)
+                    (v as u32, r, any <= reach * reach)
                 })
             })
             .collect();
-        for (v, r) in rooms {
+        let mut close = vec![false; vertices.len()];
+        for (v, r, c) in rooms {
             room[v as usize] = room[v as usize].min(r);
+            close[v as usize] = c;
         }
         // Room that changes by at most SLOPE per unit of length along the surface: a vertex
         // beside one held back moves little more than it, so that the offset does not fold the
@@ -171,7 +205,18 @@ impl Clearance {
                 break;
             }
         }
-        Clearance { room, towards }
+        Clearance {
+            room,
+            towards,
+            close,
+        }
+    }
+
+    /// Which vertices have a vertex within the reach (of any component, on either side) whose
+    /// normal faces their own: where two sides of the surface are close. None are without a
+    /// reach.
+    pub fn into_close(self) -> Vec<bool> {
+        self.close
     }
 
     /// Gives vertices added after the others (a refinement's midpoints) the room of the vertex
@@ -179,6 +224,7 @@ impl Clearance {
     pub fn extend(&mut self, parents: impl IntoIterator<Item = u32>) {
         for p in parents {
             self.room.push(self.room[p as usize]);
+            self.close.push(self.close[p as usize]);
         }
     }
 
@@ -222,21 +268,21 @@ impl Clearance {
 /// that mean) and a margin for rounding; all of them where the run's normals spread too far.
 /// The rest cannot pass the facing test, so the nearest facing vertex is the same.
 fn facing_candidates(
-    run: &[(IVec3, u32)],
+    run: &[u64],
     near: &[(usize, usize)],
-    order: &[(IVec3, u32)],
+    order: &[u64],
     normals: &[Vec3],
 ) -> Vec<u32> {
     let all = || {
         near.iter()
-            .flat_map(|&(s, e)| order[s..e].iter().map(|&(_, u)| u))
+            .flat_map(|&(s, e)| order[s..e].iter().map(|&u| u as u32))
     };
-    let sum: Vec3 = run.iter().map(|&(_, v)| normals[v as usize]).sum();
+    let sum: Vec3 = run.iter().map(|&v| normals[v as u32 as usize]).sum();
     let mean = sum.normalize_or_zero();
     // The widest angle is the least cosine's.
     let spread = run
         .iter()
-        .map(|&(_, v)| normals[v as usize])
+        .map(|&v| normals[v as u32 as usize])
         .filter(|n| *n != Vec3::ZERO)
         .map(|n| mean.dot(n).clamp(-1.0, 1.0))
         .fold(1.0f32, f32::min)

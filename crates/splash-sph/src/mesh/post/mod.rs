@@ -19,6 +19,7 @@ pub(crate) mod volume;
 
 pub use clipping::clip_to_box;
 pub(crate) use crossings::put_back_crossings;
+use crossings::uncross;
 pub use decimation::decimate;
 pub use volume::VolumeScope;
 
@@ -364,7 +365,8 @@ fn smooth_and_restore(
             smoothed
         },
     );
-    *vertices = smoothed;
+    // The raw places, for the faces that the smoothing and the volume steps make cross.
+    let raw = std::mem::replace(vertices, smoothed);
     if normals.len() != vertices.len() {
         // Zeroed pages rather than a fill on one thread: every normal is written next.
         *normals = vec![Vec3::ZERO; vertices.len()];
@@ -435,10 +437,11 @@ fn smooth_and_restore(
     }
     // The normals for the refinement and the relaxation.
     vertex_normals(vertices, triangles, rings.faces(), normals);
+    let mut parents = Vec::new();
     if config.refine_angle > 0.0 {
         // Made anew at the refined size; the refinement's own arrays take their place.
         measures = Measures::default();
-        let parents = refine_bends(
+        parents = refine_bends(
             vertices,
             normals,
             triangles,
@@ -451,7 +454,7 @@ fn smooth_and_restore(
         for &p in &parents {
             components.of_vertex.push(components.of_vertex[p as usize]);
         }
-        clearance.extend(parents);
+        clearance.extend(parents.iter().copied());
         debug_assert_eq!(components.of_vertex.len(), vertices.len());
     }
     let scratch = measures.scratch(vertices.len());
@@ -477,6 +480,7 @@ fn smooth_and_restore(
         config.volume_steps,
         max_step,
     );
+    uncross(vertices, triangles, raw, &parents, &clearance.into_close());
     if wants_normals {
         normals_and_measures(
             vertices,

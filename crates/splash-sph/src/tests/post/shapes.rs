@@ -7,7 +7,7 @@ use glam::Vec3;
 use crate::mesh::post::{PostConfig, Volumes, postprocess_mesh};
 use crate::mesh::topology::{component_volumes, normal_agreement, signed_volume, topology};
 use crate::mesh::{TriMesh, VolumeScope, self_intersecting_faces};
-use crate::tests::common::{lattice_ball, shared_data, torus};
+use crate::tests::common::{fixture, lattice_ball, shared_data, torus};
 use crate::{Config, Length, Reconstructor};
 
 const R: f32 = 0.1;
@@ -255,6 +255,43 @@ fn real_frames_whose_sheets_the_volume_steps_crossed_no_longer_cross() {
             crossing.len()
         );
         assert!(topology(&mesh).is_closed_manifold());
+    }
+}
+
+#[test]
+fn faces_the_smoothing_makes_cross_go_back_to_the_raw_surface() {
+    // The bundled frame at cell 2r (SSP07) and at r (density): before the guard against
+    // crossings the default crossed 10 and 4 faces, sheets smoothed into each other (at 2r
+    // Marching Cubes' own surface crosses 8, which the smoothing takes apart).
+    let particles = crate::read_particles(&fixture("frame_0040.ply"), None)
+        .unwrap()
+        .positions;
+    for (cell, field) in [(2.0, "ssp07"), (1.0, "density")] {
+        let run = |raw| {
+            let config = Config {
+                field: crate::field::FieldConfig::named(field).unwrap(),
+                spacing: Some(0.014),
+                cell: Length::Spacings(cell),
+                post: PostConfig {
+                    raw,
+                    ..PostConfig::default()
+                },
+                ..Config::default()
+            };
+            Reconstructor::new(config)
+                .unwrap()
+                .reconstruct(&particles)
+                .unwrap()
+                .mesh
+        };
+        let (raw, post) = (run(true), run(false));
+        let crossing = self_intersecting_faces(&post.vertices, &post.triangles);
+        assert!(
+            crossing.is_empty(),
+            "cell {cell} r: {} faces cross",
+            crossing.len()
+        );
+        assert_topology_kept(&raw, &post);
     }
 }
 

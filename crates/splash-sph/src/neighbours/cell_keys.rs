@@ -1,0 +1,48 @@
+//! Cells numbered by one 32-bit key (the signed-distance bins, the clearance's vertex grid):
+//! sorting by cell takes a radix sort of few passes, or entries of one word with an index.
+
+use glam::{IVec3, Vec3};
+
+use super::cell_of;
+
+/// Cells numbered from the lowest a set of points meets (a mesh's vertices), their three
+/// coordinates packed into one 32-bit key as few bits wide as the points' span needs: a radix
+/// sort then takes three or four passes, and a lookup hashes one word.
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct CellKeys {
+    low: IVec3,
+    high: IVec3,
+    /// Where the y and z coordinates start.
+    y: u32,
+    z: u32,
+}
+
+impl CellKeys {
+    /// The numbering of the cells `cell` wide that the box `(lo, hi)` around a mesh's vertices
+    /// meets, or None when it needs more than 32 bits.
+    pub(crate) fn new((lo, hi): (Vec3, Vec3), cell: f32) -> Option<CellKeys> {
+        // The floor is monotone: the cells of the lowest and highest coordinates.
+        let low = cell_of(lo, cell);
+        let high = cell_of(hi, cell).max(low);
+        let span = (high.as_i64vec3() - low.as_i64vec3()).max(glam::I64Vec3::ZERO);
+        let bits = span.to_array().map(|s| 64 - (s as u64).leading_zeros());
+        (bits.iter().sum::<u32>() <= 32).then_some(CellKeys {
+            low,
+            high,
+            y: bits[0],
+            z: bits[0] + bits[1],
+        })
+    }
+
+    /// The key of cell `c`, which lies within the mesh's cells.
+    pub(crate) fn packed(&self, c: IVec3) -> u32 {
+        let c = (c - self.low).as_uvec3();
+        // A span of 32 bits in x alone leaves nothing to shift in.
+        c.z.checked_shl(self.z).unwrap_or(0) | c.y.checked_shl(self.y).unwrap_or(0) | c.x
+    }
+
+    /// The key of cell `c`, or None when it lies beyond the mesh's cells (and so is empty).
+    pub(crate) fn key(&self, c: IVec3) -> Option<u32> {
+        (c.cmpge(self.low).all() && c.cmple(self.high).all()).then(|| self.packed(c))
+    }
+}
