@@ -7,6 +7,7 @@ pub(crate) mod adjacency;
 mod components;
 pub(crate) mod correction;
 mod edges;
+pub(crate) mod facing;
 pub(crate) mod marching_cubes;
 pub mod post;
 pub(crate) mod quality;

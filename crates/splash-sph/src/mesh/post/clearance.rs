@@ -11,15 +11,11 @@
 //! end (`crossings.rs`) tests the faces near two close sides (`close`) and puts back the few
 //! that still cross.
 
-use glam::{IVec3, Vec3};
+use glam::Vec3;
 use rayon::prelude::*;
-use rustc_hash::FxHashMap;
 
 use crate::mesh::adjacency::Neighbours;
-use crate::neighbours::{CellKeys, cell_of};
-
-/// Normals that turn more than this against each other face each other (120°).
-const FACING: f32 = -0.5;
+use crate::mesh::facing::{FACING, FacingGrid};
 /// How fast the room may grow along the surface, per unit length (crossing faces on cbd-large
 /// f23 2,788 with no limit; with 8, 16 and 24 rings of reach, 518 at 0.5, 10 at 0.15, 4 at 0.1;
 /// bumpiness 2.60° → 2.37°, the volume the same), and the most sweeps that spread it.
@@ -74,92 +70,42 @@ impl Clearance {
                 (focal - margin).max(0.0)
             })
             .collect();
-        if !(reach.is_finite() && reach > 0.0) || vertices.is_empty() {
+        let side = |v: usize| match of_vertex[v] {
+            u32::MAX => 0.0,
+            c => towards[c as usize],
+        };
+        // Every used vertex is in the grid, those of components that do not move too, to find
+        // every vertex close to another (`close`); only those that move hold others back.
+        let Some(grid) = FacingGrid::new(vertices, |v| of_vertex[v] != u32::MAX, reach) else {
             let close = vec![false; vertices.len()];
             return Clearance {
                 room,
                 towards,
                 close,
             };
-        }
-        let side = |v: usize| match of_vertex[v] {
-            u32::MAX => 0.0,
-            c => towards[c as usize],
         };
-        let used = |v: usize| of_vertex[v] != u32::MAX && vertices[v].is_finite();
-        let bounds = (0..vertices.len())
-            .filter(|&v| used(v))
-            .fold((Vec3::MAX, Vec3::MIN), |(lo, hi), v| {
-                (lo.min(vertices[v]), hi.max(vertices[v]))
-            });
-        // Cells at least the reach wide, wider where the span needs more than 32 bits of key:
-        // the 27 around a vertex's still hold all within the reach.
-        let mut cell = reach;
-        let keys = loop {
-            match CellKeys::new(bounds, cell) {
-                Some(keys) => break keys,
-                None => cell *= 2.0,
-            }
-        };
-        let cell_of = |p: Vec3| cell_of(p, cell);
-        // Vertices sorted by cell (`key << 32 | vertex`), and each occupied cell's run of them:
-        // those of components that do not move too, to find every vertex close to another
-        // (`close`).
-        let mut order: Vec<u64> = (0..vertices.len() as u32)
-            .into_par_iter()
-            .filter(|&v| used(v as usize))
-            .map(|v| u64::from(keys.packed(cell_of(vertices[v as usize]))) << 32 | u64::from(v))
-            .collect();
-        order.par_sort_unstable();
-        let mut runs: Vec<(u32, usize, usize)> = Vec::new();
-        for (i, &e) in order.iter().enumerate() {
-            let key = (e >> 32) as u32;
-            match runs.last_mut() {
-                Some(run) if run.0 == key => run.2 = i + 1,
-                _ => runs.push((key, i, i + 1)),
-            }
-        }
-        let cells: FxHashMap<u32, (usize, usize)> =
-            runs.iter().map(|&(k, s, e)| (k, (s, e))).collect();
-        let rooms: Vec<(u32, f32, bool)> = runs
-            .par_iter()
-            .flat_map_iter(|&(_, s, e)| {
-                // The 27 cells around this one, looked up once for all its vertices.
-                let c = cell_of(vertices[order[s] as u32 as usize]);
-                let near: Vec<(usize, usize)> = (-1..=1)
-                    .flat_map(|z| (-1..=1).flat_map(move |y| (-1..=1).map(move |x| [x, y, z])))
-                    .filter_map(|d| keys.key(c + IVec3::from_array(d)))
-                    .filter_map(|k| cells.get(&k).copied())
-                    .collect();
-                let order = &order;
-                // Only candidates whose normal can face some vertex of this cell's: within
-                // FACING's angle less the cell's own spread of normals, none can.
-                let facing = facing_candidates(&order[s..e], &near, order, normals);
-                (s..e).map(move |i| {
-                    let v = order[i] as u32 as usize;
-                    let (p, n, dir) = (vertices[v], normals[v], side(v));
-                    // The nearest facing vertex that moves, on the side this one moves to; and
-                    // the nearest of all.
-                    let (mut nearest, mut any) = (f32::INFINITY, f32::INFINITY);
-                    for &u in &facing {
-                        let d = vertices[u as usize] - p;
-                        if n.dot(normals[u as usize]) < FACING {
-                            any = any.min(d.length_squared());
-                            if dir * d.dot(n) > 0.0 && side(u as usize) != 0.0 {
-                                nearest = nearest.min(d.length_squared());
-                            }
-                        }
+        let rooms = grid.each(vertices, normals, |v, facing| {
+            let (p, n, dir) = (vertices[v], normals[v], side(v));
+            // The nearest facing vertex that moves, on the side this one moves to; and the
+            // nearest of all.
+            let (mut nearest, mut any) = (f32::INFINITY, f32::INFINITY);
+            for &u in facing {
+                let d = vertices[u as usize] - p;
+                if n.dot(normals[u as usize]) < FACING {
+                    any = any.min(d.length_squared());
+                    if dir * d.dot(n) > 0.0 && side(u as usize) != 0.0 {
+                        nearest = nearest.min(d.length_squared());
                     }
-                    let nearest = nearest.sqrt();
-                    let r = if nearest <= reach {
-                        (0.5 * nearest - margin).max(0.0)
-                    } else {
-                        f32::INFINITY
-                    };
-                    (v as u32, r, any <= reach * reach)
-                })
-            })
-            .collect();
+                }
+            }
+            let nearest = nearest.sqrt();
+            let r = if nearest <= reach {
+                (0.5 * nearest - margin).max(0.0)
+            } else {
+                f32::INFINITY
+            };
+            (v as u32, r, any <= reach * reach)
+        });
         let mut close = vec![false; vertices.len()];
         for (v, r, c) in rooms {
             room[v as usize] = room[v as usize].min(r);
@@ -260,39 +206,4 @@ impl Clearance {
                 *p += moved * *n;
             });
     }
-}
-
-/// The vertices of the cells `near` (runs of `order`) whose normals could face the normal of
-/// some vertex of `run`, in the cells' order: those whose angle to the run's mean normal
-/// exceeds FACING's angle less the run's spread (the largest angle of a normal of the run to
-/// that mean) and a margin for rounding; all of them where the run's normals spread too far.
-/// The rest cannot pass the facing test, so the nearest facing vertex is the same.
-fn facing_candidates(
-    run: &[u64],
-    near: &[(usize, usize)],
-    order: &[u64],
-    normals: &[Vec3],
-) -> Vec<u32> {
-    let all = || {
-        near.iter()
-            .flat_map(|&(s, e)| order[s..e].iter().map(|&u| u as u32))
-    };
-    let sum: Vec3 = run.iter().map(|&v| normals[v as u32 as usize]).sum();
-    let mean = sum.normalize_or_zero();
-    // The widest angle is the least cosine's.
-    let spread = run
-        .iter()
-        .map(|&v| normals[v as u32 as usize])
-        .filter(|n| *n != Vec3::ZERO)
-        .map(|n| mean.dot(n).clamp(-1.0, 1.0))
-        .fold(1.0f32, f32::min)
-        .acos();
-    let angle = FACING.acos() - spread - 0.01;
-    if mean == Vec3::ZERO || angle <= 0.0 {
-        return all().collect();
-    }
-    let most = angle.cos();
-    all()
-        .filter(|&u| mean.dot(normals[u as usize]) < most)
-        .collect()
 }
