@@ -444,7 +444,9 @@ impl Grid {
                 }
             }
         });
-        radsort::sort(&mut entries);
+        // Filled in face order: sorted stably by cell alone (half the passes of the whole
+        // word), each cell lists its faces in order, as a sort of the whole word would.
+        radsort::sort_by_key(&mut entries, |e| (e >> 32) as u32);
         self.entries = entries;
         true
     }
