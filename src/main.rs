@@ -479,13 +479,8 @@ fn recon_with(
 ) -> Result<ExitCode> {
     // The report gives the configuration as resolved, threads included.
     let report_config = args.run.report.is_some().then(|| config.clone());
-    if let Some(n) = config.threads.take() {
-        // Every frame runs in the global pool, sized once.
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(n)
-            .build_global()
-            .context("cannot start the worker threads")?;
-    }
+    // Every frame runs on the workers asked for, as in Python (splash_sph::install).
+    let threads = config.threads.take();
     let output = args
         .output
         .as_deref()
@@ -519,7 +514,7 @@ fn recon_with(
         fail_fast: args.farm.fail_fast,
         iso,
     };
-    let report = batch.run(&mut Metered(&mut console))?;
+    let report = splash_sph::install(threads, || batch.run(&mut Metered(&mut console)))??;
     if let (Some(path), Some(config)) = (&args.run.report, &report_config) {
         Report::of_run(&report.outcomes, config, this_build())?.write(path)?;
     }

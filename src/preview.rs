@@ -233,13 +233,8 @@ impl CameraPlan {
 
 pub fn preview(args: PreviewArgs) -> Result<ExitCode> {
     let mut config = args.config()?;
-    if let Some(n) = config.threads.take() {
-        // The previewer runs in the global pool, sized once.
-        rayon::ThreadPoolBuilder::new()
-            .num_threads(n)
-            .build_global()
-            .context("cannot start the worker threads")?;
-    }
+    // The previewer runs on the workers asked for, as recon's frames do.
+    let threads = config.threads.take();
     let camera_plan = args.camera_plan()?;
     let style = Style {
         background: parse_colour(&args.background).context("--background")?,
@@ -276,39 +271,41 @@ pub fn preview(args: PreviewArgs) -> Result<ExitCode> {
     job.check_writable()?;
     console.start(&job);
 
-    let (previewer, camera) = setup(
-        &inputs,
-        input_format,
-        &mut config,
-        &camera_plan,
-        bvh,
-        &console,
-    )?;
-    let report = run_plan(
-        job,
-        args.farm.fail_fast,
-        &mut console,
-        |input, output, _| {
-            let start = Instant::now();
-            let mut particles = read_particles(input, input_format)?;
-            let colouring = color_by
-                .as_deref()
-                .map(|name| Colouring::from_frame(input, &mut particles.attributes, name))
-                .transpose()?;
-            let preview = previewer.render_coloured(
-                &particles.positions,
-                colouring.as_ref(),
-                &camera,
-                &style,
-            )?;
-            write_png(output, &preview.image)?;
-            Ok(PreviewFrame {
-                stats: preview.stats,
-                kind: bvh,
-                seconds: start.elapsed().as_secs_f64(),
-            })
-        },
-    );
+    let report = splash_sph::install(threads, || -> Result<_> {
+        let (previewer, camera) = setup(
+            &inputs,
+            input_format,
+            &mut config,
+            &camera_plan,
+            bvh,
+            &console,
+        )?;
+        Ok(run_plan(
+            job,
+            args.farm.fail_fast,
+            &mut console,
+            |input, output, _| {
+                let start = Instant::now();
+                let mut particles = read_particles(input, input_format)?;
+                let colouring = color_by
+                    .as_deref()
+                    .map(|name| Colouring::from_frame(input, &mut particles.attributes, name))
+                    .transpose()?;
+                let preview = previewer.render_coloured(
+                    &particles.positions,
+                    colouring.as_ref(),
+                    &camera,
+                    &style,
+                )?;
+                write_png(output, &preview.image)?;
+                Ok(PreviewFrame {
+                    stats: preview.stats,
+                    kind: bvh,
+                    seconds: start.elapsed().as_secs_f64(),
+                })
+            },
+        ))
+    })??;
     if let Some(path) = &args.run.report {
         let size = [camera_plan.width, camera_plan.height];
         write_report(path, &report.outcomes, bvh, size, config.spacing)?;

@@ -13,7 +13,6 @@ use crate::arrays;
 use crate::errors::to_py;
 use crate::mesh::Mesh;
 use crate::particles::Particles;
-use crate::pools;
 use crate::settings::{self, Overrides};
 
 /// The name the values of ``iso(positions, values, ...)`` take in the library.
@@ -149,7 +148,9 @@ pub fn iso<'py>(
     let (format, up_axis) = (config.output.format, config.output.up_axis);
     let threads = config.threads.take();
     let surface = py
-        .detach(|| pools::install(threads, || extract(&positions, columns, &request, &config))?)
+        .detach(|| {
+            splash_sph::install(threads, || extract(&positions, columns, &request, &config))?
+        })
         .map_err(|e| match e {
             // A missing attribute is a missing key, as `Particles.attribute` raises.
             Error::Input(ref m) if m.starts_with("no particle attribute") => {

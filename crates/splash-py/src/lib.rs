@@ -8,7 +8,6 @@ mod iso;
 mod level_set;
 mod mesh;
 mod particles;
-mod pools;
 mod post;
 mod preview;
 mod read_mesh;

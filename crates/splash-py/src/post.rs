@@ -15,7 +15,6 @@ use crate::arrays;
 use crate::errors::to_py;
 use crate::mesh::Mesh;
 use crate::particles::Particles;
-use crate::pools;
 use crate::recon::as_written;
 use crate::settings::{self, Overrides};
 
@@ -168,7 +167,7 @@ pub fn postprocess<'py>(
             Some(particles) => Volumes::Particles { particles, cell },
             None => Volumes::Kept,
         };
-        pools::install(threads, || {
+        splash_sph::install(threads, || {
             postprocess_mesh(&mut out, r, volumes, &post, normals)
         })?
     })

@@ -12,7 +12,6 @@ use splash_sph::preview::{
 
 use crate::arrays;
 use crate::errors::to_py;
-use crate::pools;
 use crate::settings::{self, Overrides};
 
 fn vector(v: Option<(f32, f32, f32)>) -> Option<Vec3> {
@@ -131,7 +130,7 @@ pub fn preview<'py>(
                 }
                 (None, None) => Camera::auto(positions, previewer.margin(), up, view, fov, w, h)?,
             };
-            pools::install(threads, || {
+            splash_sph::install(threads, || {
                 previewer.render_coloured(positions, colouring.as_ref(), &cam, &style)
             })?
         })

@@ -14,7 +14,6 @@ use splash_sph::{
 use crate::arrays::{self, Points};
 use crate::errors::to_py;
 use crate::mesh::Mesh;
-use crate::pools;
 use crate::settings::{self, Overrides, options_function};
 
 /// A per-particle attribute to carry onto the vertices. Scalars ride in the x of a vector:
@@ -232,7 +231,7 @@ fn run(
     // The library would start a pool of its own for every call.
     let threads = config.threads.take();
     let reconstructor = Reconstructor::new(config)?;
-    pools::install(threads, || {
+    splash_sph::install(threads, || {
         let columns: Vec<ParticleAttribute> = attributes
             .iter()
             .map(|values| ParticleAttribute::Vector(values.to_vec()))

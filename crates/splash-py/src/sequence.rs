@@ -12,7 +12,6 @@ use splash_sph::pipeline::{Batch, FrameOutcome, Plan, Progress, RunReport};
 use splash_sph::{FrameStats, InputFormat};
 
 use crate::errors::to_py;
-use crate::pools;
 use crate::settings::{self, Overrides, options_function};
 
 /// The frame number of a file: the last run of digits in its name without the extension
@@ -126,7 +125,7 @@ fn recon_sequence<'py>(
             fail_fast,
             iso: None,
         };
-        pools::install(threads, || batch.run(&mut events))?
+        splash_sph::install(threads, || batch.run(&mut events))?
     });
     if let Some(e) = events.error.take() {
         return Err(e);

@@ -69,6 +69,7 @@ pub use recon::Reconstruction;
 pub use reconstructor::Reconstructor;
 pub use report::{Clock, CorrectionFigures, FrameStats, Observer, Stage, StageFigures};
 pub use spacing::estimate_spacing;
+pub use worker_pool::install;
 
 #[cfg(test)]
 mod tests;
