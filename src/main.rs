@@ -514,10 +514,14 @@ fn recon_with(
         fail_fast: args.farm.fail_fast,
         iso,
     };
-    let report = splash_sph::install(threads, || batch.run(&mut Metered(&mut console)))??;
-    if let (Some(path), Some(config)) = (&args.run.report, &report_config) {
-        Report::of_run(&report.outcomes, config, this_build())?.write(path)?;
-    }
+    // The report inside too: it gives the workers used.
+    let report = splash_sph::install(threads, || -> Result<_> {
+        let report = batch.run(&mut Metered(&mut console))?;
+        if let (Some(path), Some(config)) = (&args.run.report, &report_config) {
+            Report::of_run(&report.outcomes, config, this_build())?.write(path)?;
+        }
+        Ok(report)
+    })??;
     Ok(if console.finish(&report) {
         ExitCode::SUCCESS
     } else {

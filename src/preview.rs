@@ -280,7 +280,7 @@ pub fn preview(args: PreviewArgs) -> Result<ExitCode> {
             bvh,
             &console,
         )?;
-        Ok(run_plan(
+        let report = run_plan(
             job,
             args.farm.fail_fast,
             &mut console,
@@ -304,12 +304,14 @@ pub fn preview(args: PreviewArgs) -> Result<ExitCode> {
                     seconds: start.elapsed().as_secs_f64(),
                 })
             },
-        ))
+        );
+        // The report inside too: it gives the workers used.
+        if let Some(path) = &args.run.report {
+            let size = [camera_plan.width, camera_plan.height];
+            write_report(path, &report.outcomes, bvh, size, config.spacing)?;
+        }
+        Ok(report)
     })??;
-    if let Some(path) = &args.run.report {
-        let size = [camera_plan.width, camera_plan.height];
-        write_report(path, &report.outcomes, bvh, size, config.spacing)?;
-    }
     Ok(if console.finish(&report) {
         ExitCode::SUCCESS
     } else {

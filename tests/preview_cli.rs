@@ -46,6 +46,7 @@ fn a_sharded_sequence_gives_one_png_per_frame() {
     }
     let sim = dir.path("sim").display().to_string();
     let out = dir.out_dir("png");
+    let report = dir.path("report.json");
     for shard in ["1/2", "2/2"] {
         let run = splash(&[
             &sim,
@@ -55,6 +56,10 @@ fn a_sharded_sequence_gives_one_png_per_frame() {
             "48x32",
             "--shard",
             shard,
+            "--threads",
+            "3",
+            "--report",
+            report.to_str().unwrap(),
             "-o",
             &out,
         ]);
@@ -64,6 +69,10 @@ fn a_sharded_sequence_gives_one_png_per_frame() {
             String::from_utf8_lossy(&run.stderr)
         );
     }
+    // The report gives the workers asked for.
+    let report: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(report).unwrap()).unwrap();
+    assert_eq!(report["threads"], 3);
     assert_eq!(
         common::entries(&dir.path("png")),
         ["f_0001.png", "f_0002.png", "f_0003.png"]

@@ -63,6 +63,8 @@ fn recon_report_counts_match_the_ball_and_its_mesh() {
             &s(&mesh),
             "--report",
             &s(&report),
+            "--threads",
+            "3",
             "-q",
         ]);
         assert!(ok, "{err}");
@@ -70,6 +72,7 @@ fn recon_report_counts_match_the_ball_and_its_mesh() {
     }
     let report: Value =
         serde_json::from_str(&fs::read_to_string(dir.join("report.json")).unwrap()).unwrap();
+    assert_eq!(report["threads_used"], 3, "the workers asked for");
     let frame = &report["frames"][0];
     assert_eq!(report["frames"].as_array().unwrap().len(), 1);
     assert_eq!(frame["particles"], ball.len() as f64);
