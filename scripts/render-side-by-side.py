@@ -1,6 +1,7 @@
-"""Renders PLY meshes side by side, left to right, with Blender's Workbench engine (orthographic
-camera, studio light, smooth shading with each file's normals), for the pictures in
-docs/rendering.md:
+"""Renders PLY meshes (and VDB level sets, meshed by Blender's Volume to Mesh at the grid's
+resolution) side by side, left to right, with Blender's Workbench engine (orthographic camera,
+studio light, smooth shading with each file's normals), for the pictures in docs/rendering.md
+and docs/reference/vdb.md:
 
     blender -b --factory-startup --python scripts/render-side-by-side.py -- \
         --size 1200x400 -o out.png raw.ply default.ply peer.ply
@@ -21,7 +22,7 @@ from mathutils import Vector
 def arguments():
     argv = sys.argv[sys.argv.index("--") + 1 :] if "--" in sys.argv else []
     parser = argparse.ArgumentParser(prog="render-side-by-side.py")
-    parser.add_argument("meshes", nargs="+", help="PLY files, left to right")
+    parser.add_argument("meshes", nargs="+", help="PLY or VDB files, left to right")
     parser.add_argument("-o", "--output", required=True, help="PNG to write")
     parser.add_argument("--size", default="1200x400", help="WIDTHxHEIGHT in pixels")
     parser.add_argument("--direction", default="0,-1,-0.5", help="view direction x,y,z")
@@ -41,6 +42,25 @@ def import_ply(path):
     return obj
 
 
+def import_vdb(path):
+    """The zero level of the file's `surface` grid as a mesh object, as an artist gets it:
+    File > Import > OpenVDB, then a Volume to Mesh modifier at the grid's own resolution."""
+    bpy.ops.object.volume_import(filepath=path)
+    volume = bpy.context.selected_objects[0]
+    host = bpy.data.objects.new("vdb", bpy.data.meshes.new("vdb"))
+    bpy.context.scene.collection.objects.link(host)
+    mod = host.modifiers.new("level set", "VOLUME_TO_MESH")
+    mod.object, mod.grid_name, mod.threshold, mod.resolution_mode = volume, "surface", 0.0, "GRID"
+    evaluated = host.evaluated_get(bpy.context.evaluated_depsgraph_get())
+    obj = bpy.data.objects.new("vdb mesh", bpy.data.meshes.new_from_object(evaluated))
+    bpy.context.scene.collection.objects.link(obj)
+    bpy.data.objects.remove(host)
+    bpy.data.objects.remove(volume)
+    for polygon in obj.data.polygons:
+        polygon.use_smooth = True
+    return obj
+
+
 def bounds(obj):
     corners = [obj.matrix_world @ Vector(c) for c in obj.bound_box]
     low = Vector(tuple(min(c[i] for c in corners) for i in range(3)))
@@ -52,7 +72,7 @@ def main():
     args = arguments()
     bpy.ops.wm.read_factory_settings(use_empty=True)
     scene = bpy.context.scene
-    objects = [import_ply(path) for path in args.meshes]
+    objects = [import_vdb(p) if p.endswith(".vdb") else import_ply(p) for p in args.meshes]
     direction = Vector(tuple(float(v) for v in args.direction.split(","))).normalized()
     # Panels go toward the camera's right (direction × up), along ±x: left to right on screen.
     right = 1.0 if direction.cross(Vector((0.0, 0.0, 1.0))).x >= 0.0 else -1.0
