@@ -3,23 +3,21 @@
 //! recon's (the library's `frames` and `pipeline`), the logs, progress bar and summary too
 //! (log.rs); a frame's work here is an image, and its figures are a renderer's.
 
-use std::io::{IsTerminal, Write};
+use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
 
 use anyhow::{Context, Result, anyhow, bail};
 use clap::Args;
-use serde_json::json;
-
 use splash_sph::preview::{
-    BvhKind, Camera, Colouring, PreviewStats, Previewer, Style, parse_colour, parse_size,
-    robust_bounds, up_vector, write_png,
+    BvhKind, Camera, Colouring, ImageRecord, PreviewStats, Previewer, Style, parse_colour,
+    parse_size, robust_bounds, up_vector, write_png, write_report,
 };
 use splash_sph::{Bytes, Config, InputFormat, Vec3, estimate_spacing, read_particles};
 
-use splash_sph::frames::{Output, output_paths, path_frame_number};
-use splash_sph::pipeline::{FrameOutcome, Plan, run_plan};
+use splash_sph::frames::{Output, output_paths};
+use splash_sph::pipeline::{Plan, run_plan};
 
 use crate::farm::FarmArgs;
 use crate::log::{Console, FrameFigures, RunArgs, Verbosity};
@@ -308,7 +306,16 @@ pub fn preview(args: PreviewArgs) -> Result<ExitCode> {
         // The report inside too: it gives the workers used.
         if let Some(path) = &args.run.report {
             let size = [camera_plan.width, camera_plan.height];
-            write_report(path, &report.outcomes, bvh, size, config.spacing)?;
+            let images = report.outcomes.iter().filter_map(|o| {
+                let frame = o.result.as_ref().ok()?;
+                Some(ImageRecord {
+                    input: &o.input,
+                    output: &o.output,
+                    stats: &frame.stats,
+                    seconds: frame.seconds,
+                })
+            });
+            write_report(path, images, bvh, size, config.spacing)?;
         }
         Ok(report)
     })??;
@@ -417,30 +424,6 @@ fn setup(
 }
 
 /// The `--report` file: the run's settings and every written frame's figures.
-fn write_report(
-    path: &Path,
-    outcomes: &[FrameOutcome<PreviewFrame>],
-    bvh: BvhKind,
-    size: [u32; 2],
-    spacing: Option<f32>,
-) -> Result<()> {
-    let records: Vec<_> = outcomes
-        .iter()
-        .filter_map(|o| Some(record(&o.input, &o.output, o.result.as_ref().ok()?)))
-        .collect();
-    let report = json!({
-        "bvh": bvh.name(),
-        "size": size,
-        "spacing": spacing,
-        "threads": rayon::current_num_threads(),
-        "frames": records,
-    });
-    let mut file = std::fs::File::create(path)
-        .with_context(|| format!("cannot write the report '{}'", path.display()))?;
-    writeln!(file, "{}", serde_json::to_string_pretty(&report)?)?;
-    Ok(())
-}
-
 /// One image's figures, as the log and the report give them.
 pub struct PreviewFrame {
     stats: PreviewStats,
@@ -508,29 +491,4 @@ fn figures(s: &PreviewStats, kind: BvhKind) -> String {
         s.rays.metaballs as f64 / rays,
         s.rays.along_ray as f64 / rays,
     )
-}
-
-fn record(input: &Path, output: &Path, f: &PreviewFrame) -> serde_json::Value {
-    let s = &f.stats;
-    let rays = s.rays.rays.max(1) as f64;
-    json!({
-        "frame": path_frame_number(input),
-        "input": input.display().to_string(),
-        "output": output.display().to_string(),
-        "particles": s.particles,
-        "build_ms": s.build.as_secs_f64() * 1e3,
-        "render_ms": s.render.as_secs_f64() * 1e3,
-        "rays": s.rays.rays,
-        "rays_per_second": s.rays_per_second(),
-        "camera_rays": s.camera_rays,
-        "hits": s.hits,
-        "nodes": s.bvh.nodes,
-        "leaves": s.bvh.leaves,
-        "metaballs_per_leaf": s.bvh.per_leaf(),
-        "bvh_bytes": s.bvh.bytes,
-        "traversals_per_ray": s.rays.nodes as f64 / rays,
-        "intersection_tests_per_ray": s.rays.leaves as f64 / rays,
-        "metaballs_per_ray": s.rays.metaballs as f64 / rays,
-        "seconds": f.seconds,
-    })
 }
