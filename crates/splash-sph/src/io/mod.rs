@@ -24,7 +24,7 @@
 //!
 //! Meshes are written as OBJ, PLY (binary little-endian or ascii), POV-Ray `mesh2`, VTK legacy
 //! binary, VTK XML (`.vtu`, `.vtp`) or USD text layers (`.usda`), and as OpenVDB level sets
-//! (`.vdb`, [`write_vdb_file`], of a [`crate::level_set::LevelSet`]), atomically when written to a
+//! (`.vdb`, [`LevelSet::write_file`](crate::level_set::LevelSet::write_file)), atomically when written to a
 //! file with [`write_mesh_file`]. PLY, VTK and USD files can carry per-vertex attributes
 //! ([`VertexAttributes`]). [`read_mesh`] reads them back, but for POV-Ray's and USD's. A
 //! sequence of USD layers plays as one animated mesh through a stage of value clips, which a
@@ -63,12 +63,12 @@ mod text;
 #[doc(no_inline)]
 pub use crate::data::{Attribute, MeshFormat, Particles, UpAxis};
 pub use mesh::{
-    MeshFile, POV_OBJECT, USD_PRIM, VDB_LEAF_DIM, VdbGrid, VdbLeaf, VdbNode, VdbTree, VdbValues,
-    VertexAttributes, read_mesh, write_mesh, write_mesh_file, write_mesh_file_with,
-    write_mesh_with, write_vdb, write_vdb_file,
+    MeshFile, POV_OBJECT, USD_PRIM, VertexAttributes, read_mesh, write_mesh, write_mesh_file,
+    write_mesh_file_with, write_mesh_with,
 };
 pub(crate) use mesh::{
-    USD_FRAMES_PER_SECOND, UsdClip, UsdFrame, usd_stage_path, usd_topology_path, vdb_file_order,
-    vdb_node_origin, vdb_slot, write_usd_file, write_usd_stage,
+    USD_FRAMES_PER_SECOND, UsdClip, UsdFrame, VdbGrid, VdbLeaf, VdbNode, VdbTree, VdbValues,
+    usd_stage_path, usd_topology_path, vdb_file_order, vdb_node_origin, vdb_slot, write_usd_file,
+    write_usd_stage, write_vdb_file,
 };
 pub use particles::{InputFormat, read_particles};

@@ -1,6 +1,6 @@
 //! A mesh's narrow-band level set, for OpenVDB output (`--format vdb`): the signed distance to
 //! the mesh (negative inside) at voxel centres `ijk · voxel`, active within a band of
-//! [`HALF_WIDTH_VOXELS`] voxels on either side, stored as OpenVDB stores it ([`VdbTree`]):
+//! [`HALF_WIDTH_VOXELS`] voxels on either side, stored as OpenVDB stores it (a tree):
 //! 8³ leaves only where the band is, so that memory follows the surface, not the volume.
 //!
 //! The distances are the mesh's own, exact: each triangle offers the nearest point of itself
@@ -83,8 +83,8 @@ pub struct LevelSet {
     pub voxel: f32,
     /// The band's half width in world units: the background of inactive voxels.
     pub half_width: f32,
-    /// The active voxels.
-    pub tree: VdbTree,
+    /// The active voxels, as OpenVDB's tree holds them.
+    pub(crate) tree: VdbTree,
     /// The signed distance of each active voxel, in the tree's order.
     pub values: Vec<f32>,
 }

@@ -33,7 +33,7 @@ pub(crate) use usd_stage_write::{
 };
 pub use usd_write::USD_PRIM;
 pub(crate) use usd_write::UsdFrame;
-pub use vdb_write::{VDB_LEAF_DIM, VdbGrid, VdbLeaf, VdbNode, VdbTree, VdbValues, write_vdb};
+pub(crate) use vdb_write::{VdbGrid, VdbLeaf, VdbNode, VdbTree, VdbValues, write_vdb};
 pub(crate) use vdb_write::{
     file_order as vdb_file_order, node_origin as vdb_node_origin, slot as vdb_slot,
 };
@@ -81,7 +81,7 @@ pub fn write_mesh_with(
         MeshFormat::Vdb => {
             return Err(invalid_input(
                 "a .vdb file holds a level set, not a mesh: make it with \
-                 splash_sph::level_set::LevelSet and write it with write_vdb_file"
+                 splash_sph::level_set::LevelSet and write it with its write_file"
                     .into(),
             ));
         }
@@ -109,7 +109,7 @@ pub(crate) fn write_usd_file(
 
 /// Writes `grids` over `tree` (see [`write_vdb`]) to `path`, whole or not at all, as
 /// [`write_mesh_file`] does.
-pub fn write_vdb_file(
+pub(crate) fn write_vdb_file(
     path: &Path,
     tree: &VdbTree,
     voxel_size: f32,

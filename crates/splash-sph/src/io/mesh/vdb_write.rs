@@ -41,8 +41,6 @@ const NO_MASK_OR_INACTIVE_VALS: u8 = 0;
 const NO_MASK_AND_MINUS_BG: u8 = 1;
 const MASK_AND_NO_INACTIVE_VALS: u8 = 3;
 
-/// Voxels along a leaf's edge (`LeafNode<T, 3>`).
-pub const VDB_LEAF_DIM: i32 = 8;
 /// Log2 of the edges of the two internal levels' nodes, in children (`InternalNode<_, 4>`,
 /// `InternalNode<_, 5>`), and of their edges in voxels.
 const LOG2_NODE4: u32 = 4;
