@@ -6,6 +6,7 @@
 
 use std::cell::RefCell;
 use std::collections::HashMap;
+use std::collections::hash_map::Entry;
 use std::rc::Rc;
 use std::sync::Arc;
 
@@ -46,9 +47,9 @@ pub fn install<T: Send>(threads: Option<usize>, f: impl FnOnce() -> T + Send) ->
     let Some(n) = threads else {
         return Ok(f());
     };
-    let pool = POOLS.with_borrow_mut(|pools| match pools.get(&n) {
-        Some(pool) => Ok(pool.clone()),
-        None => Ok(pools.entry(n).or_insert(Rc::new(start(n)?)).clone()),
+    let pool = POOLS.with_borrow_mut(|pools| match pools.entry(n) {
+        Entry::Occupied(kept) => Ok(kept.get().clone()),
+        Entry::Vacant(slot) => Ok(slot.insert(Rc::new(start(n)?)).clone()),
     })?;
     Ok(pool.install(f))
 }

@@ -18,8 +18,8 @@ pub(crate) struct FacingGrid {
     cell: f32,
     /// `key << 32 | vertex`, sorted.
     order: Vec<u64>,
-    /// Each occupied cell's key and run of `order`.
-    runs: Vec<(u32, usize, usize)>,
+    /// Each occupied cell's run of `order`.
+    runs: Vec<(usize, usize)>,
     cells: FxHashMap<u32, (usize, usize)>,
 }
 
@@ -32,23 +32,17 @@ impl FacingGrid {
         reach: f32,
     ) -> Option<FacingGrid> {
         let used = |v: usize| used(v) && vertices[v].is_finite();
-        if !(reach.is_finite() && reach > 0.0 && (0..vertices.len()).any(used)) {
-            return None;
-        }
         let bounds = (0..vertices.len())
             .filter(|&v| used(v))
             .fold((Vec3::MAX, Vec3::MIN), |(lo, hi), v| {
                 (lo.min(vertices[v]), hi.max(vertices[v]))
             });
-        // Wider cells where the span needs more than 32 bits of key: the 27 around a vertex's
-        // still hold all within the reach.
-        let mut cell = reach;
-        let keys = loop {
-            match CellKeys::new(bounds, cell) {
-                Some(keys) => break keys,
-                None => cell *= 2.0,
-            }
-        };
+        // No vertex used leaves the box empty.
+        if !(reach.is_finite() && reach > 0.0 && bounds.0.cmple(bounds.1).all()) {
+            return None;
+        }
+        // The 27 cells around a vertex's hold all within the reach, however wide they are.
+        let (keys, cell) = CellKeys::fitting(bounds, reach);
         let mut order: Vec<u64> = (0..vertices.len() as u32)
             .into_par_iter()
             .filter(|&v| used(v as usize))
@@ -57,15 +51,16 @@ impl FacingGrid {
             })
             .collect();
         order.par_sort_unstable();
-        let mut runs: Vec<(u32, usize, usize)> = Vec::new();
-        for (i, &e) in order.iter().enumerate() {
-            let key = (e >> 32) as u32;
+        // Each occupied cell's run of `order`, by its key.
+        let mut runs: Vec<(usize, usize)> = Vec::new();
+        let key = |i: usize| (order[i] >> 32) as u32;
+        for i in 0..order.len() {
             match runs.last_mut() {
-                Some(run) if run.0 == key => run.2 = i + 1,
-                _ => runs.push((key, i, i + 1)),
+                Some(run) if key(run.0) == key(i) => run.1 = i + 1,
+                _ => runs.push((i, i + 1)),
             }
         }
-        let cells = runs.iter().map(|&(k, s, e)| (k, (s, e))).collect();
+        let cells = runs.iter().map(|&(s, e)| (key(s), (s, e))).collect();
         Some(FacingGrid {
             keys,
             cell,
@@ -88,7 +83,7 @@ impl FacingGrid {
         let order = &self.order;
         self.runs
             .par_iter()
-            .flat_map_iter(|&(_, s, e)| {
+            .flat_map_iter(|&(s, e)| {
                 // The 27 cells around this one, looked up once for all its vertices.
                 let c = cell_of(vertices[order[s] as u32 as usize], self.cell);
                 let near: Vec<(usize, usize)> = (-1..=1)

@@ -108,7 +108,7 @@ impl SurfaceBins {
             .sum();
         let mean_edge = (edges / triangles.len().max(1) as f64) as f32;
         let cell = (1.5 * mean_edge).clamp(reach / 8.0, reach);
-        let mut cell = if cell.is_finite() && cell > 0.0 {
+        let cell = if cell.is_finite() && cell > 0.0 {
             cell
         } else {
             reach
@@ -118,14 +118,7 @@ impl SurfaceBins {
             .fold((Vec3::MAX, Vec3::MIN), |(lo, hi), &v| {
                 (lo.min(v), hi.max(v))
             });
-        let keys = loop {
-            match CellKeys::new(bounds, cell) {
-                Some(keys) => break keys,
-                // A mesh thousands of cells across in every direction: wider cells, as many
-                // triangles found by fewer.
-                None => cell *= 2.0,
-            }
-        };
+        let (keys, cell) = CellKeys::fitting(bounds, cell);
         let shells = (reach / cell).ceil() as i32 + 1;
         // `cell << 32 | triangle` for every cell a triangle's box meets, in triangle order,
         // then sorted by cell, stably: each cell lists its triangles in order.

@@ -34,6 +34,18 @@ impl CellKeys {
         })
     }
 
+    /// The numbering of cells at least `cell` wide over the box `bounds`, and their width:
+    /// `cell`, doubled until the span fits in 32 bits (a box thousands of cells across in
+    /// every direction gets wider cells, each holding more).
+    pub(crate) fn fitting(bounds: (Vec3, Vec3), mut cell: f32) -> (CellKeys, f32) {
+        loop {
+            match CellKeys::new(bounds, cell) {
+                Some(keys) => return (keys, cell),
+                None => cell *= 2.0,
+            }
+        }
+    }
+
     /// The key of cell `c`, which lies within the mesh's cells.
     pub(crate) fn packed(&self, c: IVec3) -> u32 {
         let c = (c - self.low).as_uvec3();

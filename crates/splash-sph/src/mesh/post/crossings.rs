@@ -40,6 +40,10 @@ pub(crate) fn put_back_crossings(
                     .collect()
             }
         };
+        if crossing.is_empty() {
+            // Nothing crosses (the usual case): no ring to look for over the whole mesh.
+            break;
+        }
         let mut back = vec![false; vertices.len()];
         for &f in &crossing {
             for v in triangles[f as usize] {
@@ -77,10 +81,11 @@ pub(crate) fn put_back_crossings(
 /// close: 19 faces of cbd-large f23 with its spacing estimated, 10 of the bundled frame at 2r;
 /// none of the raw isosurface's) back towards their `raw` places with a ring around them (see
 /// [`put_back_crossings`]). A midpoint of the refinement (`parents`: one end of each new
-/// vertex's edge) goes back as far as its edge's end. At first only the faces with a `close` corner are tested, where another
-/// side of the surface faces it within the clearance's reach: on the 36 meshes of
-/// `scripts/same-meshes` and 112 frames of four sequences the same result as testing every
-/// face, at a fifth of the time (cbd-large f23: 134 k of 1.05 M faces, 33 ms against 187 ms).
+/// vertex's edge) goes back as far as its edge's end. At first only the faces with a `close`
+/// corner are tested, where another side of the surface faces it within the clearance's reach:
+/// on the 36 meshes of `scripts/same-meshes` and 112 frames of four sequences the same result
+/// as testing every face, at a fifth of the time (cbd-large f23: 134 k of 1.05 M faces, 33 ms
+/// against 187 ms).
 pub(super) fn uncross(
     vertices: &mut [Vec3],
     triangles: &[[u32; 3]],
