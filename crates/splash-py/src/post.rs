@@ -43,7 +43,8 @@ use crate::settings::{self, Overrides};
 ///
 /// The post-processing settings (``[post]`` of the config; None keeps the config's, the
 /// defaults by default): ``raw=True`` skips smoothing and volume restoration;
-/// ``smoothing_iterations`` (6), ``lambda_`` (0.6) and ``mu`` (−0.64): Taubin's λ|μ pairs;
+/// ``smoothing_iterations`` (6), ``lambda_`` (0.6) and ``mu`` (−0.64): Taubin's λ|μ pairs, after
+/// ``relax_first`` (4) tangential relaxation steps;
 /// ``volume_rounds`` (8), ``volume_scope`` (``"frame"``: one offset for the whole mesh;
 /// ``"component"``: each closed component to its own particles' volume), ``max_offset``
 /// (0.25 r per step), ``refine_angle`` (0: off; in
@@ -61,7 +62,8 @@ use crate::settings::{self, Overrides};
 #[allow(clippy::too_many_arguments)]
 #[pyfunction]
 #[pyo3(signature = (mesh, *, particles=None, spacing=None, cell=None, config=None, raw=None,
-    smoothing_iterations=None, lambda_=None, mu=None, volume_rounds=None, volume_scope=None,
+    smoothing_iterations=None, lambda_=None, mu=None, relax_first=None, volume_rounds=None,
+    volume_scope=None,
     max_offset=None,
     refine_angle=None, relax_iterations=None, volume_steps=None, mesh_aabb=None, min_component=None,
     decimate=None, threads=None))]
@@ -76,6 +78,7 @@ pub fn postprocess<'py>(
     smoothing_iterations: Option<i64>,
     lambda_: Option<f32>,
     mu: Option<f32>,
+    relax_first: Option<i64>,
     volume_rounds: Option<i64>,
     volume_scope: Option<String>,
     max_offset: Option<f32>,
@@ -115,6 +118,7 @@ pub fn postprocess<'py>(
         smoothing_iterations,
         "smoothing_iterations",
     )?;
+    set(&mut post.relax_first, relax_first, "relax_first")?;
     set(&mut post.volume_rounds, volume_rounds, "volume_rounds")?;
     set(
         &mut post.relax_iterations,

@@ -309,6 +309,7 @@ def postprocess(
     smoothing_iterations: Optional[int] = None,
     lambda_: Optional[float] = None,
     mu: Optional[float] = None,
+    relax_first: Optional[int] = None,
     volume_rounds: Optional[int] = None,
     volume_scope: Optional[Literal["frame", "component"]] = None,
     max_offset: Optional[float] = None,
@@ -345,7 +346,8 @@ def postprocess(
 
     The post-processing settings (``[post]`` of the config; None keeps the config's, the
     defaults by default): ``raw=True`` skips smoothing and volume restoration;
-    ``smoothing_iterations`` (6), ``lambda_`` (0.6) and ``mu`` (-0.64): Taubin's λ|μ pairs;
+    ``smoothing_iterations`` (6), ``lambda_`` (0.6) and ``mu`` (-0.64): Taubin's λ|μ pairs,
+    after ``relax_first`` (4) tangential relaxation steps;
     ``volume_rounds`` (8), ``volume_scope`` (``"frame"``: one offset for the whole mesh;
     ``"component"``: each closed component to its own particles' volume), ``max_offset``
     (0.25 r per step), ``refine_angle`` (0: off; in
