@@ -82,10 +82,12 @@ pub(crate) fn put_back_crossings(
 /// none of the raw isosurface's) back towards their `raw` places with a ring around them (see
 /// [`put_back_crossings`]). A midpoint of the refinement (`parents`: one end of each new
 /// vertex's edge) goes back as far as its edge's end. At first only the faces with a `close`
-/// corner are tested, where another side of the surface faces it within the clearance's reach:
-/// on the 36 meshes of `scripts/same-meshes` and 112 frames of four sequences the same result
-/// as testing every face, at a fifth of the time (cbd-large f23: 134 k of 1.05 M faces, 33 ms
-/// against 187 ms).
+/// corner are tested, where another side of the surface faces it within the clearance's reach,
+/// and the faces near a face turned over against its raw normal (a fold): on the 36 meshes of
+/// `scripts/same-meshes` (with 6 and 3 smoothing pairs) and 112 frames of four sequences the
+/// same result as testing every face, at a fifth of the time (cbd-large f23: 134 k of 1.05 M
+/// faces, 33 ms against 187 ms). The close faces alone missed the folds of cbd-large f23 at
+/// cell r (14 crossing faces) once the relaxation ran before the smoothing.
 pub(super) fn uncross(
     vertices: &mut [Vec3],
     triangles: &[[u32; 3]],
@@ -100,13 +102,44 @@ pub(super) fn uncross(
         raw.push(vertices[m] - (vertices[p] - raw[p]));
     }
     let movable: Vec<bool> = vertices.par_iter().zip(&raw).map(|(v, r)| v != r).collect();
+    // Faces turned over (a fold, where the relaxation and the smoothing pulled a rim's
+    // triangles past each other) cross their neighbours without two sides facing: the faces
+    // near them are tested too.
+    let mut near = vec![false; triangles.len()];
+    if let Some(corners) = turned_over(vertices, triangles, &raw) {
+        for f in faces_near(vertices, triangles, &corners) {
+            near[f as usize] = true;
+        }
+    }
     let first: Vec<u32> = triangles
         .par_iter()
         .enumerate()
-        .filter(|(_, t)| t.iter().any(|&v| close[v as usize]))
+        .filter(|&(f, t)| near[f] || t.iter().any(|&v| close[v as usize]))
         .map(|(f, _)| f as u32)
         .collect();
     put_back_crossings(vertices, triangles, &raw, &movable, Some(first));
+}
+
+/// The corners of the faces whose normal points against their normal at `raw`, or None when
+/// no face turned over.
+fn turned_over(vertices: &[Vec3], triangles: &[[u32; 3]], raw: &[Vec3]) -> Option<Vec<bool>> {
+    let normal = |p: &[Vec3], t: &[u32; 3]| {
+        let [a, b, c] = t.map(|i| p[i as usize]);
+        (b - a).cross(c - a)
+    };
+    let turned: Vec<&[u32; 3]> = triangles
+        .par_iter()
+        .with_min_len(4096)
+        .filter(|t| normal(raw, t).dot(normal(vertices, t)) < 0.0)
+        .collect();
+    if turned.is_empty() {
+        return None;
+    }
+    let mut corners = vec![false; vertices.len()];
+    for &v in turned.into_iter().flatten() {
+        corners[v as usize] = true;
+    }
+    Some(corners)
 }
 
 /// The faces whose bounding boxes meet the box of a face with a corner in `moved`: the only
@@ -164,4 +197,49 @@ fn faces_near(vertices: &[Vec3], triangles: &[[u32; 3]], moved: &[bool]) -> Vec<
         .filter(|(_, t)| meets(bounds(t)))
         .map(|(f, _)| f as u32)
         .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A flat n × n grid of unit squares, two triangles each, at z = 0.
+    fn grid(n: u32) -> (Vec<Vec3>, Vec<[u32; 3]>) {
+        let vertices = (0..=n)
+            .flat_map(|y| (0..=n).map(move |x| Vec3::new(x as f32, y as f32, 0.0)))
+            .collect();
+        let at = |x: u32, y: u32| y * (n + 1) + x;
+        let triangles = (0..n)
+            .flat_map(|y| (0..n).map(move |x| (x, y)))
+            .flat_map(|(x, y)| {
+                [
+                    [at(x, y), at(x + 1, y), at(x + 1, y + 1)],
+                    [at(x, y), at(x + 1, y + 1), at(x, y + 1)],
+                ]
+            })
+            .collect();
+        (vertices, triangles)
+    }
+
+    /// A vertex dragged past its neighbour turns its faces over, into the faces of a raised
+    /// vertex beyond, where no two sides of the surface face each other (no `close` corner):
+    /// uncross still finds the fold and puts it back.
+    #[test]
+    fn a_fold_without_facing_sides_goes_back() {
+        let (raw, triangles) = grid(6);
+        let mut vertices = raw.clone();
+        let centre = 3 * 7 + 3;
+        vertices[centre] += Vec3::new(1.6, 0.2, 0.2);
+        vertices[centre + 2].z = 1.0;
+        assert_eq!(self_intersecting_faces(&vertices, &triangles).len(), 8);
+        uncross(
+            &mut vertices,
+            &triangles,
+            raw.clone(),
+            &[],
+            &vec![false; raw.len()],
+        );
+        assert!(self_intersecting_faces(&vertices, &triangles).is_empty());
+        assert_eq!(vertices[centre], raw[centre]);
+    }
 }
