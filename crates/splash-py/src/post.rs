@@ -43,7 +43,7 @@ use crate::settings::{self, Overrides};
 ///
 /// The post-processing settings (``[post]`` of the config; None keeps the config's, the
 /// defaults by default): ``raw=True`` skips smoothing and volume restoration;
-/// ``smoothing_iterations`` (6), ``lambda_`` (0.6) and ``mu`` (−0.64): Taubin's λ|μ pairs, after
+/// ``smoothing_iterations`` (0), ``lambda_`` (0.6) and ``mu`` (−0.64): Taubin's λ|μ pairs, after
 /// ``relax_first`` (4) tangential relaxation steps;
 /// ``volume_rounds`` (8), ``volume_scope`` (``"frame"``: one offset for the whole mesh;
 /// ``"component"``: each closed component to its own particles' volume), ``max_offset``

@@ -84,7 +84,7 @@ pub(crate) fn put_back_crossings(
 /// vertex's edge) goes back as far as its edge's end. At first only the faces with a `close`
 /// corner are tested, where another side of the surface faces it within the clearance's reach,
 /// and the faces near a face turned over against its raw normal (a fold): on the 36 meshes of
-/// `scripts/same-meshes` (with 6 and 3 smoothing pairs) and 112 frames of four sequences the
+/// `scripts/same-meshes` (with 6 and 3 smoothing pairs first) and 112 frames of four sequences the
 /// same result as testing every face, at a fifth of the time (cbd-large f23: 134 k of 1.05 M
 /// faces, 33 ms against 187 ms). The close faces alone missed the folds of cbd-large f23 at
 /// cell r (14 crossing faces) once the relaxation ran before the smoothing.

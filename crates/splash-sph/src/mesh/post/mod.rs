@@ -48,9 +48,12 @@ pub struct PostConfig {
     /// Keep the field's exact isosurface: no smoothing, no volume restoration (the meshes of
     /// splash before post-processing, byte for byte).
     pub raw: bool,
-    /// λ|μ pairs of Taubin smoothing first (default 6; 10 took SSP07's bumpiness 1.99° → 1.69°
-    /// on cbd-small, 2.72° → 2.35° on cbd-large f23 before the rounds, and 1.94° instead of
-    /// 1.96° at the end on f23).
+    /// λ|μ pairs of Taubin smoothing before the volume rounds, each of which smooths by one
+    /// pair too (default 0). Each pair first adds flicker to a sequence (issue 38, carried
+    /// jitter with 0, 2 and 6 after `relax_first`: dense-dambreak 0.0264, 0.0269, 0.0297 r, A
+    /// 0.0104, 0.0105, 0.0110 r, B 0.0266, 0.0267, 0.0270 r) for next to no smoothness:
+    /// bumpiness the same on those three and on cbd-small (1.69°), cbd-large f23 2.32°, 2.31°,
+    /// 2.29°.
     pub smoothing_iterations: u32,
     /// Taubin's shrinking factor λ (default 0.6, above Taubin 1995's 0.33 to 0.5: cbd-large f23
     /// 2.70° against 2.85° at 0.5 with the same pass-band).
@@ -60,10 +63,11 @@ pub struct PostConfig {
     pub mu: f32,
     /// Tangential relaxation steps before the smoothing (default 4), which even out Marching
     /// Cubes' triangles so that the smoothing's umbrella steps move the surface alike however
-    /// the grid cut it (issue 38: carried jitter on dense-dambreak 0.0316 → 0.0297 r, on A
-    /// 0.0115 → 0.0110 r, on B 0.0277 → 0.0270 r; cbd-large f23 2.36° → 2.29°, slivers
-    /// 0.019 → 0.016 %; 12 steps do no better). The raw places, which faces that would cross go
-    /// back to, are the vertices before it.
+    /// the grid cut it (issue 38, with 6 smoothing pairs first: carried jitter on
+    /// dense-dambreak 0.0316 → 0.0297 r, on A 0.0115 → 0.0110 r, on B 0.0277 → 0.0270 r;
+    /// cbd-large f23 2.36° → 2.29°, slivers 0.019 → 0.016 %; without them, dense-dambreak
+    /// 0.0686 → 0.0264 r; 8 or 12 steps do no better). The raw places, which faces that would
+    /// cross go back to, are the vertices before it.
     pub relax_first: u32,
     /// Rounds of one volume step and one λ|μ pair, so that smoothing heals what the offsets
     /// fold (default 8: cbd-large f23 ends at 1.99° with 6, 1.96° with 8, 1.94° with 9; 0 with
@@ -121,7 +125,7 @@ impl Default for PostConfig {
     fn default() -> Self {
         PostConfig {
             raw: false,
-            smoothing_iterations: 6,
+            smoothing_iterations: 0,
             lambda: 0.6,
             mu: -0.64,
             relax_first: 4,
