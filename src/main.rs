@@ -192,7 +192,7 @@ struct ConfigArgs {
     /// carried by the fluid's motion (experimental).
     ///
     /// The motion comes from particle ids, else velocities with post.frame_time: a low-pass in
-    /// time against flicker, for about 2.4x the wall time.
+    /// time against flicker, for about 1.7x the wall time.
     #[arg(long)]
     temporal: bool,
 

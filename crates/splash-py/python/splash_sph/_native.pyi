@@ -566,7 +566,7 @@ def recon_sequence(
       (velocity, density, …): a list of names or one comma-separated string; written to PLY,
       VTK, VTU, VTP and USD.
     - ``temporal``: In a sequence, move each frame's surface towards its neighbouring frames'
-      surfaces carried by the fluid's motion (experimental). Less flicker for about 2.4× the
+      surfaces carried by the fluid's motion (experimental). Less flicker for about 1.7× the
       time; needs particle ids, or velocities with ``post.frame_time``; frames without both
       neighbours are post-processed alone, with a warning.
 

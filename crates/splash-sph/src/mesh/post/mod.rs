@@ -113,8 +113,9 @@ pub struct PostConfig {
     /// In a sequence, move each frame's surface towards its neighbours' carried to its time by
     /// the fluid's motion (default false): a low-pass in time along the flow (issue 38). Frames
     /// without both neighbours (a lone file, the ends of a sequence, a gap, a neighbour that
-    /// fails) are post-processed alone. Not with `raw`. Experimental: on dense-dambreak it takes the jitter from 0.050 r to 0.043 r
-    /// (carried, 0.037 r to 0.026 r) for 2.4× the wall time, short of the issue's targets.
+    /// fails) are post-processed alone. Not with `raw`. Experimental: carried jitter on
+    /// dense-dambreak 0.0264 → 0.0169 r, on two simulated scenes 0.0104 → 0.0081 and
+    /// 0.0266 → 0.0229 r, for 1.72× the wall time, short of the issue's targets.
     pub temporal: bool,
     /// Seconds between frames, to carry particles by their velocity when the files have no
     /// particle ids (default none: such sequences are post-processed frame by frame).
