@@ -45,9 +45,9 @@ use crate::settings::{self, Overrides};
 /// defaults by default): ``raw=True`` skips smoothing and volume restoration;
 /// ``smoothing_iterations`` (0), ``lambda_`` (0.6) and ``mu`` (−0.64): Taubin's λ|μ pairs, after
 /// ``relax_first`` (4) tangential relaxation steps;
-/// ``volume_rounds`` (8), ``volume_scope`` (``"frame"``: one offset for the whole mesh;
+/// ``volume_rounds`` (4), ``volume_scope`` (``"frame"``: one offset for the whole mesh;
 /// ``"component"``: each closed component to its own particles' volume), ``max_offset``
-/// (0.25 r per step), ``refine_angle`` (0: off; in
+/// (0.5 r per step), ``refine_angle`` (0: off; in
 /// degrees, bisects the edges where the surface bends more), ``relax_iterations`` (12),
 /// ``volume_steps`` (1); ``mesh_aabb``, ``min_component`` and ``decimate`` as in
 /// ``reconstruct``. ``config``: a TOML file's path or a dict, as ``reconstruct`` takes it.
