@@ -117,8 +117,8 @@ pub struct PostConfig {
     /// the fluid's motion (default false): a low-pass in time along the flow (issue 38). Frames
     /// without both neighbours (a lone file, the ends of a sequence, a gap, a neighbour that
     /// fails) are post-processed alone. Not with `raw`. Experimental: carried jitter on
-    /// dense-dambreak 0.0264 → 0.0169 r, on two simulated scenes 0.0104 → 0.0081 and
-    /// 0.0266 → 0.0229 r, for 1.72× the wall time, short of the issue's targets.
+    /// dense-dambreak 0.0256 → 0.0166 r, on two simulated scenes 0.0101 → 0.0080 and
+    /// 0.0262 → 0.0228 r, for 1.72× the wall time, short of the issue's targets.
     pub temporal: bool,
     /// Seconds between frames, to carry particles by their velocity when the files have no
     /// particle ids (default none: such sequences are post-processed frame by frame).
