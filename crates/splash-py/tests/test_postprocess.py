@@ -234,6 +234,12 @@ def test_post_settings_and_the_config_are_read():
         (vertices, faces), config={"spacing": R, "post": {"smoothing_iterations": 40,
                                                           "lambda": 0.6, "mu": -0.62}})
     np.testing.assert_array_equal(by_dict.vertices, strong.vertices)
+    unrelaxed = splash_sph.postprocess((vertices, faces), spacing=R, relax_first=0)
+    relaxed = splash_sph.postprocess((vertices, faces), spacing=R)
+    assert not np.array_equal(unrelaxed.vertices, relaxed.vertices)
+    by_dict = splash_sph.postprocess((vertices, faces),
+                                     config={"spacing": R, "post": {"relax_first": 0}})
+    np.testing.assert_array_equal(by_dict.vertices, unrelaxed.vertices)
 
 
 def test_bad_meshes_and_settings_raise_value_error_naming_what_is_wrong():
@@ -251,6 +257,7 @@ def test_bad_meshes_and_settings_raise_value_error_naming_what_is_wrong():
         ((vertices[:, :2], faces), {}, "shape (N, 3)"),
         ((vertices, faces), {"mu": -0.1}, "post.mu"),
         ((vertices, faces), {"volume_steps": -1}, "volume_steps must be a count from 0, got -1"),
+        ((vertices, faces), {"relax_first": -2}, "relax_first must be a count from 0, got -2"),
         ((vertices, faces), {"mesh_aabb": [0, 0, 0, 1, 1]}, "six numbers"),
         ((vertices, faces), {"particles": np.full((1, 3), np.inf, np.float32)}, "particle 0"),
     ]
