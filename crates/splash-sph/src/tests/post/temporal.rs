@@ -273,22 +273,29 @@ fn a_broken_neighbour_degrades_its_neighbours_only() {
     fs::remove_dir_all(&dir).unwrap();
 }
 
+/// The `frames` of `../shared`'s dense-dambreak with the default config at their spacing, or
+/// None (the test skips, saying so) without `../shared`.
+fn dense_dambreak(frames: std::ops::RangeInclusive<u32>) -> Option<(Vec<PathBuf>, Config)> {
+    let dir = crate::tests::common::shared_data("dense-dambreak")?;
+    let inputs = frames
+        .map(|f| dir.join(format!("frame_{f:04}.vtk")))
+        .collect();
+    let config = Config {
+        spacing: Some(0.04),
+        ..Config::default()
+    };
+    Some((inputs, config))
+}
+
 /// Real frames followed (dense-dambreak 120 to 124): no face of the inner frames crosses
 /// another, where pulling two close sheets towards different neighbours' surfaces made them
 /// cross (1,207 faces in 37 of the 40 frames before crossing faces were put back).
 #[test]
 fn following_real_frames_leaves_no_face_crossing() {
-    let Some(dir) = crate::tests::common::shared_data("dense-dambreak") else {
+    let Some((inputs, mut config)) = dense_dambreak(120..=124) else {
         return;
     };
-    let inputs: Vec<PathBuf> = (120..=124)
-        .map(|f| dir.join(format!("frame_{f:04}.vtk")))
-        .collect();
     let out = scratch("real");
-    let mut config = Config {
-        spacing: Some(0.04),
-        ..Config::default()
-    };
     config.post.temporal = true;
     let record = run_with(&inputs, &out, config, None);
     assert_eq!(record.warnings.len(), 2, "{:?}", record.warnings);
@@ -311,17 +318,10 @@ fn following_real_frames_leaves_no_face_crossing() {
 /// and no Taubin pairs run before the volume rounds (1.64× with 6 pairs first, unrelaxed).
 #[test]
 fn the_default_flickers_little_more_than_the_raw_surface() {
-    let Some(dir) = crate::tests::common::shared_data("dense-dambreak") else {
+    let Some((inputs, mut config)) = dense_dambreak(120..=125) else {
         return;
     };
-    let inputs: Vec<PathBuf> = (120..=125)
-        .map(|f| dir.join(format!("frame_{f:04}.vtk")))
-        .collect();
     let out = scratch("default-flicker");
-    let mut config = Config {
-        spacing: Some(0.04),
-        ..Config::default()
-    };
     run_with(&inputs, &out.join("s"), config.clone(), None);
     config.post.raw = true;
     run_with(&inputs, &out.join("r"), config, None);
