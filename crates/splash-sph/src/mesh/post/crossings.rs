@@ -105,16 +105,19 @@ pub(super) fn uncross(
     // Faces turned over (a fold, where the relaxation and the smoothing pulled a rim's
     // triangles past each other) cross their neighbours without two sides facing: the faces
     // near them are tested too.
-    let mut near = vec![false; triangles.len()];
-    if let Some(corners) = turned_over(vertices, triangles, &raw) {
+    let near = turned_over(vertices, triangles, &raw).map(|corners| {
+        let mut near = vec![false; triangles.len()];
         for f in faces_near(vertices, triangles, &corners) {
             near[f as usize] = true;
         }
-    }
+        near
+    });
     let first: Vec<u32> = triangles
         .par_iter()
         .enumerate()
-        .filter(|&(f, t)| near[f] || t.iter().any(|&v| close[v as usize]))
+        .filter(|&(f, t)| {
+            near.as_ref().is_some_and(|near| near[f]) || t.iter().any(|&v| close[v as usize])
+        })
         .map(|(f, _)| f as u32)
         .collect();
     put_back_crossings(vertices, triangles, &raw, &movable, Some(first));

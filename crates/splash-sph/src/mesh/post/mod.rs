@@ -383,7 +383,7 @@ fn smooth_and_restore(
                     normals,
                     &rings,
                     config.relax_first,
-                    0.5,
+                    RELAX_STEP,
                 );
             }
             taubin(
@@ -492,7 +492,7 @@ fn smooth_and_restore(
         normals,
         &rings,
         config.relax_iterations,
-        0.5,
+        RELAX_STEP,
     );
     let rings = rings.into_faces();
     restore(
@@ -522,6 +522,10 @@ fn smooth_and_restore(
         *normals = Vec::new();
     }
 }
+
+/// The share of its ring's tangential pull a vertex moves by in a relaxation step, before the
+/// smoothing and after the volume steps alike.
+const RELAX_STEP: f32 = 0.5;
 
 /// What the volume steps leave between two sides that close in on each other, in spacings r:
 /// 0.15 r each, so that a sheet keeps 0.3 r (crossing faces on cbd-large f23 7,382 with 0.05,
