@@ -646,6 +646,10 @@ impl<'a> Decimation<'a> {
                 if taken.is_empty() {
                     break;
                 }
+                // In the mesh's order, not the costs': checks and collapses next to each other
+                // then read the same memory (cbd-large f23 at 0.1r: 2.88 → 2.67 s). They touch
+                // disjoint stars, so the order changes nothing else.
+                taken.sort_unstable_by_key(|&(slot, _, _)| slot);
                 let before = accepted;
                 // Checked a share at a time, so that the collapses waiting to be made stay few
                 // (all of a pass's at once held 32 MB on cbd-large f23).
