@@ -73,29 +73,44 @@ impl FacingGrid {
     /// `visit(v, candidates)` for every vertex v of the grid, by cell on the pool: the
     /// candidates are the vertices of the 27 cells around v's whose normal could face the normal
     /// of some vertex of v's cell (see [`facing_candidates`]), a superset of those that face
-    /// v's within the reach.
-    pub(crate) fn each<T: Send>(
+    /// v's within the reach. The answers come in the grid's order; each thread reuses its
+    /// lists of cells and candidates from cell to cell.
+    pub(crate) fn each<T: Send + Default + Clone>(
         &self,
         vertices: &[Vec3],
         normals: &[Vec3],
         visit: impl Fn(usize, &[u32]) -> T + Sync,
     ) -> Vec<T> {
         let order = &self.order;
-        self.runs
-            .par_iter()
-            .flat_map_iter(|&(s, e)| {
+        let mut out = vec![T::default(); order.len()];
+        // Each cell's run of `order` answered into its own run of `out`.
+        let mut rest = out.as_mut_slice();
+        let mut runs = Vec::with_capacity(self.runs.len());
+        for &(s, e) in &self.runs {
+            let (run, tail) = std::mem::take(&mut rest).split_at_mut(e - s);
+            runs.push((s, run));
+            rest = tail;
+        }
+        runs.into_par_iter().for_each_init(
+            || (Vec::new(), Vec::new()),
+            |(near, facing), (s, answers)| {
                 // The 27 cells around this one, looked up once for all its vertices.
                 let c = cell_of(vertices[order[s] as u32 as usize], self.cell);
-                let near: Vec<(usize, usize)> = (-1..=1)
-                    .flat_map(|z| (-1..=1).flat_map(move |y| (-1..=1).map(move |x| [x, y, z])))
-                    .filter_map(|d| self.keys.key(c + IVec3::from_array(d)))
-                    .filter_map(|k| self.cells.get(&k).copied())
-                    .collect();
-                let facing = facing_candidates(&order[s..e], &near, order, normals);
-                let visit = &visit;
-                (s..e).map(move |i| visit(order[i] as u32 as usize, &facing))
-            })
-            .collect()
+                near.clear();
+                near.extend(
+                    (-1..=1)
+                        .flat_map(|z| (-1..=1).flat_map(move |y| (-1..=1).map(move |x| [x, y, z])))
+                        .filter_map(|d| self.keys.key(c + IVec3::from_array(d)))
+                        .filter_map(|k| self.cells.get(&k).copied()),
+                );
+                let run = &order[s..s + answers.len()];
+                facing_candidates(run, near, order, normals, facing);
+                for (answer, &v) in answers.iter_mut().zip(run) {
+                    *answer = visit(v as u32 as usize, facing);
+                }
+            },
+        );
+        out
     }
 }
 
@@ -109,7 +124,9 @@ fn facing_candidates(
     near: &[(usize, usize)],
     order: &[u64],
     normals: &[Vec3],
-) -> Vec<u32> {
+    facing: &mut Vec<u32>,
+) {
+    facing.clear();
     let all = || {
         near.iter()
             .flat_map(|&(s, e)| order[s..e].iter().map(|&u| u as u32))
@@ -126,10 +143,9 @@ fn facing_candidates(
         .acos();
     let angle = FACING.acos() - spread - 0.01;
     if mean == Vec3::ZERO || angle <= 0.0 {
-        return all().collect();
+        facing.extend(all());
+        return;
     }
     let most = angle.cos();
-    all()
-        .filter(|&u| mean.dot(normals[u as usize]) < most)
-        .collect()
+    facing.extend(all().filter(|&u| mean.dot(normals[u as usize]) < most));
 }
