@@ -1117,6 +1117,48 @@ mod tests {
         assert_eq!(surface.witness(beyond, [far, far]), None);
     }
 
+    /// A quadric kept in f32 at a vertex far from the origin gives back the sum of squared
+    /// distances to its planes, computed directly, at points around the vertex: to f32's
+    /// precision of the distances there, not of the coordinates.
+    #[test]
+    fn kept_quadrics_measure_small_distances_far_from_the_origin() {
+        let p = DVec3::new(40.0, -25.0, 12.5);
+        let planes: Vec<(DVec3, f64, f64)> = [
+            (DVec3::new(1.0, 2.0, 2.0), 0.3),
+            (DVec3::new(-2.0, 1.0, 0.5), 1.7),
+            (DVec3::new(0.2, -0.4, 1.0), 0.05),
+        ]
+        .into_iter()
+        .map(|(n, w)| {
+            let n = n.normalize();
+            // Planes within 1e-3 of the vertex: the errors a decimation weighs.
+            let d = -n.dot(p) + 1e-3 * w;
+            (n, d, w)
+        })
+        .collect();
+        let q = planes.iter().fold(Quadric::default(), |q, &(n, d, w)| {
+            q.add(&Quadric::plane(n, d, w))
+        });
+        let back = q.kept_at(p).at(p);
+        for step in [
+            DVec3::ZERO,
+            DVec3::new(1e-3, 0.0, 0.0),
+            DVec3::new(-2e-3, 1e-3, 3e-3),
+        ] {
+            let x = p + step;
+            let direct: f64 = planes
+                .iter()
+                .map(|&(n, d, w)| w * (n.dot(x) + d).powi(2))
+                .sum();
+            let kept = back.eval(x);
+            assert!(
+                (kept - direct).abs() <= 1e-4 * direct,
+                "at {step}: {kept} against {direct}"
+            );
+        }
+        assert_eq!(back.w as f32, q.w as f32);
+    }
+
     #[test]
     fn bad_arguments_are_errors() {
         let mesh = fine_cube(2);
