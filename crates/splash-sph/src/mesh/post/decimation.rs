@@ -385,8 +385,7 @@ impl<'a> Decimation<'a> {
         if q.w <= 0.0 {
             return 0.0;
         }
-        let local = |v: u32| self.local(v);
-        let mid = (local(a) + local(b)) * 0.5;
+        let mid = (self.local(a) + self.local(b)) * 0.5;
         let x = q.minimiser(mid, DVec3::ZERO, 0.0).unwrap_or(mid);
         let cost = (q.eval(x) / q.w).max(0.0);
         if cost > self.max_error * self.max_error {
@@ -528,16 +527,23 @@ impl<'a> Decimation<'a> {
             .filter(move |(_, tri, _)| !(tri.contains(&a) && tri.contains(&b)))
     }
 
-    /// Marks with `stamp` every vertex of the triangles around `a` and `b` that does not carry
-    /// `held` already.
-    fn lock(&self, a: u32, b: u32, locked: &mut [u32], stamp: u32, held: u32) {
+    /// `visit(v)` for each vertex of the triangles around `a` and `b` (some more than once):
+    /// what a collapse of the edge reads and changes.
+    fn region(&self, a: u32, b: u32, mut visit: impl FnMut(usize)) {
         for &s in self.stars.of(a).iter().chain(self.stars.of(b)) {
             for v in self.triangles[s as usize] {
-                if locked[v as usize] != held {
-                    locked[v as usize] = stamp;
-                }
+                visit(v as usize);
             }
         }
+    }
+
+    /// Marks with `stamp` every vertex of [`Self::region`] that does not carry `held` already.
+    fn lock(&self, a: u32, b: u32, locked: &mut [u32], stamp: u32, held: u32) {
+        self.region(a, b, |v| {
+            if locked[v] != held {
+                locked[v] = stamp;
+            }
+        });
     }
 
     fn run(&mut self) {
@@ -664,12 +670,10 @@ impl<'a> Decimation<'a> {
                             costs[slot] = -costs[slot];
                             continue;
                         };
-                        self.lock(c.a, c.b, &mut locked, held, held);
-                        for &s in self.stars.of(c.a).iter().chain(self.stars.of(c.b)) {
-                            for v in self.triangles[s as usize] {
-                                changed[v as usize] = pass;
-                            }
-                        }
+                        self.region(c.a, c.b, |v| {
+                            locked[v] = held;
+                            changed[v] = pass;
+                        });
                         moved[c.a as usize] = pass;
                         self.collapse(&c);
                         accepted += 1;
