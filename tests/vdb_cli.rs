@@ -1,8 +1,9 @@
 //! `splash recon --format vdb` end to end on the bundled frame, read back by OpenVDB's own
 //! tools (Debian's libopenvdb-tools; the tests say they skipped without them): `vdb_print`
 //! finds the level set and the attribute grids, and `vdb_tool` meshes the level set into a
-//! surface of the same volume as splash's mesh, lying on it. And a bad output
-//! path is an error naming the file that leaves nothing behind.
+//! surface of the same volume as splash's mesh, lying on it; `splash iso --format vdb` writes an
+//! isosurface's level set with its attribute grids. And a bad output path is an error naming
+//! the file that leaves nothing behind.
 
 mod common;
 
@@ -168,6 +169,50 @@ fn openvdb_reads_the_level_set_and_meshes_it_back_onto_the_mesh() {
         v / w,
         quantile(&back_here, 99),
         quantile(&there, 50)
+    );
+}
+
+#[test]
+fn isosurfaces_write_level_sets_with_attribute_grids() {
+    let dir = TempDir::new("vdb-iso");
+    let (frame, out) = (fixture("frame_0040.ply"), dir.path("iso.vdb"));
+    let run = Command::new(env!("CARGO_BIN_EXE_splash"))
+        .args([
+            "iso",
+            frame.to_str().unwrap(),
+            "--attribute",
+            "density",
+            "--level",
+            "600",
+        ])
+        .args(FAST)
+        .args(["--format", "vdb", "--attributes", "velocity,density", "-o"])
+        .arg(&out)
+        .output()
+        .expect("cannot start splash");
+    finish(
+        "splash iso --format vdb --attributes velocity,density".into(),
+        run,
+    )
+    .ok();
+    let Some(listing) = tool("vdb_print", &["-l", out.to_str().unwrap()]) else {
+        return;
+    };
+    for expected in [
+        "Name: surface",
+        "class: level set",
+        "Name: v",
+        "Name: density",
+    ] {
+        assert!(listing.contains(expected), "no {expected} in\n{listing}");
+    }
+    let counts: Vec<&str> = listing
+        .lines()
+        .filter(|l| l.contains("file_voxel_count"))
+        .collect();
+    assert!(
+        counts.len() == 3 && counts.iter().all(|c| *c == counts[0]) && !counts[0].ends_with(" 0"),
+        "{counts:?}"
     );
 }
 

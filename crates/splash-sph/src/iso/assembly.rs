@@ -1,7 +1,7 @@
 //! The mesh of the crossed cells: Marching Cubes triangles from the project's tables, one vertex
 //! per crossed edge shared by its cells, each corrected onto the isosurface (Sec. III-D2) with
-//! `CrossedEdge::correct`, then trimmed (Sec. III-D3), given SPH-gradient normals (Sec.
-//! III-D4) and the interpolated extra attributes.
+//! `CrossedEdge::correct`, then trimmed (Sec. III-D3) and given SPH-gradient normals (Sec.
+//! III-D4).
 
 use glam::{IVec3, Vec3};
 use rayon::prelude::*;
@@ -94,13 +94,11 @@ pub(crate) struct Finished {
     pub vertices: Vec<Vec3>,
     pub normals: Vec<Vec3>,
     pub triangles: Vec<[u32; 3]>,
-    /// Interpolated extra attributes, one row of components per vertex.
-    pub extras: Vec<f32>,
     pub trim_cases: [usize; 5],
 }
 
 /// Trims the mesh at `vertex_threshold`, adds the cut vertices (projected onto the isosurface
-/// with `iterations` steps), drops vertices no triangle uses, and samples normals and extras.
+/// with `iterations` steps), drops vertices no triangle uses, and samples normals.
 pub(crate) fn finish(
     it: &Interpolant,
     mut vertices: Vec<Vec3>,
@@ -149,19 +147,10 @@ pub(crate) fn finish(
             g.try_normalize().unwrap_or(Vec3::Z)
         })
         .collect();
-    let width: usize = it.channels.extras.iter().map(|e| e.1).sum();
-    let mut extras = vec![0.0f32; kept.len() * width];
-    if width > 0 {
-        extras
-            .par_chunks_mut(width)
-            .zip(kept.par_iter())
-            .for_each(|(out, &x)| it.extras_at(x, out));
-    }
     Finished {
         vertices: kept,
         normals,
         triangles,
-        extras,
         trim_cases: cases,
     }
 }

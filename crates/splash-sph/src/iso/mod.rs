@@ -20,6 +20,7 @@ use std::collections::BTreeMap;
 use std::time::Instant;
 
 use glam::Vec3;
+use rayon::prelude::*;
 
 use crate::config::Config;
 use crate::error::{Error, Result};
@@ -62,10 +63,46 @@ pub struct Isosurface {
 /// cell `cell`, `[iso]`, `threads` and the extra attributes of `output.attributes`.
 pub fn extract(
     positions: &[Vec3],
-    mut attributes: BTreeMap<String, Attribute>,
+    attributes: BTreeMap<String, Attribute>,
     request: &IsoRequest,
     config: &Config,
 ) -> Result<Isosurface> {
+    extract_then(positions, attributes, request, config, |surface, _| {
+        Ok(surface)
+    })
+}
+
+/// The extra attributes of an isosurface's particles (`config.output.attributes`), to sample
+/// at other points than its vertices: a level set's voxels.
+pub(crate) struct Extras<'a> {
+    it: &'a sph_interpolant::Interpolant,
+    names: &'a [String],
+}
+
+impl Extras<'_> {
+    /// The extra attributes at `points`, one value per point each, interpolated as at the
+    /// isosurface's vertices.
+    pub(crate) fn at(&self, points: &[Vec3]) -> Vec<(String, Attribute)> {
+        let width: usize = self.it.channels.extras.iter().map(|e| e.1).sum();
+        let mut rows = vec![0.0f32; points.len() * width];
+        if width > 0 {
+            rows.par_chunks_mut(width)
+                .zip(points.par_iter())
+                .for_each(|(out, &x)| self.it.extras_at(x, out));
+        }
+        split_extras(self.names, &self.it.channels.extras, &rows)
+    }
+}
+
+/// [`extract`], then `then` with the isosurface and its particles' [`Extras`], in the same
+/// worker pool.
+pub(crate) fn extract_then<T: Send>(
+    positions: &[Vec3],
+    mut attributes: BTreeMap<String, Attribute>,
+    request: &IsoRequest,
+    config: &Config,
+    then: impl FnOnce(Isosurface, &Extras<'_>) -> Result<T> + Send,
+) -> Result<T> {
     config.validate()?;
     let Some(r) = config.spacing else {
         return Err(Error::config("the isosurface needs the particle spacing"));
@@ -75,7 +112,7 @@ pub fn extract(
     }
     let iso = &config.iso;
     let pool = crate::worker_pool::worker_pool(config.threads)?;
-    let mut run = move || -> Result<Isosurface> {
+    let run = move || -> Result<T> {
         let level = f64::from(request.level);
         let start = Instant::now();
         let mut timings = IsoTimings::default();
@@ -106,8 +143,12 @@ pub fn extract(
             stats,
             warnings: Vec::new(),
         };
+        let extras = Extras {
+            it: &it,
+            names: &names,
+        };
         if positions.is_empty() {
-            return Ok(empty(stats));
+            return then(empty(stats), &extras);
         }
         let (lo, hi) = positions
             .iter()
@@ -170,16 +211,17 @@ pub fn extract(
         mesh.triangles = done.triangles;
         stats.vertices = mesh.vertices.len();
         stats.triangles = mesh.triangles.len();
-        let attributes = split_extras(&names, &it.channels.extras, &done.extras);
+        let attributes = extras.at(&mesh.vertices);
         timings.finishing = start.elapsed();
         stats.timings = timings;
         let warnings = kernel_warnings(&stats, iso.kernel_scale);
-        Ok(Isosurface {
+        let surface = Isosurface {
             mesh,
             attributes,
             stats,
             warnings,
-        })
+        };
+        then(surface, &extras)
     };
     match pool {
         Some(pool) => pool.install(run),

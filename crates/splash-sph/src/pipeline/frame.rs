@@ -281,38 +281,32 @@ impl FramePipeline {
         })
     }
 
-    /// [`finish`](Self::finish) for VDB output: the mesh's level set (turned upright first, as
-    /// every output is), its attributes carried onto its active voxels.
-    fn finish_level_set(&self, prepared: &Prepared, mut mesh: TriMesh) -> Result<Made> {
+    /// [`finish`](Self::finish) for VDB output: the mesh's level set, its attributes carried
+    /// onto its active voxels.
+    fn finish_level_set(&self, prepared: &Prepared, mesh: TriMesh) -> Result<Made> {
         let reconstructor = self.prepared_reconstructor();
-        let up_axis = self.config.output.up_axis;
-        if let Some(axis) = up_axis {
-            axis.rotate_mesh(&mut mesh, &mut []);
-        }
-        let level_set = reconstructor.install(|| LevelSet::of_mesh(&mesh, prepared.stats.cell))?;
-        let mut named = Vec::new();
-        if !prepared.wanted.is_empty() {
-            // The voxels where the particles are, before the turn upright.
-            let mut points = level_set.positions();
-            if let Some(axis) = up_axis {
-                axis.inverse().rotate(&mut points);
-            }
-            let columns: Vec<&Attribute> = prepared.wanted.iter().map(|(_, a)| a).collect();
-            let values =
-                reconstructor.interpolate_at(&points, &prepared.motion.positions, &columns)?;
-            named = prepared
-                .wanted
-                .iter()
-                .map(|(n, _)| n.clone())
-                .zip(values)
-                .collect();
-            if let Some(axis) = up_axis {
-                axis.rotate_mesh(&mut TriMesh::default(), &mut named);
-            }
-        }
         let mut stats = prepared.stats;
         stats.triangles = mesh.triangles.len();
         stats.vertices = mesh.vertices.len();
+        let wanted = !prepared.wanted.is_empty();
+        let (level_set, named) = reconstructor.install(|| {
+            upright_level_set(
+                mesh,
+                stats.cell,
+                self.config.output.up_axis,
+                wanted,
+                |points| {
+                    let columns: Vec<&Attribute> = prepared.wanted.iter().map(|(_, a)| a).collect();
+                    let values = reconstructor.interpolate_at(
+                        points,
+                        &prepared.motion.positions,
+                        &columns,
+                    )?;
+                    let names = prepared.wanted.iter().map(|(n, _)| n.clone());
+                    Ok(names.zip(values).collect())
+                },
+            )
+        })?;
         Ok(Made {
             mesh: TriMesh::default(),
             named,
@@ -346,8 +340,33 @@ impl FramePipeline {
             spacing: Some(r),
             ..self.config.clone()
         };
-        let surface = iso::extract(&positions, attributes, request, &config)
-            .map_err(|e| e.context(format_args!("'{}'", input.display())))?;
+        // For VDB output, the level set is made while the particles' attributes can still be
+        // sampled at its voxels.
+        let vdb = self.format == MeshFormat::Vdb;
+        let up_axis = config.output.up_axis;
+        let (surface, level_set) = iso::extract_then(
+            &positions,
+            attributes,
+            request,
+            &config,
+            |mut surface, extras| {
+                if !vdb {
+                    return Ok((surface, None));
+                }
+                // The counts stay those of the mesh the level set is made of.
+                let mesh = std::mem::take(&mut surface.mesh);
+                surface.stats.triangles = mesh.triangles.len();
+                surface.stats.vertices = mesh.vertices.len();
+                let wanted = !surface.attributes.is_empty();
+                let (level_set, named) =
+                    upright_level_set(mesh, surface.stats.cell, up_axis, wanted, |points| {
+                        Ok(extras.at(points))
+                    })?;
+                surface.attributes = named;
+                Ok((surface, Some(level_set)))
+            },
+        )
+        .map_err(|e| e.context(format_args!("'{}'", input.display())))?;
         if !self.iso_warned && !surface.warnings.is_empty() {
             self.iso_warned = true;
             for warning in &surface.warnings {
@@ -358,18 +377,22 @@ impl FramePipeline {
             spacing: r,
             cell: surface.stats.cell,
             particles: positions.len(),
-            triangles: surface.mesh.triangles.len(),
-            vertices: surface.mesh.vertices.len(),
+            triangles: surface.stats.triangles,
+            vertices: surface.stats.vertices,
             iso: Some(surface.stats),
             ..FrameStats::default()
         };
         progress.measured(&mut stats);
         Ok(Made {
-            mesh: surface.mesh,
+            mesh: if level_set.is_some() {
+                TriMesh::default()
+            } else {
+                surface.mesh
+            },
             named: surface.attributes,
             stats,
             time: None,
-            level_set: None,
+            level_set,
         })
     }
 
@@ -476,6 +499,14 @@ pub(super) struct Made {
     level_set: Option<LevelSet>,
 }
 
+#[cfg(test)]
+impl Made {
+    /// The level set of VDB output, and the grids on its voxels.
+    pub(super) fn level_set_and_grids(&self) -> (&LevelSet, &[(String, Attribute)]) {
+        (self.level_set.as_ref().expect("VDB output"), &self.named)
+    }
+}
+
 /// Writes meshes: turned upright if asked, whole or not at all.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Writer {
@@ -503,12 +534,7 @@ impl Writer {
             axis.rotate_mesh(&mut mesh, &mut named);
         }
         if self.format == MeshFormat::Vdb {
-            // An isosurface's, or a frame without particles (no voxels: any voxel size will do).
-            if !named.is_empty() && !mesh.is_empty() {
-                bail_config!(
-                    "--format vdb writes the attributes of surfaces only, not of isosurfaces"
-                );
-            }
+            // A frame without particles (no voxels: any voxel size will do).
             let voxel = if stats.cell > 0.0 { stats.cell } else { 1.0 };
             let level_set = LevelSet::of_mesh(&mesh, voxel)?;
             level_set.write_file(output, &named)?;
@@ -528,6 +554,35 @@ impl Writer {
         stats.timings.write = start.elapsed();
         Ok(stats)
     }
+}
+
+/// `mesh`'s level set on voxels of `cell`, turned upright first as every output is, and when
+/// attributes are `wanted`, those `sample` gives at its active voxels (at their places before
+/// the turn, where the particles are; vectors turned with the grid).
+fn upright_level_set(
+    mut mesh: TriMesh,
+    cell: f32,
+    up_axis: Option<UpAxis>,
+    wanted: bool,
+    sample: impl FnOnce(&[Vec3]) -> Result<Vec<(String, Attribute)>>,
+) -> Result<(LevelSet, Vec<(String, Attribute)>)> {
+    if let Some(axis) = up_axis {
+        axis.rotate_mesh(&mut mesh, &mut []);
+    }
+    let level_set = LevelSet::of_mesh(&mesh, cell)?;
+    drop(mesh);
+    if !wanted {
+        return Ok((level_set, Vec::new()));
+    }
+    let mut points = level_set.positions();
+    if let Some(axis) = up_axis {
+        axis.inverse().rotate(&mut points);
+    }
+    let mut named = sample(&points)?;
+    if let Some(axis) = up_axis {
+        axis.rotate_mesh(&mut TriMesh::default(), &mut named);
+    }
+    Ok((level_set, named))
 }
 
 /// The attributes `names` (canonical spellings) of frame `input`, found through the alias

@@ -36,6 +36,8 @@
 mod batch;
 mod following;
 mod frame;
+#[cfg(test)]
+mod level_set_output;
 mod overlap;
 mod plan;
 mod run;
