@@ -100,15 +100,12 @@ fn distances(from: &TriMesh, to: &TriMesh, reach: f32) -> Vec<f32> {
     d
 }
 
-#[test]
-fn openvdb_reads_the_level_set_and_meshes_it_back_onto_the_mesh() {
-    let dir = TempDir::new("vdb-read-back");
-    let (grids, vdb, ply) = (dir.path("grids.vdb"), dir.path("f.vdb"), dir.path("f.ply"));
-    recon(&grids, &["--attributes", "velocity,density"]).ok();
-    recon(&vdb, &[]).ok();
-    recon(&ply, &[]).ok();
-    let Some(listing) = tool("vdb_print", &["-l", grids.to_str().unwrap()]) else {
-        return;
+/// Whether `vdb_print` is installed; when it is, checks that it lists in `file` the level set
+/// `surface`, the velocity grid `v` and the density grid, on the same nonzero count of active
+/// voxels and voxels of the fixture's cell.
+fn lists_three_grids_on_one_band(file: &Path) -> bool {
+    let Some(listing) = tool("vdb_print", &["-l", file.to_str().unwrap()]) else {
+        return false;
     };
     for expected in [
         "Name: surface",
@@ -120,15 +117,27 @@ fn openvdb_reads_the_level_set_and_meshes_it_back_onto_the_mesh() {
     ] {
         assert!(listing.contains(expected), "no {expected} in\n{listing}");
     }
-    // The three grids share their active voxels.
     let counts: Vec<&str> = listing
         .lines()
         .filter(|l| l.contains("file_voxel_count"))
         .collect();
     assert!(
-        counts.len() == 3 && counts.iter().all(|c| *c == counts[0]),
+        counts.len() == 3 && counts.iter().all(|c| *c == counts[0]) && !counts[0].ends_with(" 0"),
         "{counts:?}"
     );
+    true
+}
+
+#[test]
+fn openvdb_reads_the_level_set_and_meshes_it_back_onto_the_mesh() {
+    let dir = TempDir::new("vdb-read-back");
+    let (grids, vdb, ply) = (dir.path("grids.vdb"), dir.path("f.vdb"), dir.path("f.ply"));
+    recon(&grids, &["--attributes", "velocity,density"]).ok();
+    recon(&vdb, &[]).ok();
+    recon(&ply, &[]).ok();
+    if !lists_three_grids_on_one_band(&grids) {
+        return;
+    }
     let back = dir.path("back.obj");
     let args = [
         "-read",
@@ -195,25 +204,7 @@ fn isosurfaces_write_level_sets_with_attribute_grids() {
         run,
     )
     .ok();
-    let Some(listing) = tool("vdb_print", &["-l", out.to_str().unwrap()]) else {
-        return;
-    };
-    for expected in [
-        "Name: surface",
-        "class: level set",
-        "Name: v",
-        "Name: density",
-    ] {
-        assert!(listing.contains(expected), "no {expected} in\n{listing}");
-    }
-    let counts: Vec<&str> = listing
-        .lines()
-        .filter(|l| l.contains("file_voxel_count"))
-        .collect();
-    assert!(
-        counts.len() == 3 && counts.iter().all(|c| *c == counts[0]) && !counts[0].ends_with(" 0"),
-        "{counts:?}"
-    );
+    lists_three_grids_on_one_band(&out);
 }
 
 #[test]
