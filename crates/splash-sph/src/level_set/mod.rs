@@ -25,7 +25,7 @@ use std::path::Path;
 use crate::data::{Attribute, TriMesh};
 use crate::error::Result;
 use crate::io::{self, VdbGrid, VdbLeaf, VdbTree, VdbValues};
-use crate::mesh::signed_distance::{nearest_on_triangle, signed_distance_among};
+use crate::mesh::signed_distance::signed_distance_among;
 use cones::{Cones, face_normal};
 use scan::Work;
 
@@ -203,7 +203,9 @@ impl Signs<'_> {
         let tri = triangles[t as usize];
         let n = face_normal(&tri, vertices);
         if n != Vec3::ZERO && self.cones.narrow(tri, n) {
-            let inside = (p - nearest_on_triangle(p, tri, vertices)).dot(n) < 0.0;
+            // The nearest point lies in the face's plane, so its offset along the normal is
+            // that of any corner.
+            let inside = (p - vertices[tri[0] as usize]).dot(n) < 0.0;
             return if inside { -d } else { d };
         }
         let around = tri.into_iter().flat_map(|v| self.fans.around(v));
