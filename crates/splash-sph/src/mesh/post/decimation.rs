@@ -41,6 +41,24 @@ const MAX_STAR: usize = 16;
 /// Collapses checked in parallel before they are made.
 const CHECKED_AT_ONCE: usize = 1 << 14;
 
+/// How many keys ahead the selection fetches a key's triangle.
+const PREFETCH: usize = 16;
+
+/// Asks the processor to bring `t` into the cache: a hint, with no effect on what runs.
+#[inline(always)]
+fn prefetch<T>(t: &T) {
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: a prefetch reads nothing and faults on no address; SSE is in x86-64's baseline.
+    unsafe {
+        std::arch::x86_64::_mm_prefetch(
+            (t as *const T).cast::<i8>(),
+            std::arch::x86_64::_MM_HINT_T0,
+        );
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = t;
+}
+
 /// Triangle quality `4 √3 area / Σ edge²` (1 for an equilateral triangle) under which a
 /// collapse may not bring a triangle unless one as bad was there already: 0.3 is about a 10°
 /// smallest angle.
@@ -629,26 +647,36 @@ impl<'a> Decimation<'a> {
             loop {
                 stamp += 1;
                 let mut taken = Vec::new();
-                keys.retain(|&key| {
+                let mut kept = 0;
+                for i in 0..keys.len() {
+                    // The keys go by cost, so their triangles lie all over the mesh: each is
+                    // fetched a few keys ahead (cbd-large f23 at 0.1r, 19 M keys read in 881
+                    // rounds: the selection 477 → 355 ms).
+                    if let Some(&ahead) = keys.get(i + PREFETCH) {
+                        prefetch(&self.triangles[ahead as u32 as usize / 3]);
+                    }
+                    let key = keys[i];
                     let slot = key as u32 as usize;
                     let t = self.triangles[slot / 3];
                     if t[0] == DEAD {
                         // The edge of a collapse made this pass.
-                        return false;
+                        continue;
                     }
                     let (a, b) = (t[slot % 3], t[(slot + 1) % 3]);
                     let (la, lb) = (locked[a as usize], locked[b as usize]);
                     // Next to an accepted collapse: not this pass.
                     if la == held || lb == held {
-                        return false;
+                        continue;
                     }
                     if la == stamp || lb == stamp {
-                        return true;
+                        keys[kept] = key;
+                        kept += 1;
+                        continue;
                     }
                     self.lock(a, b, &mut locked, stamp, held);
                     taken.push((slot, a, b));
-                    false
-                });
+                }
+                keys.truncate(kept);
                 if taken.is_empty() {
                     break;
                 }
