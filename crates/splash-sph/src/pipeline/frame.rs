@@ -353,10 +353,7 @@ impl FramePipeline {
                 if !vdb {
                     return Ok((surface, None));
                 }
-                // The counts stay those of the mesh the level set is made of.
                 let mesh = std::mem::take(&mut surface.mesh);
-                surface.stats.triangles = mesh.triangles.len();
-                surface.stats.vertices = mesh.vertices.len();
                 let wanted = !surface.attributes.is_empty();
                 let (level_set, named) =
                     upright_level_set(mesh, surface.stats.cell, up_axis, wanted, |points| {
@@ -384,11 +381,7 @@ impl FramePipeline {
         };
         progress.measured(&mut stats);
         Ok(Made {
-            mesh: if level_set.is_some() {
-                TriMesh::default()
-            } else {
-                surface.mesh
-            },
+            mesh: surface.mesh,
             named: surface.attributes,
             stats,
             time: None,
