@@ -19,7 +19,7 @@
 //! `recon` and `preview` share it, and the flags that drive it ([`RunArgs`]).
 
 use std::path::{Path, PathBuf};
-use std::time::{SystemTime, UNIX_EPOCH};
+use std::time::{Duration, SystemTime, UNIX_EPOCH};
 
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -95,7 +95,11 @@ impl FrameFigures for FrameStats {
 
     fn seconds(&self) -> f64 {
         let t = self.timings;
-        (t.read + t.reconstruction() + t.write).as_secs_f64()
+        // An isosurface's stages are its own, not the reconstruction's.
+        let iso = self
+            .iso
+            .map_or(Duration::ZERO, |i| i.timings.grid_construction + i.total());
+        (t.read + t.reconstruction() + iso + t.write).as_secs_f64()
     }
 
     fn line(&self, output: &Path, verbosity: Verbosity) -> String {

@@ -194,6 +194,20 @@ fn json_log_has_the_iso_figures_and_threads_do_not_change_the_mesh() {
         }
         let ratio: f64 = figures.get("cache_hit_ratio").parse().unwrap();
         assert!((0.0..=1.0).contains(&ratio), "hit ratio {ratio}");
+        // The frame's time counts the isosurface's stages (it counted only the read and the
+        // write before).
+        let stages: serde_json::Value = serde_json::from_str(figures.get("timings")).unwrap();
+        let stages: f64 = stages
+            .as_object()
+            .unwrap()
+            .values()
+            .map(|d| d["secs"].as_f64().unwrap() + d["nanos"].as_f64().unwrap() * 1e-9)
+            .sum();
+        let seconds: f64 = frame.get("seconds").parse().unwrap();
+        assert!(
+            seconds + 1e-3 >= stages && stages > 0.0,
+            "{seconds} s, stages {stages} s"
+        );
         let triangles: usize = frame.get("triangles").parse().unwrap();
         assert_eq!(figures.get("triangles"), frame.get("triangles"));
         assert_eq!(read_ply(&out).payload["face"].len(), triangles);

@@ -289,6 +289,7 @@ impl FramePipeline {
         stats.triangles = mesh.triangles.len();
         stats.vertices = mesh.vertices.len();
         let wanted = !prepared.wanted.is_empty();
+        let start = Instant::now();
         let (level_set, named) = reconstructor.install(|| {
             upright_level_set(
                 mesh,
@@ -307,6 +308,8 @@ impl FramePipeline {
                 },
             )
         })?;
+        // Making the level set is part of writing the frame as VDB.
+        stats.timings.write = start.elapsed();
         Ok(Made {
             mesh: TriMesh::default(),
             named,
@@ -344,6 +347,7 @@ impl FramePipeline {
         // sampled at its voxels.
         let vdb = self.format == MeshFormat::Vdb;
         let up_axis = config.output.up_axis;
+        let mut level_set_time = Duration::ZERO;
         let (surface, level_set) = iso::extract_then(
             &positions,
             attributes,
@@ -353,12 +357,14 @@ impl FramePipeline {
                 if !vdb {
                     return Ok((surface, None));
                 }
+                let start = Instant::now();
                 let mesh = std::mem::take(&mut surface.mesh);
                 let wanted = !surface.attributes.is_empty();
                 let (level_set, named) =
                     upright_level_set(mesh, surface.stats.cell, up_axis, wanted, |points| {
                         Ok(extras.at(points))
                     })?;
+                level_set_time = start.elapsed();
                 surface.attributes = named;
                 Ok((surface, Some(level_set)))
             },
@@ -379,6 +385,7 @@ impl FramePipeline {
             iso: Some(surface.stats),
             ..FrameStats::default()
         };
+        stats.timings.write = level_set_time;
         progress.measured(&mut stats);
         Ok(Made {
             mesh: surface.mesh,
@@ -520,7 +527,7 @@ impl Writer {
         let start = Instant::now();
         if let Some(level_set) = level_set {
             level_set.write_file(output, &named)?;
-            stats.timings.write = start.elapsed();
+            stats.timings.write += start.elapsed();
             return Ok(stats);
         }
         if let Some(axis) = self.up_axis {

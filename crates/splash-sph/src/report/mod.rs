@@ -30,7 +30,8 @@ pub struct Timings {
     pub triangulation: Duration,
     /// Post-processing the mesh (smoothing, volume; issue 25).
     pub post: Duration,
-    /// Writing the mesh (set by callers that write it).
+    /// Writing the mesh (set by callers that write it); for VDB output, making its level set
+    /// too.
     pub write: Duration,
 }
 
