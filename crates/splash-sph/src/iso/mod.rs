@@ -67,9 +67,16 @@ pub fn extract(
     request: &IsoRequest,
     config: &Config,
 ) -> Result<Isosurface> {
-    extract_then(positions, attributes, request, config, |surface, _| {
-        Ok(surface)
-    })
+    extract_then(
+        positions,
+        attributes,
+        request,
+        config,
+        |mut surface, extras| {
+            extras.onto_vertices(&mut surface);
+            Ok(surface)
+        },
+    )
 }
 
 /// The extra attributes of an isosurface's particles (`config.output.attributes`), to sample
@@ -92,10 +99,27 @@ impl Extras<'_> {
         }
         split_extras(self.names, &self.it.channels.extras, &rows)
     }
+
+    /// Samples the extra attributes at `surface`'s vertices, the time counted into its
+    /// finishing; without particles, each is an empty column.
+    pub(crate) fn onto_vertices(&self, surface: &mut Isosurface) {
+        if self.it.handlers.positions.is_empty() {
+            surface.attributes = self
+                .names
+                .iter()
+                .map(|n| (n.clone(), Attribute::Scalar(Vec::new())))
+                .collect();
+            return;
+        }
+        let start = Instant::now();
+        surface.attributes = self.at(&surface.mesh.vertices);
+        surface.stats.timings.finishing += start.elapsed();
+    }
 }
 
-/// [`extract`], then `then` with the isosurface and its particles' [`Extras`], in the same
-/// worker pool.
+/// [`extract`] without the vertex attributes, then `then` with the isosurface and its
+/// particles' [`Extras`] (to sample them at its vertices, [`Extras::onto_vertices`], or
+/// elsewhere), in the same worker pool.
 pub(crate) fn extract_then<T: Send>(
     positions: &[Vec3],
     mut attributes: BTreeMap<String, Attribute>,
@@ -134,21 +158,18 @@ pub(crate) fn extract_then<T: Send>(
         };
         let mut mesh = TriMesh::default();
         let names = config.output.attributes.clone();
-        let empty = |stats| Isosurface {
-            mesh: TriMesh::default(),
-            attributes: names
-                .iter()
-                .map(|n| (n.clone(), Attribute::Scalar(Vec::new())))
-                .collect(),
-            stats,
-            warnings: Vec::new(),
-        };
         let extras = Extras {
             it: &it,
             names: &names,
         };
         if positions.is_empty() {
-            return then(empty(stats), &extras);
+            let empty = Isosurface {
+                mesh: TriMesh::default(),
+                attributes: Vec::new(),
+                stats,
+                warnings: Vec::new(),
+            };
+            return then(empty, &extras);
         }
         let (lo, hi) = positions
             .iter()
@@ -211,13 +232,12 @@ pub(crate) fn extract_then<T: Send>(
         mesh.triangles = done.triangles;
         stats.vertices = mesh.vertices.len();
         stats.triangles = mesh.triangles.len();
-        let attributes = extras.at(&mesh.vertices);
         timings.finishing = start.elapsed();
         stats.timings = timings;
         let warnings = kernel_warnings(&stats, iso.kernel_scale);
         let surface = Isosurface {
             mesh,
-            attributes,
+            attributes: Vec::new(),
             stats,
             warnings,
         };

@@ -289,8 +289,7 @@ impl FramePipeline {
         stats.triangles = mesh.triangles.len();
         stats.vertices = mesh.vertices.len();
         let wanted = !prepared.wanted.is_empty();
-        let start = Instant::now();
-        let (level_set, named) = reconstructor.install(|| {
+        let voxels = reconstructor.install(|| {
             upright_level_set(
                 mesh,
                 stats.cell,
@@ -308,14 +307,13 @@ impl FramePipeline {
                 },
             )
         })?;
-        // Making the level set is part of writing the frame as VDB.
-        stats.timings.write = start.elapsed();
+        stats.timings.write = voxels.time;
         Ok(Made {
             mesh: TriMesh::default(),
-            named,
+            named: voxels.grids,
             stats,
             time: prepared.time,
-            level_set: Some(level_set),
+            level_set: Some(voxels.level_set),
         })
     }
 
@@ -347,6 +345,7 @@ impl FramePipeline {
         // sampled at its voxels.
         let vdb = self.format == MeshFormat::Vdb;
         let up_axis = config.output.up_axis;
+        let wanted = !config.output.attributes.is_empty();
         let mut level_set_time = Duration::ZERO;
         let (surface, level_set) = iso::extract_then(
             &positions,
@@ -355,18 +354,17 @@ impl FramePipeline {
             &config,
             |mut surface, extras| {
                 if !vdb {
+                    extras.onto_vertices(&mut surface);
                     return Ok((surface, None));
                 }
-                let start = Instant::now();
                 let mesh = std::mem::take(&mut surface.mesh);
-                let wanted = !surface.attributes.is_empty();
-                let (level_set, named) =
+                let voxels =
                     upright_level_set(mesh, surface.stats.cell, up_axis, wanted, |points| {
                         Ok(extras.at(points))
                     })?;
-                level_set_time = start.elapsed();
-                surface.attributes = named;
-                Ok((surface, Some(level_set)))
+                level_set_time = voxels.time;
+                surface.attributes = voxels.grids;
+                Ok((surface, Some(voxels.level_set)))
             },
         )
         .map_err(|e| e.context(format_args!("'{}'", input.display())))?;
@@ -556,6 +554,14 @@ impl Writer {
     }
 }
 
+/// A frame's level set for VDB output, the grids on its active voxels, and the time they took,
+/// which counts as writing the frame.
+struct Voxels {
+    level_set: LevelSet,
+    grids: Vec<(String, Attribute)>,
+    time: Duration,
+}
+
 /// `mesh`'s level set on voxels of `cell`, turned upright first as every output is, and when
 /// attributes are `wanted`, those `sample` gives at its active voxels (at their places before
 /// the turn, where the particles are; vectors turned with the grid).
@@ -565,24 +571,33 @@ fn upright_level_set(
     up_axis: Option<UpAxis>,
     wanted: bool,
     sample: impl FnOnce(&[Vec3]) -> Result<Vec<(String, Attribute)>>,
-) -> Result<(LevelSet, Vec<(String, Attribute)>)> {
+) -> Result<Voxels> {
+    let start = Instant::now();
     if let Some(axis) = up_axis {
         axis.rotate_mesh(&mut mesh, &mut []);
     }
     let level_set = LevelSet::of_mesh(&mesh, cell)?;
     drop(mesh);
     if !wanted {
-        return Ok((level_set, Vec::new()));
+        return Ok(Voxels {
+            level_set,
+            grids: Vec::new(),
+            time: start.elapsed(),
+        });
     }
     let mut points = level_set.positions();
     if let Some(axis) = up_axis {
         axis.inverse().rotate(&mut points);
     }
-    let mut named = sample(&points)?;
+    let mut grids = sample(&points)?;
     if let Some(axis) = up_axis {
-        axis.rotate_mesh(&mut TriMesh::default(), &mut named);
+        axis.rotate_mesh(&mut TriMesh::default(), &mut grids);
     }
-    Ok((level_set, named))
+    Ok(Voxels {
+        level_set,
+        grids,
+        time: start.elapsed(),
+    })
 }
 
 /// The attributes `names` (canonical spellings) of frame `input`, found through the alias
