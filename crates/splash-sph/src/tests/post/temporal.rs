@@ -314,8 +314,8 @@ fn following_real_frames_leaves_no_face_crossing() {
 }
 
 /// The default adds little flicker to the raw surface on real frames (dense-dambreak 120 to
-/// 125, carried jitter): 1.35× raw's since the triangles are evened out before any smoothing
-/// and no Taubin pairs run before the volume rounds (1.64× with 6 pairs first, unrelaxed).
+/// 125, carried jitter): 1.17× raw's since the room of the volume steps spreads at slope 0.2
+/// (1.35× at 0.1; 1.64× with 6 Taubin pairs first and no relaxation).
 #[test]
 fn the_default_flickers_little_more_than_the_raw_surface() {
     let Some((inputs, mut config)) = dense_dambreak(120..=125) else {
@@ -327,7 +327,7 @@ fn the_default_flickers_little_more_than_the_raw_surface() {
     run_with(&inputs, &out.join("r"), config, None);
     let [r, s] = ["r", "s"].map(|name| jitter_at(&inputs, &out.join(name), 0.04));
     assert!(
-        s.carried_rms() < 1.45 * r.carried_rms(),
+        s.carried_rms() < 1.25 * r.carried_rms(),
         "default {} r against raw {} r",
         s.carried_rms(),
         r.carried_rms()
