@@ -31,6 +31,18 @@ pub(crate) fn triangle_components(mesh: &TriMesh) -> (Vec<u32>, usize) {
     (labels, count as usize)
 }
 
+/// [`triangle_components`]' labels with each component's signed volume (positive for a closed,
+/// outward-wound one), by the divergence theorem.
+pub(crate) fn component_labels_and_volumes(mesh: &TriMesh) -> (Vec<u32>, Vec<f64>) {
+    let (labels, count) = triangle_components(mesh);
+    let mut volumes = vec![0.0f64; count];
+    for (t, &label) in mesh.triangles.iter().zip(&labels) {
+        let [a, b, c] = t.map(|i| mesh.vertices[i as usize].as_dvec3());
+        volumes[label as usize] += a.dot(b.cross(c)) / 6.0;
+    }
+    (labels, volumes)
+}
+
 /// Removes the connected components of `mesh` whose enclosed volume is smaller in magnitude
 /// than `min_volume` (the command line's `--min-component V` passes `V r³`), and the vertices
 /// only they used; returns the rest, vertices and normals in their order, and how many
@@ -48,12 +60,7 @@ pub fn drop_small_components(mesh: &TriMesh, min_volume: f64) -> Result<(TriMesh
         )));
     }
     validate(mesh)?;
-    let (labels, count) = triangle_components(mesh);
-    let mut volumes = vec![0.0f64; count];
-    for (t, &label) in mesh.triangles.iter().zip(&labels) {
-        let [a, b, c] = t.map(|i| mesh.vertices[i as usize].as_dvec3());
-        volumes[label as usize] += a.dot(b.cross(c)) / 6.0;
-    }
+    let (labels, volumes) = component_labels_and_volumes(mesh);
     let keep: Vec<bool> = volumes.iter().map(|v| v.abs() >= min_volume).collect();
     let dropped = keep.iter().filter(|&&k| !k).count();
     if dropped == 0 {

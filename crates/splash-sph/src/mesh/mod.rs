@@ -16,6 +16,7 @@ pub(crate) mod signed_distance;
 mod stars;
 pub(crate) mod topology;
 
+pub(crate) use components::component_labels_and_volumes;
 pub use components::drop_small_components;
 pub use edges::Edges;
 pub use post::{VolumeScope, clip_to_box, decimate};

@@ -19,7 +19,37 @@ use rayon::prelude::*;
 
 use super::motion::{FrameMotion, mean_motions};
 use crate::error::Result;
-use crate::mesh::{SignedDistance, TriMesh, area_weighted_normals};
+use crate::mesh::{SignedDistance, TriMesh, area_weighted_normals, component_labels_and_volumes};
+
+/// The parts of a surface whose carried jitter [`Jitter::parts`] sums apart, by connected
+/// component: the body (the component of largest volume), pieces of at least [`DROPLET`] r³,
+/// and droplets below. A droplet's few particles rearrange as it flies, so its surface
+/// flickers more than the body's (dense-dambreak 120–135, raw: 2 % of the vertices, a third
+/// of the mean square).
+pub const PARTS: [&str; 3] = ["body", "pieces", "droplets"];
+
+/// Volume, in r³, under which a component counts as a droplet in [`PARTS`].
+pub const DROPLET: f64 = 10.0;
+
+/// The carried sums of one of the [`PARTS`].
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Part {
+    /// Vertices measured in the carried form.
+    pub vertices: u64,
+    /// Σ ((c₊ + c₋)/2)² over those, in spacings r.
+    pub carried: f64,
+}
+
+impl Part {
+    /// RMS((c₊ + c₋)/2) in spacings r (NaN without vertices).
+    pub fn rms(&self) -> f64 {
+        if self.vertices == 0 {
+            f64::NAN
+        } else {
+            (self.carried / self.vertices as f64).sqrt()
+        }
+    }
+}
 
 /// Sums of squares over the vertices of inner frames, in spacings r; add frames with `+=`.
 /// Vertices without an area around them or with a non-finite figure count as left out.
@@ -39,6 +69,8 @@ pub struct Jitter {
     pub carried_vertices: u64,
     /// Σ ((c₊ + c₋)/2)² over those.
     pub carried: f64,
+    /// The carried sums of each of the [`PARTS`], in order.
+    pub parts: [Part; 3],
 }
 
 impl std::ops::AddAssign for Jitter {
@@ -50,6 +82,10 @@ impl std::ops::AddAssign for Jitter {
         self.surface += o.surface;
         self.carried_vertices += o.carried_vertices;
         self.carried += o.carried;
+        for (a, b) in self.parts.iter_mut().zip(o.parts) {
+            a.vertices += b.vertices;
+            a.carried += b.carried;
+        }
     }
 }
 
@@ -122,6 +158,7 @@ pub fn frame_jitter(window: &Window<'_>, spacing: f32) -> Result<Jitter> {
         || SignedDistance::new(&next.vertices, &next.triangles, reach),
     );
     let r = f64::from(spacing);
+    let parts = vertex_parts(mesh, r);
     Ok(mesh
         .vertices
         .par_iter()
@@ -154,6 +191,10 @@ pub fn frame_jitter(window: &Window<'_>, spacing: f32) -> Result<Jitter> {
             {
                 out.carried_vertices = 1;
                 out.carried = (f64::from(c_next + c_prev) / (2.0 * r)).powi(2);
+                out.parts[usize::from(parts[i])] = Part {
+                    vertices: 1,
+                    carried: out.carried,
+                };
             }
             out.vertices = 1;
             out.jitter = ((e_next + e_prev) / 2.0).powi(2);
@@ -165,4 +206,27 @@ pub fn frame_jitter(window: &Window<'_>, spacing: f32) -> Result<Jitter> {
             a += b;
             a
         }))
+}
+
+/// Which of the [`PARTS`] each vertex of `mesh` belongs to (vertices no triangle uses count
+/// as the body's; they are never measured), at spacing `r`.
+fn vertex_parts(mesh: &TriMesh, r: f64) -> Vec<u8> {
+    let (labels, volumes) = component_labels_and_volumes(mesh);
+    let body = (0..volumes.len()).max_by(|&a, &b| volumes[a].total_cmp(&volumes[b]));
+    let part = |c: usize| -> u8 {
+        if Some(c) == body {
+            0
+        } else if volumes[c].abs() >= DROPLET * r * r * r {
+            1
+        } else {
+            2
+        }
+    };
+    let mut parts = vec![0u8; mesh.vertices.len()];
+    for (t, &label) in mesh.triangles.iter().zip(&labels) {
+        for i in t {
+            parts[*i as usize] = part(label as usize);
+        }
+    }
+    parts
 }

@@ -10,5 +10,5 @@ mod motion;
 pub use filter::Followed;
 pub(crate) use filter::{Neighbour, follow_fluid, neighbour_bins};
 
-pub use jitter::{Jitter, Window, frame_jitter};
+pub use jitter::{DROPLET, Jitter, PARTS, Part, Window, frame_jitter};
 pub use motion::FrameMotion;
