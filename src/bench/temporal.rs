@@ -245,7 +245,7 @@ pub fn run(args: BenchTemporalArgs) -> Result<ExitCode> {
          of largest volume, droplets enclose less than {DROPLET} r³, pieces the rest"
     );
     println!("| mesh | {} |", PARTS.join(" | "));
-    println!("|---|---|---|---|");
+    println!("|---|{}", "---|".repeat(PARTS.len()));
     for (v, row) in variants.iter().zip(&table) {
         let j = &row.jitter;
         let cells: Vec<String> = j

@@ -672,7 +672,7 @@ pub(crate) mod tests {
 
     use super::*;
     use crate::data::TriMesh;
-    use crate::tests::common::{torus, uniform};
+    use crate::tests::common::{merged, torus, uniform};
 
     /// A closed UV sphere, outward: `rings` bands of `segments` quads split in two, fans at the
     /// poles (vertex 0 the north pole, the last the south pole).
@@ -707,16 +707,6 @@ pub(crate) mod tests {
             normals: Vec::new(),
             triangles,
         }
-    }
-
-    /// `a` and `b` as one mesh.
-    pub(crate) fn merged(a: &TriMesh, b: &TriMesh) -> TriMesh {
-        let offset = a.vertices.len() as u32;
-        let mut out = a.clone();
-        out.vertices.extend(&b.vertices);
-        out.triangles
-            .extend(b.triangles.iter().map(|t| t.map(|v| v + offset)));
-        out
     }
 
     fn found(m: &TriMesh) -> Vec<u32> {

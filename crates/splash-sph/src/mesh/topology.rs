@@ -270,7 +270,7 @@ impl UnionFind {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::tests::common::torus;
+    use crate::tests::common::{merged, torus};
     use glam::Vec3;
 
     /// Builds a mesh whose normals point away from `center` (outward for convex shapes).
@@ -314,20 +314,6 @@ mod tests {
             .to_vec();
         let triangles = vec![[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]];
         mesh(vertices, triangles, offset + Vec3::splat(0.25))
-    }
-
-    fn merge(a: &TriMesh, b: &TriMesh) -> TriMesh {
-        let shift = a.vertices.len() as u32;
-        TriMesh {
-            vertices: [a.vertices.clone(), b.vertices.clone()].concat(),
-            normals: [a.normals.clone(), b.normals.clone()].concat(),
-            triangles: a
-                .triangles
-                .iter()
-                .copied()
-                .chain(b.triangles.iter().map(|t| t.map(|i| i + shift)))
-                .collect(),
-        }
     }
 
     #[test]
@@ -416,7 +402,7 @@ mod tests {
 
     #[test]
     fn two_tetrahedra() {
-        let m = merge(&tetrahedron(Vec3::ZERO), &tetrahedron(Vec3::splat(3.0)));
+        let m = merged(&tetrahedron(Vec3::ZERO), &tetrahedron(Vec3::splat(3.0)));
         let t = topology(&m);
         assert_eq!(t.components, 2);
         assert_eq!(t.edges, 12);
@@ -435,7 +421,7 @@ mod tests {
     #[test]
     fn shared_vertex_joins_components() {
         // Second tetrahedron's first vertex welded onto the first one's apex.
-        let mut m = merge(&tetrahedron(Vec3::ZERO), &tetrahedron(Vec3::Z));
+        let mut m = merged(&tetrahedron(Vec3::ZERO), &tetrahedron(Vec3::Z));
         for t in &mut m.triangles[4..] {
             for i in t.iter_mut() {
                 if *i == 4 {

@@ -578,20 +578,16 @@ fn upright_level_set(
     }
     let level_set = LevelSet::of_mesh(&mesh, cell)?;
     drop(mesh);
-    if !wanted {
-        return Ok(Voxels {
-            level_set,
-            grids: Vec::new(),
-            time: start.elapsed(),
-        });
-    }
-    let mut points = level_set.positions();
-    if let Some(axis) = up_axis {
-        axis.inverse().rotate(&mut points);
-    }
-    let mut grids = sample(&points)?;
-    if let Some(axis) = up_axis {
-        axis.rotate_mesh(&mut TriMesh::default(), &mut grids);
+    let mut grids = Vec::new();
+    if wanted {
+        let mut points = level_set.positions();
+        if let Some(axis) = up_axis {
+            axis.inverse().rotate(&mut points);
+        }
+        grids = sample(&points)?;
+        if let Some(axis) = up_axis {
+            axis.rotate_mesh(&mut TriMesh::default(), &mut grids);
+        }
     }
     Ok(Voxels {
         level_set,

@@ -213,19 +213,21 @@ pub fn frame_jitter(window: &Window<'_>, spacing: f32) -> Result<Jitter> {
 fn vertex_parts(mesh: &TriMesh, r: f64) -> Vec<u8> {
     let (labels, volumes) = component_labels_and_volumes(mesh);
     let body = (0..volumes.len()).max_by(|&a, &b| volumes[a].total_cmp(&volumes[b]));
-    let part = |c: usize| -> u8 {
-        if Some(c) == body {
-            0
-        } else if volumes[c].abs() >= DROPLET * r * r * r {
-            1
-        } else {
-            2
-        }
-    };
+    let of_component: Vec<u8> = (0..volumes.len())
+        .map(|c| {
+            if Some(c) == body {
+                0
+            } else if volumes[c].abs() >= DROPLET * r * r * r {
+                1
+            } else {
+                2
+            }
+        })
+        .collect();
     let mut parts = vec![0u8; mesh.vertices.len()];
     for (t, &label) in mesh.triangles.iter().zip(&labels) {
-        for i in t {
-            parts[*i as usize] = part(label as usize);
+        for &i in t {
+            parts[i as usize] = of_component[label as usize];
         }
     }
     parts

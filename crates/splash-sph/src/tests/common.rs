@@ -213,6 +213,22 @@ pub fn ball_frames(dir: &std::path::Path, count: u32) -> Vec<std::path::PathBuf>
         .collect()
 }
 
+/// `a` and `b` as one mesh: `b`'s triangles renumbered past `a`'s vertices, the normals of
+/// both kept.
+pub fn merged(a: &TriMesh, b: &TriMesh) -> TriMesh {
+    let shift = a.vertices.len() as u32;
+    TriMesh {
+        vertices: [a.vertices.as_slice(), &b.vertices].concat(),
+        normals: [a.normals.as_slice(), &b.normals].concat(),
+        triangles: a
+            .triangles
+            .iter()
+            .copied()
+            .chain(b.triangles.iter().map(|t| t.map(|i| i + shift)))
+            .collect(),
+    }
+}
+
 /// The unit sphere as an octahedron whose faces are split in four `level` times, the new
 /// vertices pushed onto the sphere; closed and wound counter-clockwise seen from outside.
 pub fn octasphere(level: u32) -> TriMesh {

@@ -17,6 +17,7 @@ use crate::io::{MeshFormat, read_mesh};
 use crate::mesh::TriMesh;
 use crate::pipeline::{Batch, FrameOutcome, Progress};
 use crate::temporal::{FrameMotion, Jitter, Window, frame_jitter};
+use crate::tests::common::{merged, octasphere};
 
 const R: f32 = 0.1;
 
@@ -343,7 +344,7 @@ fn the_default_flickers_little_more_than_the_raw_surface() {
 fn jitter_is_told_apart_by_part() {
     let r = 0.1;
     let ball = |centre: Vec3, radius: f32, level: u32| {
-        let mut m = crate::tests::common::octasphere(level);
+        let mut m = octasphere(level);
         for v in &mut m.vertices {
             *v = centre + *v * radius;
         }
@@ -357,19 +358,8 @@ fn jitter_is_told_apart_by_part() {
     );
     let jump = 0.02;
     let frame = |shift: f32| {
-        let parts = [
-            ball(body, 1.0, 4),
-            ball(piece, 0.3, 3),
-            ball(droplet + Vec3::X * shift, 0.1, 2),
-        ];
-        let mut mesh = TriMesh::default();
-        for p in parts {
-            let offset = mesh.vertices.len() as u32;
-            mesh.vertices.extend(p.vertices);
-            mesh.triangles
-                .extend(p.triangles.iter().map(|t| t.map(|v| v + offset)));
-        }
-        mesh
+        let body_and_piece = merged(&ball(body, 1.0, 4), &ball(piece, 0.3, 3));
+        merged(&body_and_piece, &ball(droplet + Vec3::X * shift, 0.1, 2))
     };
     let meshes = [frame(0.0), frame(jump), frame(0.0)];
     // Particles at rest within the motion's support (2r) of every vertex.
