@@ -11,7 +11,7 @@ use crate::config::{Config, Normals, Params};
 use crate::error::{Error, Result, figure};
 use crate::io::Attribute;
 use crate::mesh::TriMesh;
-use crate::mesh::post::postprocess;
+use crate::mesh::post::postprocess_close;
 use crate::recon::engines::full_grid::{self, Grid};
 use crate::recon::{self, Reconstruction};
 use crate::report::{Observer, Stage, Stages};
@@ -115,9 +115,11 @@ impl Reconstructor {
                 let (r, cell) = (self.params.spacing, self.params.cell);
                 let normals = self.config.normals != Normals::None;
                 let mut stages = Stages::start(out.stats, observer);
-                stages.run(Stage::Post, || {
-                    postprocess(&mut out.mesh, positions, r, cell, post, normals)
-                })?;
+                out.close = stages
+                    .run(Stage::Post, || {
+                        postprocess_close(&mut out.mesh, positions, r, cell, post, normals)
+                    })?
+                    .unwrap_or_default();
                 out.stats = stages.stats;
                 out.stats.heap_peak = out.stats.stage_heap.max();
                 out.stats.triangles = out.mesh.triangles.len();

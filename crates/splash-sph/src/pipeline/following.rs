@@ -150,6 +150,7 @@ fn follow(
             .install(|| {
                 follow_fluid(
                     &mut mesh,
+                    &own.close,
                     &own.motion,
                     neighbours,
                     frame_time,

@@ -248,6 +248,7 @@ impl FramePipeline {
         stats.timings.read = read;
         Ok(Ready::Surface(Prepared {
             mesh: rec.mesh,
+            close: rec.close,
             motion,
             ids_warning,
             wanted,
@@ -469,6 +470,9 @@ pub(super) enum Ready {
 #[derive(Debug)]
 pub(super) struct Prepared {
     pub(super) mesh: TriMesh,
+    /// Per vertex, whether another side of the surface faces it (see
+    /// [`Reconstruction`](crate::Reconstruction)); empty where unknown.
+    pub(super) close: Vec<bool>,
     /// The particles, with their ids and velocities when the sequence follows the fluid.
     pub(super) motion: FrameMotion,
     /// Why the file's ids cannot carry the particles, for a warning.

@@ -109,7 +109,7 @@ pub fn surface_following(
             motion: &motions[2 * k],
         });
         followed = reconstructor
-            .install(|| follow_fluid(&mut mesh, own, neighbours, None, spacing, cell))?
+            .install(|| follow_fluid(&mut mesh, &rec.close, own, neighbours, None, spacing, cell))?
             .expect("frames with ids carry their particles");
     }
     let start = Instant::now();

@@ -40,6 +40,7 @@ pub(crate) fn reconstruct(
         return Ok(Reconstruction {
             mesh: TriMesh::default(),
             stats: stages.stats,
+            close: Vec::new(),
         });
     }
     // The grid of the full-grid engines; the others report it without allocating it.

@@ -6,7 +6,7 @@ use rayon::prelude::*;
 
 use super::motion::{FrameMotion, mean_motions};
 use crate::error::Result;
-use crate::mesh::post::put_back_crossings;
+use crate::mesh::post::{put_back_crossings, put_back_near};
 use crate::mesh::{SignedDistance, SurfaceBins, TriMesh, area_weighted_normals};
 
 /// Frame t's neighbours for [`follow_fluid`]: a neighbour frame's mesh and particles.
@@ -60,10 +60,15 @@ const WEIGHT: f32 = 1.0 / 3.0;
 /// `neighbours` (frames t−1 and t+1) carried to time t by the displacements of `own`'s
 /// particles to each (matched by id, else velocity × `frame_time`), as [`Followed`] says, and
 /// recomputes its normals when it has them. `spacing`: r; the motion's kernel has support 2r,
-/// the neighbours count within r. None, with nothing moved, when the particles cannot be
-/// carried (no ids, and no velocities with a frame time).
+/// the neighbours count within r. `close`: per vertex, whether another side of the surface
+/// faces it within the post-processing's clearance (at least r/2: more than twice the
+/// farthest a vertex moves here, 0.19 r); with cells up to r only their faces and those near
+/// a fold are tested for crossings, as the post-processing's guard tests them, else (empty, or
+/// larger cells) every face. None, with nothing moved, when the particles cannot be carried
+/// (no ids, and no velocities with a frame time).
 pub fn follow_fluid(
     mesh: &mut TriMesh,
+    close: &[bool],
     own: &FrameMotion,
     neighbours: [Neighbour<'_>; 2],
     frame_time: Option<f32>,
@@ -112,8 +117,15 @@ pub fn follow_fluid(
     }
     // Where following made faces cross (two sheets pulled towards different neighbours'
     // surfaces), their corners and a ring keep their own frame's places.
-    let movable: Vec<bool> = offsets.iter().map(|&o| o != 0.0).collect();
-    let went_back = put_back_crossings(&mut mesh.vertices, &mesh.triangles, &own, &movable, None);
+    // Measured against testing every face, the same meshes at r/2 and r (dense-dambreak's 40
+    // frames, B2's 30, cbd-small's 21); at 2r, where faces are as wide as the clearance's
+    // reach, 4 crossing faces in 3 of dense-dambreak's 40 frames, so there every face is tested.
+    let went_back = if close.len() == own.len() && cell <= spacing {
+        put_back_near(&mut mesh.vertices, &mesh.triangles, &own, close)
+    } else {
+        let movable: Vec<bool> = offsets.iter().map(|&o| o != 0.0).collect();
+        put_back_crossings(&mut mesh.vertices, &mesh.triangles, &own, &movable, None)
+    };
     for (offset, _) in offsets.iter_mut().zip(&went_back).filter(|(_, b)| **b) {
         *offset = 0.0;
     }

@@ -80,14 +80,8 @@ pub(crate) fn put_back_crossings(
 /// Puts the faces that the smoothing and the volume steps made cross (where two sheets came
 /// close: 19 faces of cbd-large f23 with its spacing estimated, 10 of the bundled frame at 2r;
 /// none of the raw isosurface's) back towards their `raw` places with a ring around them (see
-/// [`put_back_crossings`]). A midpoint of the refinement (`parents`: one end of each new
-/// vertex's edge) goes back as far as its edge's end. At first only the faces with a `close`
-/// corner are tested, where another side of the surface faces it within the clearance's reach,
-/// and the faces near a face turned over against its raw normal (a fold): on the 36 meshes of
-/// `scripts/same-meshes` (with 6 and 3 smoothing pairs first) and 112 frames of four sequences the
-/// same result as testing every face, at a fifth of the time (cbd-large f23: 134 k of 1.05 M
-/// faces, 33 ms against 187 ms). The close faces alone missed the folds of cbd-large f23 at
-/// cell r (14 crossing faces) once the relaxation ran before the smoothing.
+/// [`put_back_near`]). A midpoint of the refinement (`parents`: one end of each new vertex's
+/// edge) goes back as far as its edge's end.
 pub(super) fn uncross(
     vertices: &mut [Vec3],
     triangles: &[[u32; 3]],
@@ -101,11 +95,32 @@ pub(super) fn uncross(
         debug_assert!(p < m && m == vertices.len() - parents.len() + k);
         raw.push(vertices[m] - (vertices[p] - raw[p]));
     }
-    let movable: Vec<bool> = vertices.par_iter().zip(&raw).map(|(v, r)| v != r).collect();
+    put_back_near(vertices, triangles, &raw, close);
+}
+
+/// [`put_back_crossings`] for vertices that moved since `before`, testing at first only the
+/// faces with a `close` corner, where another side of the surface faces it within the
+/// clearance's reach, and the faces near a face turned over against its normal at `before` (a
+/// fold). After the post-processing: on the 36 meshes of `scripts/same-meshes` (with 6 and 3
+/// smoothing pairs first) and 112 frames of four sequences the same result as testing every
+/// face, at a fifth of the time (cbd-large f23: 134 k of 1.05 M faces, 33 ms against 187 ms);
+/// the close faces alone missed the folds of cbd-large f23 at cell r (14 crossing faces) once
+/// the relaxation ran before the smoothing. Returns which vertices went back.
+pub(crate) fn put_back_near(
+    vertices: &mut [Vec3],
+    triangles: &[[u32; 3]],
+    before: &[Vec3],
+    close: &[bool],
+) -> Vec<bool> {
+    let movable: Vec<bool> = vertices
+        .par_iter()
+        .zip(before)
+        .map(|(v, b)| v != b)
+        .collect();
     // Faces turned over (a fold, where the relaxation and the smoothing pulled a rim's
     // triangles past each other) cross their neighbours without two sides facing: the faces
     // near them are tested too.
-    let near = turned_over(vertices, triangles, &raw).map(|corners| {
+    let near = turned_over(vertices, triangles, before).map(|corners| {
         let mut near = vec![false; triangles.len()];
         for f in faces_near(vertices, triangles, &corners) {
             near[f as usize] = true;
@@ -120,7 +135,7 @@ pub(super) fn uncross(
         })
         .map(|(f, _)| f as u32)
         .collect();
-    put_back_crossings(vertices, triangles, &raw, &movable, Some(first));
+    put_back_crossings(vertices, triangles, before, &movable, Some(first))
 }
 
 /// The corners of the faces whose normal points against their normal at `raw`, or None when

@@ -19,8 +19,8 @@ pub(crate) mod smoothing;
 pub(crate) mod volume;
 
 pub use clipping::clip_to_box;
-pub(crate) use crossings::put_back_crossings;
 use crossings::uncross;
+pub(crate) use crossings::{put_back_crossings, put_back_near};
 pub use decimation::decimate;
 pub use volume::VolumeScope;
 
@@ -223,6 +223,21 @@ pub fn postprocess(
     config: &PostConfig,
     normals: bool,
 ) -> Result<()> {
+    postprocess_close(mesh, particles, spacing, cell, config, normals).map(drop)
+}
+
+/// [`postprocess`], returning which vertices of the mesh have another side of the surface
+/// facing them within the clearance's reach (where a later move can make faces cross: the
+/// guard of following the fluid tests their faces), or None where it did not look (`raw`) or
+/// changed the vertices after looking (the box, the small components, the decimation).
+pub(crate) fn postprocess_close(
+    mesh: &mut TriMesh,
+    particles: &[Vec3],
+    spacing: f32,
+    cell: f32,
+    config: &PostConfig,
+    normals: bool,
+) -> Result<Option<Vec<bool>>> {
     let volumes = Volumes::Particles { particles, cell };
     run(mesh, spacing, &volumes, config, normals)
 }
@@ -302,22 +317,27 @@ pub fn postprocess_mesh(
         // Smoothing would compute them; the raw path's stages keep the ones there are.
         mesh.normals = crate::mesh::stars::area_weighted_normals(&mesh.vertices, &mesh.triangles);
     }
-    run(mesh, spacing, &volumes, config, normals)
+    run(mesh, spacing, &volumes, config, normals).map(drop)
 }
 
-/// The stages of [`postprocess`] and [`postprocess_mesh`].
+/// The stages of [`postprocess`] and [`postprocess_mesh`]; the close vertices as
+/// [`postprocess_close`] says.
 fn run(
     mesh: &mut TriMesh,
     spacing: f32,
     volumes: &Volumes<'_>,
     config: &PostConfig,
     normals: bool,
-) -> Result<()> {
+) -> Result<Option<Vec<bool>>> {
+    let mut close = None;
     if !config.raw {
-        smooth_and_restore(mesh, volumes, spacing, config, normals);
+        close = Some(smooth_and_restore(mesh, volumes, spacing, config, normals));
     }
     // Clipped after smoothing, so that the caps stay flat; components dropped after clipping,
     // which can leave small pieces; decimated last, against the mesh that would be written.
+    if config.mesh_aabb.is_some() || config.min_component.is_some() || config.decimate.is_some() {
+        close = None;
+    }
     if let Some(aabb) = config.mesh_aabb {
         *mesh = clip_to_box(mesh, aabb)?;
     }
@@ -333,21 +353,22 @@ fn run(
             mesh.normals = area_weighted_normals(&mesh.vertices, &mesh.triangles);
         }
     }
-    Ok(())
+    Ok(close)
 }
 
 /// Smooths `mesh` and restores its volume (see the module's header). Keeps the
 /// topology; moves the vertices, bisects the edges where the surface bends (when
-/// `refine_angle` is set) and recomputes the normals (when the mesh has normals).
+/// `refine_angle` is set) and recomputes the normals (when the mesh has normals). Returns
+/// which vertices have another side facing them within the clearance's reach.
 fn smooth_and_restore(
     mesh: &mut TriMesh,
     volumes: &Volumes<'_>,
     spacing: f32,
     config: &PostConfig,
     wants_normals: bool,
-) {
+) -> Vec<bool> {
     if mesh.triangles.is_empty() {
-        return;
+        return vec![false; mesh.vertices.len()];
     }
     let TriMesh {
         vertices,
@@ -508,7 +529,8 @@ fn smooth_and_restore(
         config.volume_steps,
         max_step,
     );
-    uncross(vertices, triangles, raw, &parents, &clearance.into_close());
+    let close = clearance.into_close();
+    uncross(vertices, triangles, raw, &parents, &close);
     if wants_normals {
         normals_and_measures(
             vertices,
@@ -521,6 +543,7 @@ fn smooth_and_restore(
     } else {
         *normals = Vec::new();
     }
+    close
 }
 
 /// The share of its ring's tangential pull a vertex moves by in a relaxation step, before the

@@ -30,6 +30,9 @@ pub struct Reconstruction {
     pub mesh: TriMesh,
     /// Counts, array bytes, and the stage figures of an [`Observer`](crate::Observer).
     pub stats: FrameStats,
+    /// Per vertex, whether the post-processing found another side of the surface facing it
+    /// within its clearance's reach; empty where it did not look.
+    pub(crate) close: Vec<bool>,
 }
 
 /// The field, and the handler array of the frame with the field's channels; fields with
@@ -149,5 +152,9 @@ pub(super) fn finish(
     stats.vertices = mesh.vertices.len();
     stats.peak_bytes = handler_bytes + band.heap_bytes() + values_bytes + mesh.heap_bytes();
     stats.heap_peak = stats.stage_heap.max();
-    Reconstruction { mesh, stats }
+    Reconstruction {
+        mesh,
+        stats,
+        close: Vec::new(),
+    }
 }
