@@ -11,7 +11,7 @@ use crate::config::{Config, Normals, Params};
 use crate::error::{Error, Result, figure};
 use crate::io::Attribute;
 use crate::mesh::TriMesh;
-use crate::mesh::post::postprocess_close;
+use crate::mesh::post::{Volumes, stages as post_stages};
 use crate::recon::engines::full_grid::{self, Grid};
 use crate::recon::{self, Reconstruction};
 use crate::report::{Observer, Stage, Stages};
@@ -117,7 +117,11 @@ impl Reconstructor {
                 let mut stages = Stages::start(out.stats, observer);
                 out.close = stages
                     .run(Stage::Post, || {
-                        postprocess_close(&mut out.mesh, positions, r, cell, post, normals)
+                        let volumes = Volumes::Particles {
+                            particles: positions,
+                            cell,
+                        };
+                        post_stages(&mut out.mesh, r, &volumes, post, normals)
                     })?
                     .unwrap_or_default();
                 out.stats = stages.stats;

@@ -223,23 +223,8 @@ pub fn postprocess(
     config: &PostConfig,
     normals: bool,
 ) -> Result<()> {
-    postprocess_close(mesh, particles, spacing, cell, config, normals).map(drop)
-}
-
-/// [`postprocess`], returning which vertices of the mesh have another side of the surface
-/// facing them within the clearance's reach (where a later move can make faces cross: the
-/// guard of following the fluid tests their faces), or None where it did not look (`raw`) or
-/// changed the vertices after looking (the box, the small components, the decimation).
-pub(crate) fn postprocess_close(
-    mesh: &mut TriMesh,
-    particles: &[Vec3],
-    spacing: f32,
-    cell: f32,
-    config: &PostConfig,
-    normals: bool,
-) -> Result<Option<Vec<bool>>> {
     let volumes = Volumes::Particles { particles, cell };
-    run(mesh, spacing, &volumes, config, normals)
+    stages(mesh, spacing, &volumes, config, normals).map(drop)
 }
 
 /// What [`postprocess_mesh`] brings the volume to: with particles, the whole mesh's or each
@@ -317,12 +302,15 @@ pub fn postprocess_mesh(
         // Smoothing would compute them; the raw path's stages keep the ones there are.
         mesh.normals = crate::mesh::stars::area_weighted_normals(&mesh.vertices, &mesh.triangles);
     }
-    run(mesh, spacing, &volumes, config, normals).map(drop)
+    stages(mesh, spacing, &volumes, config, normals).map(drop)
 }
 
-/// The stages of [`postprocess`] and [`postprocess_mesh`]; the close vertices as
-/// [`postprocess_close`] says.
-fn run(
+/// The stages of [`postprocess`] and [`postprocess_mesh`], returning which vertices of the
+/// mesh have another side of the surface facing them within the clearance's reach (where a
+/// later move can make faces cross: the guard of following the fluid tests their faces), or
+/// None where it did not look (`raw`) or changed the vertices after looking (the box, the small
+/// components, the decimation).
+pub(crate) fn stages(
     mesh: &mut TriMesh,
     spacing: f32,
     volumes: &Volumes<'_>,
