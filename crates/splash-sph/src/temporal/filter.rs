@@ -110,9 +110,12 @@ pub fn follow_fluid(
             });
     }
     let own = mesh.vertices.clone();
-    for ((x, n), &offset) in mesh.vertices.iter_mut().zip(&normals).zip(&offsets) {
-        if *n != Vec3::ZERO {
-            *x += *n * offset;
+    for ((x, n), offset) in mesh.vertices.iter_mut().zip(&normals).zip(&mut offsets) {
+        // A vertex without a normal (its faces enclose nothing) stays, and counts as unmoved.
+        if *n == Vec3::ZERO {
+            *offset = 0.0;
+        } else {
+            *x += *n * *offset;
         }
     }
     // Where following made faces cross (two sheets pulled towards different neighbours'
