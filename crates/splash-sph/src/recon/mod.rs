@@ -37,11 +37,7 @@ pub(crate) fn reconstruct(
         observer,
     );
     if particles.is_empty() {
-        return Ok(Reconstruction {
-            mesh: TriMesh::default(),
-            stats: stages.stats,
-            close: Vec::new(),
-        });
+        return Ok(Reconstruction::new(TriMesh::default(), stages.stats));
     }
     // The grid of the full-grid engines; the others report it without allocating it.
     let grid = Grid::around(particles, params.cell, params.support);

@@ -35,6 +35,18 @@ pub struct Reconstruction {
     pub(crate) close: Vec<bool>,
 }
 
+impl Reconstruction {
+    /// An engine's surface with its figures; only the post-processing knows which vertices
+    /// are close.
+    pub(crate) fn new(mesh: TriMesh, stats: FrameStats) -> Reconstruction {
+        Reconstruction {
+            mesh,
+            stats,
+            close: Vec::new(),
+        }
+    }
+}
+
 /// The field, and the handler array of the frame with the field's channels; fields with
 /// adaptive kernels also come fitted to the frame, with their own handler array.
 pub(super) struct Prepared {
@@ -152,9 +164,5 @@ pub(super) fn finish(
     stats.vertices = mesh.vertices.len();
     stats.peak_bytes = handler_bytes + band.heap_bytes() + values_bytes + mesh.heap_bytes();
     stats.heap_peak = stats.stage_heap.max();
-    Reconstruction {
-        mesh,
-        stats,
-        close: Vec::new(),
-    }
+    Reconstruction::new(mesh, stats)
 }

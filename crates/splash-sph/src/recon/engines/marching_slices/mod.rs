@@ -162,12 +162,5 @@ pub fn reconstruct(
     s.vertices = mesh.vertices.len();
     s.peak_bytes = prepared.heap_bytes() + blocks_bytes + report.in_flight_peak + mesh.heap_bytes();
     s.heap_peak = s.stage_heap.max();
-    Ok((
-        Reconstruction {
-            mesh,
-            stats: s,
-            close: Vec::new(),
-        },
-        report,
-    ))
+    Ok((Reconstruction::new(mesh, s), report))
 }

@@ -161,9 +161,5 @@ pub fn reconstruct(
     s.peak_bytes =
         prepared.heap_bytes() + lists as usize + s.slices.in_flight_peak + mesh.heap_bytes();
     s.heap_peak = s.stage_heap.max();
-    Ok(Reconstruction {
-        mesh,
-        stats: s,
-        close: Vec::new(),
-    })
+    Ok(Reconstruction::new(mesh, s))
 }
