@@ -6,7 +6,7 @@ use rayon::prelude::*;
 
 use super::motion::{FrameMotion, mean_motions};
 use crate::error::Result;
-use crate::mesh::post::{put_back_crossings, put_back_near};
+use crate::mesh::post::put_back_near;
 use crate::mesh::{SignedDistance, SurfaceBins, TriMesh, area_weighted_normals};
 
 /// Frame t's neighbours for [`follow_fluid`]: a neighbour frame's mesh and particles.
@@ -123,12 +123,8 @@ pub fn follow_fluid(
     // Measured against testing every face, the same meshes at r/2 and r (dense-dambreak's 40
     // frames, B2's 30, cbd-small's 21); at 2r, where faces are as wide as the clearance's
     // reach, 4 crossing faces in 3 of dense-dambreak's 40 frames, so there every face is tested.
-    let went_back = if close.len() == own.len() && cell <= spacing {
-        put_back_near(&mut mesh.vertices, &mesh.triangles, &own, close)
-    } else {
-        let movable: Vec<bool> = offsets.iter().map(|&o| o != 0.0).collect();
-        put_back_crossings(&mut mesh.vertices, &mesh.triangles, &own, &movable, None)
-    };
+    let close = Some(close).filter(|c| c.len() == own.len() && cell <= spacing);
+    let went_back = put_back_near(&mut mesh.vertices, &mesh.triangles, &own, close);
     for (offset, _) in offsets.iter_mut().zip(&went_back).filter(|(_, b)| **b) {
         *offset = 0.0;
     }

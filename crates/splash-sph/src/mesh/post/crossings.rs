@@ -20,7 +20,7 @@ const ROUNDS: usize = 3;
 /// did not cross at `before` does not after. The first round tests the faces of `first` among
 /// themselves (every face when None). Returns which vertices went back. What still crosses
 /// crossed at `before` too.
-pub(crate) fn put_back_crossings(
+fn put_back_crossings(
     vertices: &mut [Vec3],
     triangles: &[[u32; 3]],
     before: &[Vec3],
@@ -95,47 +95,50 @@ pub(super) fn uncross(
         debug_assert!(p < m && m == vertices.len() - parents.len() + k);
         raw.push(vertices[m] - (vertices[p] - raw[p]));
     }
-    put_back_near(vertices, triangles, &raw, close);
+    put_back_near(vertices, triangles, &raw, Some(close));
 }
 
 /// [`put_back_crossings`] for vertices that moved since `before`, testing at first only the
 /// faces with a `close` corner, where another side of the surface faces it within the
 /// clearance's reach, and the faces near a face turned over against its normal at `before` (a
-/// fold). After the post-processing: on the 36 meshes of `scripts/same-meshes` (with 6 and 3
-/// smoothing pairs first) and 112 frames of four sequences the same result as testing every
-/// face, at a fifth of the time (cbd-large f23: 134 k of 1.05 M faces, 33 ms against 187 ms);
-/// the close faces alone missed the folds of cbd-large f23 at cell r (14 crossing faces) once
-/// the relaxation ran before the smoothing. Returns which vertices went back.
+/// fold); every face without `close`. After the post-processing: on the 36 meshes of
+/// `scripts/same-meshes` (with 6 and 3 smoothing pairs first) and 112 frames of four sequences
+/// the same result as testing every face, at a fifth of the time (cbd-large f23: 134 k of
+/// 1.05 M faces, 33 ms against 187 ms); the close faces alone missed the folds of cbd-large f23
+/// at cell r (14 crossing faces) once the relaxation ran before the smoothing. Returns which
+/// vertices went back.
 pub(crate) fn put_back_near(
     vertices: &mut [Vec3],
     triangles: &[[u32; 3]],
     before: &[Vec3],
-    close: &[bool],
+    close: Option<&[bool]>,
 ) -> Vec<bool> {
     let movable: Vec<bool> = vertices
         .par_iter()
         .zip(before)
         .map(|(v, b)| v != b)
         .collect();
-    // Faces turned over (a fold, where the relaxation and the smoothing pulled a rim's
-    // triangles past each other) cross their neighbours without two sides facing: the faces
-    // near them are tested too.
-    let near = turned_over(vertices, triangles, before).map(|corners| {
-        let mut near = vec![false; triangles.len()];
-        for f in faces_near(vertices, triangles, &corners) {
-            near[f as usize] = true;
-        }
-        near
+    let first = close.map(|close| {
+        // Faces turned over (a fold, where the relaxation and the smoothing pulled a rim's
+        // triangles past each other) cross their neighbours without two sides facing: the
+        // faces near them are tested too.
+        let near = turned_over(vertices, triangles, before).map(|corners| {
+            let mut near = vec![false; triangles.len()];
+            for f in faces_near(vertices, triangles, &corners) {
+                near[f as usize] = true;
+            }
+            near
+        });
+        triangles
+            .par_iter()
+            .enumerate()
+            .filter(|&(f, t)| {
+                near.as_ref().is_some_and(|near| near[f]) || t.iter().any(|&v| close[v as usize])
+            })
+            .map(|(f, _)| f as u32)
+            .collect()
     });
-    let first: Vec<u32> = triangles
-        .par_iter()
-        .enumerate()
-        .filter(|&(f, t)| {
-            near.as_ref().is_some_and(|near| near[f]) || t.iter().any(|&v| close[v as usize])
-        })
-        .map(|(f, _)| f as u32)
-        .collect();
-    put_back_crossings(vertices, triangles, before, &movable, Some(first))
+    put_back_crossings(vertices, triangles, before, &movable, first)
 }
 
 /// The corners of the faces whose normal points against their normal at `raw`, or None when

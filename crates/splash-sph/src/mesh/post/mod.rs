@@ -19,8 +19,8 @@ pub(crate) mod smoothing;
 pub(crate) mod volume;
 
 pub use clipping::clip_to_box;
+pub(crate) use crossings::put_back_near;
 use crossings::uncross;
-pub(crate) use crossings::{put_back_crossings, put_back_near};
 pub use decimation::decimate;
 pub use volume::VolumeScope;
 
