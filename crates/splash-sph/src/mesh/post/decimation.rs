@@ -5,10 +5,11 @@
 //! collapses to the point minimising the merged quadric. The collapses run in passes: every
 //! edge is priced cheaply (the merged quadric's own minimum, which changes only when a collapse
 //! moves an end), the cheapest are taken greedily as long as their stars share no triangle,
-//! and those taken are checked in parallel against the mesh as the pass found it; a refused
-//! collapse frees its star for the next cheapest in further rounds of the same pass, and stays
-//! refused until a collapse changes the star of an end. The result does not depend on the
-//! thread count. A collapse is refused when
+//! and those taken are checked in parallel against the mesh as the round found them; further
+//! rounds of the same pass take the next cheapest around the refused collapses and the made
+//! ones (but for the edges at a moved vertex, which wait for the next pass's prices). A refused
+//! collapse stays refused until a collapse changes the star of an end. The result does not
+//! depend on the thread count. A collapse is refused when
 //! - the root-mean-square distance of the new point to the merged planes exceeds `max_error`;
 //! - the new point, or the centroid of a triangle it makes, lies farther than `max_error` from
 //!   the original triangles (exact point-to-triangle distance): the guarantee. The witness, an
@@ -38,7 +39,9 @@ use rayon::prelude::*;
 /// fans from growing into needles.
 const MAX_STAR: usize = 16;
 
-/// Collapses checked in parallel before they are made.
+/// Collapses selected and checked in parallel before they are made: a share of a round, so that
+/// the collapses waiting to be made stay few (all of a pass's at once held 32 MB on cbd-large
+/// f23).
 const CHECKED_AT_ONCE: usize = 1 << 14;
 
 /// How many keys ahead the selection fetches a key's triangle.
@@ -564,6 +567,50 @@ impl<'a> Decimation<'a> {
         });
     }
 
+    /// The next share of a round's selection: from `keys[at.next..]` in order, the edges
+    /// with neither end locked, their regions locked with the round's stamp, until
+    /// [`CHECKED_AT_ONCE`] are taken or the keys end. Keys with an end locked by this round
+    /// are kept for the next (moved down to `keys[..at.kept]`); those of dead edges or with an
+    /// end held are dropped for the pass.
+    fn select(
+        &self,
+        keys: &mut [u64],
+        at: &mut Selection,
+        locked: &mut [u32],
+    ) -> Vec<(usize, u32, u32)> {
+        let mut taken = Vec::new();
+        while at.next < keys.len() && taken.len() < CHECKED_AT_ONCE {
+            let i = at.next;
+            at.next += 1;
+            // The keys go by cost, so their triangles lie all over the mesh: each is fetched a
+            // few keys ahead (cbd-large f23 at 0.1r, 19 M keys read in 881 rounds: the
+            // selection 477 → 355 ms).
+            if let Some(&ahead) = keys.get(i + PREFETCH) {
+                prefetch(&self.triangles[ahead as u32 as usize / 3]);
+            }
+            let key = keys[i];
+            let slot = key as u32 as usize;
+            let t = self.triangles[slot / 3];
+            if t[0] == DEAD {
+                // The edge of a collapse made this pass.
+                continue;
+            }
+            let (a, b) = (t[slot % 3], t[(slot + 1) % 3]);
+            let (la, lb) = (locked[a as usize], locked[b as usize]);
+            if la == at.held || lb == at.held {
+                continue;
+            }
+            if la == at.stamp || lb == at.stamp {
+                keys[at.kept] = key;
+                at.kept += 1;
+                continue;
+            }
+            self.lock(a, b, locked, at.stamp, at.held);
+            taken.push((slot, a, b));
+        }
+        taken
+    }
+
     fn run(&mut self) {
         let n = self.positions.len();
         // Per corner slot (triangle × 3 + corner: the edge from that corner to the next), the
@@ -636,58 +683,36 @@ impl<'a> Decimation<'a> {
             );
             // Costs are non-negative, so their bits sort as the costs do; the slot breaks ties.
             keys.par_sort_unstable();
-            // Rounds: the cheapest edges whose stars share no triangle with each other nor with
-            // the collapses accepted so far, checked in parallel against the mesh as the pass
-            // found it; the stars of the refused ones are free again for the next round. An
-            // accepted collapse is made at once: no other of the pass reads its star (each
-            // edge with an end there is dropped), so the mesh each check sees is the same.
+            // Rounds: the cheapest edges whose stars share no triangle with each other, checked
+            // in parallel against the mesh as the round found it; the stars of the refused ones
+            // are free again for the next round. An accepted collapse is made at once: the
+            // survivor's star, and those of the two corners that lose a triangle, are out of
+            // date until the next pass rebuilds the stars, so the edges at those three wait for
+            // it (as the survivor's, whose prices it changed, must); the others around it keep
+            // their prices and stars (their triangles only name the survivor in place of the
+            // other end) and may collapse in the next round. A round is selected, checked and
+            // made a share at a time: a collapse changes only triangles whose corners the round
+            // has locked already, so the keys read after it are taken or kept as before it.
             let mut accepted = 0;
             stamp += 1;
             let held = stamp;
             loop {
                 stamp += 1;
-                let mut taken = Vec::new();
-                let mut kept = 0;
-                for i in 0..keys.len() {
-                    // The keys go by cost, so their triangles lie all over the mesh: each is
-                    // fetched a few keys ahead (cbd-large f23 at 0.1r, 19 M keys read in 881
-                    // rounds: the selection 477 → 355 ms).
-                    if let Some(&ahead) = keys.get(i + PREFETCH) {
-                        prefetch(&self.triangles[ahead as u32 as usize / 3]);
-                    }
-                    let key = keys[i];
-                    let slot = key as u32 as usize;
-                    let t = self.triangles[slot / 3];
-                    if t[0] == DEAD {
-                        // The edge of a collapse made this pass.
-                        continue;
-                    }
-                    let (a, b) = (t[slot % 3], t[(slot + 1) % 3]);
-                    let (la, lb) = (locked[a as usize], locked[b as usize]);
-                    // Next to an accepted collapse: not this pass.
-                    if la == held || lb == held {
-                        continue;
-                    }
-                    if la == stamp || lb == stamp {
-                        keys[kept] = key;
-                        kept += 1;
-                        continue;
-                    }
-                    self.lock(a, b, &mut locked, stamp, held);
-                    taken.push((slot, a, b));
-                }
-                keys.truncate(kept);
-                if taken.is_empty() {
+                let mut at = Selection {
+                    next: 0,
+                    kept: 0,
+                    stamp,
+                    held,
+                };
+                let mut share = self.select(&mut keys, &mut at, &mut locked);
+                if share.is_empty() {
                     break;
                 }
-                // In the mesh's order, not the costs': checks and collapses next to each other
-                // then read the same memory (cbd-large f23 at 0.1r: 2.88 → 2.67 s). They touch
-                // disjoint stars, so the order changes nothing else.
-                taken.sort_unstable_by_key(|&(slot, _, _)| slot);
-                let before = accepted;
-                // Checked a share at a time, so that the collapses waiting to be made stay few
-                // (all of a pass's at once held 32 MB on cbd-large f23).
-                for share in taken.chunks(CHECKED_AT_ONCE) {
+                while !share.is_empty() {
+                    // In the mesh's order, not the costs': checks and collapses next to each
+                    // other then read the same memory (cbd-large f23 at 0.1r: 2.88 → 2.67 s).
+                    // They touch disjoint stars, so the order changes nothing else.
+                    share.sort_unstable_by_key(|&(slot, _, _)| slot);
                     let this = &*self;
                     let checked: Vec<Option<Collapse>> = share
                         .par_iter()
@@ -698,18 +723,16 @@ impl<'a> Decimation<'a> {
                             costs[slot] = -costs[slot];
                             continue;
                         };
-                        self.region(c.a, c.b, |v| {
-                            locked[v] = held;
-                            changed[v] = pass;
-                        });
+                        self.region(c.a, c.b, |v| changed[v] = pass);
                         moved[c.a as usize] = pass;
-                        self.collapse(&c);
+                        for v in self.collapse(&c) {
+                            locked[v as usize] = held;
+                        }
                         accepted += 1;
                     }
+                    share = self.select(&mut keys, &mut at, &mut locked);
                 }
-                if accepted - before == taken.len() {
-                    break;
-                }
+                keys.truncate(at.kept);
             }
             if accepted == 0 {
                 break;
@@ -718,8 +741,9 @@ impl<'a> Decimation<'a> {
     }
 
     /// Moves `a` to the collapse point, gives it `b`'s triangles and removes the two triangles
-    /// of the edge.
-    fn collapse(&mut self, c: &Collapse) {
+    /// of the edge; returns `a` and the two corners opposite the edge, whose stars are now out
+    /// of date.
+    fn collapse(&mut self, c: &Collapse) -> [u32; 3] {
         let (a, b) = (c.a, c.b);
         self.positions[a as usize] = c.point;
         self.quadrics[a as usize] = c.quadric.kept_at(self.local(a));
@@ -727,9 +751,13 @@ impl<'a> Decimation<'a> {
         for &(t, w) in &c.centres[..c.count] {
             self.centre_witness[t as usize] = w;
         }
+        let mut out = [a; 3];
+        let mut opposite = 1;
         for &t in self.stars.of(b) {
             let tri = &mut self.triangles[t as usize];
             if tri.contains(&a) {
+                out[opposite] = tri.iter().copied().find(|&v| v != a && v != b).unwrap_or(a);
+                opposite = 2;
                 *tri = [DEAD; 3];
             } else {
                 for v in tri.iter_mut().filter(|v| **v == b) {
@@ -737,7 +765,18 @@ impl<'a> Decimation<'a> {
                 }
             }
         }
+        out
     }
+}
+
+/// Where a round's selection stands: the next key to read, how many keys were kept for the
+/// next round, the round's lock stamp, and the pass's mark of vertices whose edges wait for the
+/// next pass.
+struct Selection {
+    next: usize,
+    kept: usize,
+    stamp: u32,
+    held: u32,
 }
 
 /// The original mesh, for "is this point within the error of the surface" questions answered
