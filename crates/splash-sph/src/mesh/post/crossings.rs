@@ -118,27 +118,35 @@ pub(crate) fn put_back_near(
         .zip(before)
         .map(|(v, b)| v != b)
         .collect();
-    let first = close.map(|close| {
-        // Faces turned over (a fold, where the relaxation and the smoothing pulled a rim's
-        // triangles past each other) cross their neighbours without two sides facing: the
-        // faces near them are tested too.
-        let near = turned_over(vertices, triangles, before).map(|corners| {
-            let mut near = vec![false; triangles.len()];
-            for f in faces_near(vertices, triangles, &corners) {
-                near[f as usize] = true;
-            }
-            near
-        });
-        triangles
-            .par_iter()
-            .enumerate()
-            .filter(|&(f, t)| {
-                near.as_ref().is_some_and(|near| near[f]) || t.iter().any(|&v| close[v as usize])
-            })
-            .map(|(f, _)| f as u32)
-            .collect()
-    });
+    let first = close.map(|close| first_faces(vertices, triangles, before, close));
     put_back_crossings(vertices, triangles, before, &movable, first)
+}
+
+/// The faces [`put_back_near`] tests first: those with a `close` corner and those near a face
+/// turned over since `before`.
+fn first_faces(
+    vertices: &[Vec3],
+    triangles: &[[u32; 3]],
+    before: &[Vec3],
+    close: &[bool],
+) -> Vec<u32> {
+    // Faces turned over (a fold, where the relaxation and the smoothing pulled a rim's
+    // triangles past each other) cross their neighbours without two sides facing: the faces
+    // near them are tested too.
+    let near = turned_over(vertices, triangles, before).map(|corners| {
+        let mut near = vec![false; triangles.len()];
+        for f in faces_near(vertices, triangles, &corners) {
+            near[f as usize] = true;
+        }
+        near
+    });
+    let near = |f: usize| near.as_ref().is_some_and(|near| near[f]);
+    triangles
+        .par_iter()
+        .enumerate()
+        .filter(|&(f, t)| near(f) || t.iter().any(|&v| close[v as usize]))
+        .map(|(f, _)| f as u32)
+        .collect()
 }
 
 /// The corners of the faces whose normal points against their normal at `raw`, or None when

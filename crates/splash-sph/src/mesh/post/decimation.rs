@@ -295,12 +295,14 @@ fn is_closed_fan(v: u32, star: &[u32], triangles: &[[u32; 3]]) -> bool {
 }
 
 /// A collapse that passed every check: `b` goes into `a`, which moves to `point` with the
-/// merged quadric; `witness` is an original triangle within the error of `point`, and
+/// merged quadric; `opposite` are the corners of the edge's two triangles off the edge (whose
+/// stars each lose one), `witness` is an original triangle within the error of `point`, and
 /// `centres[..count]` the triangles the collapse moves, each with one within the error of its
 /// new centroid.
 struct Collapse {
     a: u32,
     b: u32,
+    opposite: [u32; 2],
     quadric: Quadric,
     point: Vec3,
     witness: u32,
@@ -477,8 +479,10 @@ impl<'a> Decimation<'a> {
         };
         let (ra, rb) = (ring(a, sa), ring(b, sb));
         let (ra, rb) = (&ra[..sa.len()], &rb[..sb.len()]);
-        let shared = ra.iter().filter(|&&x| x != b && rb.contains(&x)).count();
-        if shared != 2 {
+        // The two shared neighbours are the corners opposite the edge.
+        let mut shared = ra.iter().copied().filter(|&x| x != b && rb.contains(&x));
+        let opposite = [shared.next()?, shared.next()?];
+        if shared.next().is_some() {
             return None;
         }
         let (q, p) = self.target(a, b);
@@ -529,6 +533,7 @@ impl<'a> Decimation<'a> {
         Some(Collapse {
             a,
             b,
+            opposite,
             quadric: q,
             point: p,
             witness,
@@ -725,9 +730,10 @@ impl<'a> Decimation<'a> {
                         };
                         self.region(c.a, c.b, |v| changed[v] = pass);
                         moved[c.a as usize] = pass;
-                        for v in self.collapse(&c) {
+                        for v in [c.a, c.opposite[0], c.opposite[1]] {
                             locked[v as usize] = held;
                         }
+                        self.collapse(&c);
                         accepted += 1;
                     }
                     share = self.select(&mut keys, &mut at, &mut locked);
@@ -741,9 +747,8 @@ impl<'a> Decimation<'a> {
     }
 
     /// Moves `a` to the collapse point, gives it `b`'s triangles and removes the two triangles
-    /// of the edge; returns `a` and the two corners opposite the edge, whose stars are now out
-    /// of date.
-    fn collapse(&mut self, c: &Collapse) -> [u32; 3] {
+    /// of the edge.
+    fn collapse(&mut self, c: &Collapse) {
         let (a, b) = (c.a, c.b);
         self.positions[a as usize] = c.point;
         self.quadrics[a as usize] = c.quadric.kept_at(self.local(a));
@@ -751,13 +756,9 @@ impl<'a> Decimation<'a> {
         for &(t, w) in &c.centres[..c.count] {
             self.centre_witness[t as usize] = w;
         }
-        let mut out = [a; 3];
-        let mut opposite = 1;
         for &t in self.stars.of(b) {
             let tri = &mut self.triangles[t as usize];
             if tri.contains(&a) {
-                out[opposite] = tri.iter().copied().find(|&v| v != a && v != b).unwrap_or(a);
-                opposite = 2;
                 *tri = [DEAD; 3];
             } else {
                 for v in tri.iter_mut().filter(|v| **v == b) {
@@ -765,7 +766,6 @@ impl<'a> Decimation<'a> {
                 }
             }
         }
-        out
     }
 }
 
