@@ -56,3 +56,87 @@ fn bench_temporal_splits_the_carried_jitter_by_part() {
         );
     }
 }
+
+/// The carried figure of each row in `stdout`'s first table, by name.
+fn carried(stdout: &str) -> Vec<(String, f64)> {
+    stdout
+        .lines()
+        .take_while(|l| !l.starts_with("Carried jitter by part"))
+        .filter(|l| l.starts_with("| ") && !l.starts_with("| mesh"))
+        .map(|l| {
+            let cells: Vec<&str> = l.trim_matches('|').split('|').map(str::trim).collect();
+            (cells[0].to_string(), cells[2].parse().expect(l))
+        })
+        .collect()
+}
+
+/// A lattice ball of particles at spacing 0.1, in an ASCII PLY file.
+fn ball(dir: &std::path::Path) -> std::path::PathBuf {
+    let mut points = Vec::new();
+    for i in -6i32..=6 {
+        for j in -6i32..=6 {
+            for k in -6i32..=6 {
+                if i * i + j * j + k * k <= 30 {
+                    points.push(format!(
+                        "{} {} {}",
+                        0.1 * i as f32,
+                        0.1 * j as f32,
+                        0.1 * k as f32
+                    ));
+                }
+            }
+        }
+    }
+    let path = dir.join("ball.ply");
+    let header = format!(
+        "ply\nformat ascii 1.0\nelement vertex {}\nproperty float x\nproperty float y\n\
+         property float z\nend_header\n",
+        points.len()
+    );
+    std::fs::write(&path, header + &points.join("\n") + "\n").unwrap();
+    path
+}
+
+#[test]
+fn a_rigid_step_of_whole_cells_reads_no_carried_jitter_and_a_fractional_one_does() {
+    let dir = std::env::temp_dir().join(format!("splash-rigid-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let input = ball(&dir);
+    let bench = |step: &str| {
+        let output = Command::new(env!("CARGO_BIN_EXE_splash"))
+            .args(["bench", "temporal", input.to_str().unwrap()])
+            .args(["--spacing", "0.1", "--threads", "2", "--peer", "none"])
+            .args(["--rigid-step", step, "--rigid-frames", "4"])
+            .output()
+            .unwrap();
+        let stdout = String::from_utf8_lossy(&output.stdout).into_owned();
+        finish(format!("splash bench temporal --rigid-step {step}"), output).ok();
+        carried(&stdout)
+    };
+    // Two cells of r/2 a frame: every mesh is its predecessor moved, whatever made it.
+    let whole = bench("2,0,-1");
+    assert_eq!(whole.len(), 3, "{whole:?}");
+    for (name, c) in &whole {
+        assert!(
+            *c < 1e-4,
+            "{name}: carried {c} r for a rigid step of whole cells"
+        );
+    }
+    // A fractional step cuts the surface anew each frame.
+    let raw = bench("0.37,0.23,0.29")[0].clone();
+    assert!(raw.0 == "raw" && raw.1 > 1e-3, "{raw:?}");
+    let bad = Command::new(env!("CARGO_BIN_EXE_splash"))
+        .args([
+            "bench",
+            "temporal",
+            input.to_str().unwrap(),
+            "--rigid-step",
+            "1,2",
+        ])
+        .output()
+        .unwrap();
+    finish("splash bench temporal --rigid-step 1,2".into(), bad)
+        .failed()
+        .has("--rigid-step '1,2' must be three");
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -5,6 +5,7 @@
 mod engines;
 mod iso;
 mod preview;
+mod rigid;
 mod slices;
 mod tables;
 mod temporal;

@@ -18,6 +18,7 @@ use splash_sph::pipeline::{Batch, FrameOutcome, Progress};
 use splash_sph::temporal::{DROPLET, FrameMotion, Jitter, PARTS, Window, frame_jitter};
 use splash_sph::{Config, Length, MeshFormat, TriMesh, estimate_spacing, read_particles};
 
+use super::rigid;
 use crate::memory::HeapScope;
 
 #[derive(Args)]
@@ -41,6 +42,9 @@ Variants: raw (--raw), single-frame (each frame post-processed alone, the defaul
 written, named like the frames: DIR/<frame stem>[_surface].ply|obj|vtk|vtu|vtp), and peer (splashsurf's
 recommended pipeline: density field, support 2r, iso 0.6, weighted smoothing 25, cleanup,
 normal smoothing 10) when splashsurf is on the PATH or --peer names it.
+--rigid-step X,Y,Z measures the first frame moved rigidly by X,Y,Z cells a frame instead: the
+field moves exactly with the particles, so each row reads the share of its jitter that comes
+from the grid the surface moves across (whole cells read 0).
 Example:
   splash bench temporal ../shared/data/dense-dambreak --spacing 0.04 --threads 2")]
 pub struct BenchTemporalArgs {
@@ -92,6 +96,15 @@ pub struct BenchTemporalArgs {
     /// Keep every variant's meshes in DIR/NAME/ (default: a temporary directory, removed).
     #[arg(long)]
     keep: Option<PathBuf>,
+
+    /// Measure the first frame translated rigidly by X,Y,Z cells a frame instead of the
+    /// frames themselves: what is left is the grid's share of the jitter.
+    #[arg(long, value_name = "X,Y,Z")]
+    rigid_step: Option<String>,
+
+    /// How many frames --rigid-step makes.
+    #[arg(long, default_value_t = 8, requires = "rigid_step")]
+    rigid_frames: usize,
 }
 
 /// A sequence of meshes to measure, and how it was made.
@@ -105,12 +118,19 @@ struct Variant {
 
 pub fn run(args: BenchTemporalArgs) -> Result<ExitCode> {
     let selection = select(&args.inputs, args.frames.as_deref())?;
-    let frames = selection.files;
-    if frames.len() < 3 {
-        bail!(
-            "jitter needs at least 3 consecutive frames; {} selected",
-            frames.len()
-        );
+    let mut frames = selection.files;
+    let step = args
+        .rigid_step
+        .as_deref()
+        .map(rigid::parse_step)
+        .transpose()?;
+    let wanted = if step.is_some() {
+        args.rigid_frames
+    } else {
+        frames.len()
+    };
+    if wanted < 3 {
+        bail!("jitter needs at least 3 consecutive frames; {wanted} selected");
     }
     let mut base = match &args.config {
         Some(path) => Config::from_file(path)?,
@@ -142,6 +162,21 @@ pub fn run(args: BenchTemporalArgs) -> Result<ExitCode> {
             temp.0.clone()
         }
     };
+    if let Some(step) = step {
+        let cell = base.cell.resolve(spacing);
+        eprintln!(
+            "{}: {} frames moved rigidly by {} cells a frame",
+            frames[0].display(),
+            args.rigid_frames,
+            step
+        );
+        frames = rigid::write_frames(
+            &frames[0],
+            step * cell,
+            args.rigid_frames,
+            &root.join("rigid"),
+        )?;
+    }
     let mut runs: Vec<(String, Config)> = Vec::new();
     let mut raw = base.clone();
     raw.post.raw = true;
