@@ -5,7 +5,7 @@ pub(crate) mod common;
 mod engines;
 mod field;
 mod iso;
-mod post;
+pub(crate) mod post;
 
 /// The helpers the integration tests and the command line's tests share.
 #[allow(dead_code)]

@@ -3,5 +3,5 @@
 
 #[cfg(target_os = "linux")]
 mod post_stages;
-mod shapes;
+pub(crate) mod shapes;
 mod temporal;

@@ -28,7 +28,7 @@ fn configured(particles: &[Vec3], threads: Option<usize>, post: PostConfig) -> T
 }
 
 /// The mesh of `particles` at spacing `spacing`, cell r/2, post-processed by `post`.
-fn at_spacing(
+pub(crate) fn at_spacing(
     particles: &[Vec3],
     spacing: f32,
     threads: Option<usize>,
