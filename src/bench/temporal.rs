@@ -162,14 +162,19 @@ pub fn run(args: BenchTemporalArgs) -> Result<ExitCode> {
             temp.0.clone()
         }
     };
+    // What the table's heading says the frames are.
+    let mut source = frames[0]
+        .parent()
+        .unwrap_or(Path::new("."))
+        .display()
+        .to_string();
     if let Some(step) = step {
         let cell = base.cell.resolve(spacing);
-        eprintln!(
-            "{}: {} frames moved rigidly by {} cells a frame",
-            frames[0].display(),
-            args.rigid_frames,
-            step
+        source = format!(
+            "{} moved rigidly by {step} cells a frame",
+            frames[0].display()
         );
+        eprintln!("{source}: {} frames", args.rigid_frames);
         frames = rigid::write_frames(
             &frames[0],
             step * cell,
@@ -242,7 +247,7 @@ pub fn run(args: BenchTemporalArgs) -> Result<ExitCode> {
         "{} frames ({} inner) of {}, r = {spacing}, cell {}, {} threads",
         frames.len(),
         frames.len() - 2,
-        frames[0].parent().unwrap_or(Path::new(".")).display(),
+        source,
         base.cell,
         args.threads.map_or_else(|| "all".into(), |t| t.to_string())
     );
