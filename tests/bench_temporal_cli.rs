@@ -6,7 +6,8 @@ mod common;
 
 use std::process::Command;
 
-use common::{finish, shared_data};
+use common::{TempDir, finish, lattice_ball, shared_data};
+use glam::Vec3;
 
 #[test]
 fn bench_temporal_splits_the_carried_jitter_by_part() {
@@ -24,18 +25,6 @@ fn bench_temporal_splits_the_carried_jitter_by_part() {
     let (jitter, parts) = stdout
         .split_once("Carried jitter by part")
         .unwrap_or_else(|| panic!("no table by part in:\n{stdout}"));
-    let rows = |table: &str| -> Vec<Vec<String>> {
-        table
-            .lines()
-            .filter(|l| l.starts_with("| ") && !l.starts_with("| mesh"))
-            .map(|l| {
-                l.trim_matches('|')
-                    .split('|')
-                    .map(|c| c.trim().to_string())
-                    .collect()
-            })
-            .collect()
-    };
     let names = |rows: &[Vec<String>]| rows.iter().map(|r| r[0].clone()).collect::<Vec<_>>();
     let (jitter, parts) = (rows(jitter), rows(parts));
     assert_eq!(names(&jitter), ["raw", "single-frame", "temporal"]);
@@ -57,51 +46,40 @@ fn bench_temporal_splits_the_carried_jitter_by_part() {
     }
 }
 
-/// The carried figure of each row in `stdout`'s first table, by name.
-fn carried(stdout: &str) -> Vec<(String, f64)> {
-    stdout
+/// The rows of the Markdown table(s) in `table`, cells trimmed, the heading left out.
+fn rows(table: &str) -> Vec<Vec<String>> {
+    table
         .lines()
-        .take_while(|l| !l.starts_with("Carried jitter by part"))
         .filter(|l| l.starts_with("| ") && !l.starts_with("| mesh"))
         .map(|l| {
-            let cells: Vec<&str> = l.trim_matches('|').split('|').map(str::trim).collect();
-            (cells[0].to_string(), cells[2].parse().expect(l))
+            l.trim_matches('|')
+                .split('|')
+                .map(|c| c.trim().to_string())
+                .collect()
         })
         .collect()
 }
 
-/// A lattice ball of particles at spacing 0.1, in an ASCII PLY file.
-fn ball(dir: &std::path::Path) -> std::path::PathBuf {
-    let mut points = Vec::new();
-    for i in -6i32..=6 {
-        for j in -6i32..=6 {
-            for k in -6i32..=6 {
-                if i * i + j * j + k * k <= 30 {
-                    points.push(format!(
-                        "{} {} {}",
-                        0.1 * i as f32,
-                        0.1 * j as f32,
-                        0.1 * k as f32
-                    ));
-                }
-            }
-        }
-    }
-    let path = dir.join("ball.ply");
-    let header = format!(
-        "ply\nformat ascii 1.0\nelement vertex {}\nproperty float x\nproperty float y\n\
-         property float z\nend_header\n",
-        points.len()
-    );
-    std::fs::write(&path, header + &points.join("\n") + "\n").unwrap();
-    path
+/// The carried figure of each row in `stdout`'s first table, by name.
+fn carried(stdout: &str) -> Vec<(String, f64)> {
+    let (first, _) = stdout
+        .split_once("Carried jitter by part")
+        .unwrap_or((stdout, ""));
+    rows(first)
+        .into_iter()
+        .map(|r| (r[0].clone(), r[2].parse().expect(&r[2])))
+        .collect()
 }
 
 #[test]
 fn a_rigid_step_of_whole_cells_reads_no_carried_jitter_and_a_fractional_one_does() {
-    let dir = std::env::temp_dir().join(format!("splash-rigid-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let input = ball(&dir);
+    let dir = TempDir::new("rigid");
+    // A lattice ball of spacing 0.1 (the lattice points within √30 spacings of its centre).
+    let text: String = lattice_ball(Vec3::ZERO, 0.55, 0.1)
+        .iter()
+        .map(|p| format!("{},{},{}\n", p.x, p.y, p.z))
+        .collect();
+    let input = dir.file("ball.csv", format!("x,y,z\n{text}"));
     let bench = |step: &str| {
         let output = Command::new(env!("CARGO_BIN_EXE_splash"))
             .args(["bench", "temporal", input.to_str().unwrap()])
@@ -138,5 +116,4 @@ fn a_rigid_step_of_whole_cells_reads_no_carried_jitter_and_a_fractional_one_does
     finish("splash bench temporal --rigid-step 1,2".into(), bad)
         .failed()
         .has("--rigid-step '1,2' must be three");
-    std::fs::remove_dir_all(&dir).ok();
 }

@@ -16,7 +16,7 @@ use splash_sph::io::read_mesh;
 use splash_sph::mesh::{quality, volume_error};
 use splash_sph::pipeline::{Batch, FrameOutcome, Progress};
 use splash_sph::temporal::{DROPLET, FrameMotion, Jitter, PARTS, Window, frame_jitter};
-use splash_sph::{Config, Length, MeshFormat, TriMesh, estimate_spacing, read_particles};
+use splash_sph::{Config, Length, MeshFormat, TriMesh, Vec3, estimate_spacing, read_particles};
 
 use super::rigid;
 use crate::memory::HeapScope;
@@ -99,8 +99,8 @@ pub struct BenchTemporalArgs {
 
     /// Measure the first frame translated rigidly by X,Y,Z cells a frame instead of the
     /// frames themselves: what is left is the grid's share of the jitter.
-    #[arg(long, value_name = "X,Y,Z")]
-    rigid_step: Option<String>,
+    #[arg(long, value_name = "X,Y,Z", value_parser = rigid::parse_step)]
+    rigid_step: Option<Vec3>,
 
     /// How many frames --rigid-step makes.
     #[arg(long, default_value_t = 8, requires = "rigid_step")]
@@ -119,11 +119,7 @@ struct Variant {
 pub fn run(args: BenchTemporalArgs) -> Result<ExitCode> {
     let selection = select(&args.inputs, args.frames.as_deref())?;
     let mut frames = selection.files;
-    let step = args
-        .rigid_step
-        .as_deref()
-        .map(rigid::parse_step)
-        .transpose()?;
+    let step = args.rigid_step;
     let wanted = if step.is_some() {
         args.rigid_frames
     } else {

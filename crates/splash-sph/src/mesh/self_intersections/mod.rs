@@ -519,4 +519,4 @@ fn repeats(t: &[u32; 3]) -> bool {
 }
 
 #[cfg(test)]
-pub(crate) mod tests;
+mod tests;

@@ -6,7 +6,7 @@ use crate::tests::common::{merged, torus, uniform};
 
 /// A closed UV sphere, outward: `rings` bands of `segments` quads split in two, fans at the
 /// poles (vertex 0 the north pole, the last the south pole).
-pub(crate) fn sphere(centre: Vec3, radius: f32, rings: u32, segments: u32) -> TriMesh {
+fn sphere(centre: Vec3, radius: f32, rings: u32, segments: u32) -> TriMesh {
     let mut vertices = vec![centre + radius * Vec3::Z];
     for i in 1..rings {
         let theta = PI * i as f32 / rings as f32;

@@ -256,12 +256,7 @@ impl<'a> Decimation<'a> {
             centre_witness: (0..mesh.triangles.len() as u32).collect(),
             origin,
             max_error,
-            surface: Surface {
-                vertices: &mesh.vertices,
-                triangles: &mesh.triangles,
-                stars: original,
-                max_squared: max_error * max_error,
-            },
+            surface: Surface::new(mesh, original, max_error),
             stars: Stars::default(),
         }
     }

@@ -11,9 +11,9 @@ pub(super) const REGULARISATION: f64 = 1e-3;
 /// `c = Σ w d²`, with `w` the summed weights.
 #[derive(Clone, Copy, Default)]
 pub(super) struct Quadric {
-    pub(super) a: [f64; 6], // xx, xy, xz, yy, yz, zz
-    pub(super) b: [f64; 3],
-    pub(super) c: f64,
+    a: [f64; 6], // xx, xy, xz, yy, yz, zz
+    b: [f64; 3],
+    c: f64,
     pub(super) w: f64,
 }
 
@@ -102,10 +102,10 @@ impl Quadric {
 /// holds them as well as `f64` holds the sums around the mesh's centre.
 #[derive(Clone, Copy, Default)]
 pub(super) struct Kept {
-    pub(super) a: [f32; 6],
-    pub(super) b: [f32; 3],
-    pub(super) c: f32,
-    pub(super) w: f32,
+    a: [f32; 6],
+    b: [f32; 3],
+    c: f32,
+    w: f32,
 }
 
 impl Kept {

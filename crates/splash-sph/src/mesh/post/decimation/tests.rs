@@ -281,12 +281,7 @@ fn surface_walk_reaches_the_nearest_face_and_no_farther() {
     let mut stars = Stars::default();
     stars.rebuild(mesh.vertices.len(), &mesh.triangles);
     let max_error = 1e-3;
-    let surface = Surface {
-        vertices: &mesh.vertices,
-        triangles: &mesh.triangles,
-        stars,
-        max_squared: max_error * max_error,
-    };
+    let surface = Surface::new(&mesh, stars, max_error);
     let far = (0..mesh.triangles.len() as u32)
         .find(|&t| {
             mesh.triangles[t as usize]

@@ -3,19 +3,30 @@
 
 use glam::{DVec3, Vec3};
 
+use crate::mesh::TriMesh;
 use crate::mesh::stars::{DEAD, Stars};
 
 /// The original mesh, for "is this point within the error of the surface" questions answered
 /// by walking its triangles: from triangles near the point, over the triangles around their
 /// corners, to ever closer ones.
 pub(super) struct Surface<'a> {
-    pub(super) vertices: &'a [Vec3],
-    pub(super) triangles: &'a [[u32; 3]],
-    pub(super) stars: Stars,
-    pub(super) max_squared: f64,
+    vertices: &'a [Vec3],
+    triangles: &'a [[u32; 3]],
+    stars: Stars,
+    max_squared: f64,
 }
 
-impl Surface<'_> {
+impl<'a> Surface<'a> {
+    /// `mesh` with the triangles around each vertex (`stars`), answering within `max_error`.
+    pub(super) fn new(mesh: &'a TriMesh, stars: Stars, max_error: f64) -> Self {
+        Surface {
+            vertices: &mesh.vertices,
+            triangles: &mesh.triangles,
+            stars,
+            max_squared: max_error * max_error,
+        }
+    }
+
     pub(super) fn distance_squared(&self, t: u32, p: DVec3) -> f64 {
         let q = self.triangles[t as usize].map(|v| self.vertices[v as usize].as_dvec3());
         point_triangle_distance_squared(p, q)
