@@ -119,8 +119,7 @@ struct Variant {
 pub fn run(args: BenchTemporalArgs) -> Result<ExitCode> {
     let selection = select(&args.inputs, args.frames.as_deref())?;
     let mut frames = selection.files;
-    let step = args.rigid_step;
-    let wanted = if step.is_some() {
+    let wanted = if args.rigid_step.is_some() {
         args.rigid_frames
     } else {
         frames.len()
@@ -159,17 +158,19 @@ pub fn run(args: BenchTemporalArgs) -> Result<ExitCode> {
         }
     };
     // What the table's heading says the frames are.
-    let mut source = frames[0]
-        .parent()
-        .unwrap_or(Path::new("."))
-        .display()
-        .to_string();
-    if let Some(step) = step {
-        let cell = base.cell.resolve(spacing);
-        source = format!(
+    let source = match args.rigid_step {
+        Some(step) => format!(
             "{} moved rigidly by {step} cells a frame",
             frames[0].display()
-        );
+        ),
+        None => frames[0]
+            .parent()
+            .unwrap_or(Path::new("."))
+            .display()
+            .to_string(),
+    };
+    if let Some(step) = args.rigid_step {
+        let cell = base.cell.resolve(spacing);
         eprintln!("{source}: {} frames", args.rigid_frames);
         frames = rigid::write_frames(
             &frames[0],
