@@ -188,11 +188,11 @@ struct ConfigArgs {
     #[arg(long)]
     raw: bool,
 
-    /// In a sequence, move each frame's surface towards its neighbouring frames' surfaces
+    /// In a sequence, average each frame's field and surface with its neighbouring frames'
     /// carried by the fluid's motion (experimental).
     ///
     /// The motion comes from particle ids, else velocities with post.frame_time: a low-pass in
-    /// time against flicker, for about 1.7x the wall time.
+    /// time against flicker, for about 1.9x the wall time.
     #[arg(long)]
     temporal: bool,
 

@@ -124,8 +124,8 @@ def _quality(defaults):
                 "temporal": BoolProperty(
                     name="Follow the fluid",
                     default=d["temporal"],
-                    description="In a sequence, move each frame's surface towards its "
-                    "neighbouring frames' surfaces carried by the fluid's motion (experimental). "
+                    description="In a sequence, average each frame's field and surface with "
+                    "its neighbouring frames' carried by the fluid's motion (experimental). "
                     "--temporal. Live mode does it for an imported particle sequence whose "
                     "files carry particle ids, reading the files before and after the frame: "
                     "about three times the work per frame",

@@ -94,9 +94,10 @@ options_function! {
 /// ``ids`` and ``neighbours``: to make the surface follow the fluid from frame to frame, as
 /// ``recon_sequence(temporal=True)`` does (issue 38): ``ids`` an (N,) integer array of the
 /// particles' unique identities, ``neighbours`` the frames before and after as
-/// ``((positions, ids), (positions, ids))``. The three frames are reconstructed alike (about
-/// three times the work) and this frame's surface moves towards its neighbours' carried to its
-/// time by the particles matched by id; particles without a match do not carry it. With
+/// ``((positions, ids), (positions, ids))``. The three frames are reconstructed (about three
+/// times the work): this frame's field is averaged with its neighbours' where the particles
+/// matched by id carry each vertex, and its surface moves towards their surfaces carried to its
+/// time; particles without a match do not carry it. With
 /// ``raw=True`` nothing follows. ``Mesh.report["followed"]`` gives the vertices ``moved`` and
 /// the ``rms`` and ``max`` move in world units.
 ///
@@ -302,6 +303,7 @@ fn report<'py>(
     report.set_item("surface_vertices", s.surface_vertices)?;
     report.set_item("closure_vertices", s.closure_vertices)?;
     report.set_item("deferred_values", s.deferred_values)?;
+    report.set_item("flow_mean_vertices", s.flow_mean_vertices)?;
     report.set_item("surface_cells", s.surface_cells)?;
     report.set_item("bricks", s.bricks)?;
     report.set_item("grid", s.grid)?;

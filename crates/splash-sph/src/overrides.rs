@@ -347,8 +347,8 @@ pub const OPTIONS: &[OptionSpec] = &[
         blender: Spelling::Named("temporal"),
         value: OptionValue::Flag,
         default: "false",
-        help: "In a sequence, move each frame's surface towards its neighbouring frames' \
-               surfaces carried by the fluid's motion (experimental)",
+        help: "In a sequence, average each frame's field and surface with its neighbouring \
+               frames' carried by the fluid's motion (experimental)",
     },
     OptionSpec {
         name: "volume_scope",

@@ -13,7 +13,7 @@ use crate::io::Attribute;
 use crate::mesh::TriMesh;
 use crate::mesh::post::{Volumes, stages as post_stages};
 use crate::recon::engines::full_grid::{self, Grid};
-use crate::recon::{self, Reconstruction};
+use crate::recon::{self, Reconstruction, Sides};
 use crate::report::{Observer, Stage, Stages};
 use crate::worker_pool::worker_pool;
 
@@ -79,7 +79,19 @@ impl Reconstructor {
     /// array bytes; no times: see [`reconstruct_observed`](Self::reconstruct_observed)).
     /// Coordinates must be finite.
     pub fn reconstruct(&self, positions: &[Vec3]) -> Result<Reconstruction> {
-        self.run(positions, None)
+        self.run(positions, None, None)
+    }
+
+    /// [`reconstruct`](Self::reconstruct) with the field averaged along the flow with the
+    /// frames beside (`sides`: their particles, and the moves of `positions` to them), where
+    /// the engine and field allow it.
+    pub(crate) fn reconstruct_along_flow(
+        &self,
+        positions: &[Vec3],
+        sides: Option<&Sides<'_>>,
+        observer: Option<&mut dyn Observer>,
+    ) -> Result<Reconstruction> {
+        self.run(positions, sides, observer)
     }
 
     /// [`reconstruct`](Self::reconstruct), with `observer` measuring each stage for the report.
@@ -88,12 +100,13 @@ impl Reconstructor {
         positions: &[Vec3],
         observer: &mut dyn Observer,
     ) -> Result<Reconstruction> {
-        self.run(positions, Some(observer))
+        self.run(positions, None, Some(observer))
     }
 
     fn run(
         &self,
         positions: &[Vec3],
+        sides: Option<&Sides<'_>>,
         mut observer: Option<&mut dyn Observer>,
     ) -> Result<Reconstruction> {
         if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
@@ -109,7 +122,8 @@ impl Reconstructor {
                 Some(o) => Some(&mut **o),
                 None => None,
             };
-            let mut out = recon::reconstruct(positions, &self.params, reborrowed)?;
+            let mut out =
+                recon::reconstruct_along_flow(positions, sides, &self.params, reborrowed)?;
             let post = &self.config.post;
             if post.changes_mesh() && !out.mesh.is_empty() {
                 let (r, cell) = (self.params.spacing, self.params.cell);

@@ -565,8 +565,8 @@ def recon_sequence(
     - ``attributes``: Particle attributes interpolated onto the mesh's vertices, by name
       (velocity, density, …): a list of names or one comma-separated string; written to PLY,
       VTK, VTU, VTP and USD.
-    - ``temporal``: In a sequence, move each frame's surface towards its neighbouring frames'
-      surfaces carried by the fluid's motion (experimental). Less flicker for about 1.7× the
+    - ``temporal``: In a sequence, average each frame's field and surface with its neighbouring
+      frames' carried by the fluid's motion (experimental). Less flicker for about 1.9× the
       time; needs particle ids, or velocities with ``post.frame_time``; frames without both
       neighbours are post-processed alone, with a warning.
 

@@ -59,6 +59,12 @@ pub(crate) trait ScalarField: Send + Sync {
         None
     }
 
+    /// Whether the field's value is a distance (SSP07's and ZB05's, in world units): how far a
+    /// vertex lies from the surface then shows in its value.
+    fn is_distance(&self) -> bool {
+        false
+    }
+
     /// For fields whose sign often costs far less than their value (SSP07: bounds on its
     /// eigenvalue settle the sign without it): that form, so that the sampling can leave out
     /// the values no triangle reads. `None` for the others.

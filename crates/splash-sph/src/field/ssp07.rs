@@ -76,6 +76,10 @@ impl ScalarField for Ssp07 {
         self.support
     }
 
+    fn is_distance(&self) -> bool {
+        true
+    }
+
     fn radial_kernel(&self) -> RadialKernel {
         RadialKernel::Poly6 {
             support: self.support,

@@ -64,6 +64,10 @@ impl ScalarField for Zb05 {
         self.support
     }
 
+    fn is_distance(&self) -> bool {
+        true
+    }
+
     fn radial_kernel(&self) -> RadialKernel {
         RadialKernel::Poly6 {
             support: self.support,

@@ -1,24 +1,27 @@
-//! A sequence whose surfaces follow the fluid (`post.temporal`, issue 38): frame t is written
-//! from its own post-processed surface moved towards its neighbours' (the frames beside it in
-//! the selection) carried to its time ([`follow_fluid`]). A frame's neighbours are
+//! A sequence whose surfaces follow the fluid (`post.temporal`, issue 38): frame t's field is
+//! averaged with those of the frames beside it where the fluid carries each vertex
+//! (`recon/stages/flow_mean`), and its post-processed surface is moved towards its
+//! neighbours' surfaces carried to its time ([`follow_fluid`]). A frame's neighbours are
 //! reconstructed too, also where another job writes them (`--shard`) or their output exists
 //! (`skip_existing`), so that every job writes the bytes one run over the whole sequence
-//! writes. At most three prepared frames are held at once, with their triangles binned for
-//! distance queries (each frame's once, for both frames beside it), and one file read ahead
-//! while the last mesh is written, as frames meshed alone are. A frame without both neighbours
-//! (the ends of the selection, a gap in its frame numbers, a neighbour that fails or has no
-//! particles, particles that cannot be matched) is post-processed alone, with a warning.
+//! writes. At most five frames' particles (t−2 … t+2) and three prepared frames are held at
+//! once, with their triangles binned for distance queries (each frame's once, for both frames
+//! beside it), and one file read ahead while the last mesh is written, as frames meshed alone
+//! are. A frame without both neighbours (the ends of the selection, a gap in its frame
+//! numbers, a neighbour that fails or has no particles, particles that cannot be matched) is
+//! meshed from its own field and post-processed alone, with a warning.
 
-use std::collections::BTreeMap;
 use std::collections::btree_map::Entry;
+use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 
-use super::frame::{Prepared, Ready};
+use super::frame::{Prepared, Ready, Staged};
 use super::overlap::{Reads, run_overlapped};
 use super::{FramePipeline, Plan, Progress, RunReport};
 use crate::error::{Error, Result};
 use crate::frames::path_frame_number;
 use crate::mesh::SurfaceBins;
+use crate::recon::Sides;
 use crate::temporal::{Neighbour, follow_fluid, neighbour_bins};
 
 /// Runs the plan's frames of the selection `inputs`, each following the fluid from its
@@ -31,6 +34,13 @@ pub(super) fn run_following(
     progress: &mut dyn Progress,
     pipeline: &mut FramePipeline,
 ) -> RunReport {
+    if let Some(why) = pipeline.flow_mean_missing() {
+        let message = format!(
+            "the fields are not averaged along the flow with {why}: each frame's surface \
+             follows its neighbours' alone"
+        );
+        progress.warning(None, &message);
+    }
     let selection = Selection::new(inputs);
     let reading: Vec<PathBuf> = read_order(&plan.positions, inputs.len())
         .into_iter()
@@ -38,6 +48,9 @@ pub(super) fn run_following(
         .collect();
     // The frames' positions in the selection, in the order the plan takes them.
     let mut positions = plan.positions.clone().into_iter();
+    // Frames read, by position in the selection: their particles, for their own surface and
+    // as the sides of the fields beside them.
+    let mut staged: BTreeMap<usize, Result<Staged>> = BTreeMap::new();
     // Frames prepared, by position in the selection.
     let mut held: BTreeMap<usize, Result<Ready>> = BTreeMap::new();
     // Their triangles binned as neighbours, each once for both frames beside it.
@@ -47,15 +60,23 @@ pub(super) fn run_following(
                 reads: &mut dyn Reads,
                 progress: &mut dyn Progress| {
         let at = positions.next().expect("one position per frame to do");
+        staged.retain(|&j, _| staged_kept(j, at));
         held.retain(|&j, _| kept(j, at));
         bins.retain(|&j, _| kept(j, at));
         for j in near(at, inputs.len()) {
-            if let Entry::Vacant(slot) = held.entry(j) {
-                let prepared = reads
-                    .next()
-                    .and_then(|loaded| pipeline.prepare(&inputs[j], loaded, progress));
-                slot.insert(prepared);
+            if held.contains_key(&j) {
+                continue;
             }
+            for i in near(j, inputs.len()) {
+                if let Entry::Vacant(slot) = staged.entry(i) {
+                    let read = reads.next();
+                    slot.insert(
+                        read.and_then(|loaded| pipeline.stage(&inputs[i], loaded, progress)),
+                    );
+                }
+            }
+            let prepared = prepare(pipeline, &selection, j, &mut staged, progress);
+            held.insert(j, prepared);
         }
         // The frame's own error stays its outcome; its neighbours keep only its message.
         match held.remove(&at).expect("prepared above") {
@@ -79,24 +100,85 @@ pub(super) fn run_following(
     run_overlapped(plan, fail_fast, progress, pipeline, &reading, make)
 }
 
+/// Frame `j`'s surface from its particles in `staged`, its field averaged along the flow with
+/// the frames beside it where both are there and can be matched (else its own field alone).
+fn prepare(
+    pipeline: &mut FramePipeline,
+    selection: &Selection,
+    j: usize,
+    staged: &mut BTreeMap<usize, Result<Staged>>,
+    progress: &mut dyn Progress,
+) -> Result<Ready> {
+    let input = &selection.inputs[j];
+    if !matches!(staged.get(&j), Some(Ok(Staged::Particles(_)))) {
+        // The frame's own outcome; frames beside it see only that it has no particles.
+        let why = Error::input(format!("'{}' has no particles", input.display()));
+        return match staged
+            .insert(j, Err(why))
+            .expect("staged before it is prepared")
+        {
+            Ok(Staged::Made(made)) => Ok(Ready::Made(*made)),
+            Ok(Staged::Particles(_)) => unreachable!("matched above"),
+            Err(e) => Err(e),
+        };
+    }
+    let Some(Ok(Staged::Particles(own))) = staged.get(&j) else {
+        unreachable!("matched above")
+    };
+    let side = |i: Option<usize>| {
+        let i = i.filter(|&i| i < selection.inputs.len() && !selection.gap_between(j, i))?;
+        match staged.get(&i)? {
+            Ok(Staged::Particles(p)) => Some(&p.motion),
+            _ => None,
+        }
+    };
+    let frame_time = pipeline.frame_time();
+    let moves = side(j.checked_sub(1))
+        .zip(side(Some(j + 1)))
+        .and_then(|(before, after)| {
+            let back = own.motion.displacements(before, -1, frame_time)?;
+            let ahead = own.motion.displacements(after, 1, frame_time)?;
+            Some((
+                [before.positions.as_slice(), after.positions.as_slice()],
+                [back, ahead],
+            ))
+        });
+    let sides = moves.as_ref().map(|(particles, [back, ahead])| Sides {
+        particles: *particles,
+        moves: [back.as_slice(), ahead.as_slice()],
+    });
+    pipeline.reconstruct(input, own, sides.as_ref(), progress)
+}
+
 /// The frames of the selection that making frame `at` needs prepared: it and those beside it.
 fn near(at: usize, frames: usize) -> std::ops::Range<usize> {
     at.saturating_sub(1)..(at + 2).min(frames)
 }
 
-/// Whether frame `j` is still held when frame `at` is made (frames are made in order).
+/// Whether frame `j` is still held prepared when frame `at` is made (frames are made in order).
 fn kept(j: usize, at: usize) -> bool {
     j + 1 >= at
 }
 
+/// Whether frame `j`'s particles are still held when frame `at` is made: the frames prepared
+/// then need those beside them.
+fn staged_kept(j: usize, at: usize) -> bool {
+    j + 2 >= at
+}
+
 /// The frames read, in order, to make the frames at `positions` of a selection of `frames`:
-/// each the first time a frame made needs it while it is not held.
+/// each the first time a frame prepared needs it while it is not held.
 fn read_order(positions: &[usize], frames: usize) -> Vec<usize> {
-    let mut held = std::collections::BTreeSet::new();
+    let (mut staged, mut held) = (BTreeSet::new(), BTreeSet::new());
     let mut order = Vec::new();
     for &at in positions {
+        staged.retain(|&j| staged_kept(j, at));
         held.retain(|&j| kept(j, at));
-        order.extend(near(at, frames).filter(|&j| held.insert(j)));
+        for j in near(at, frames) {
+            if held.insert(j) {
+                order.extend(near(j, frames).filter(|&i| staged.insert(i)));
+            }
+        }
     }
     order
 }

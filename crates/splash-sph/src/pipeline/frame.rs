@@ -10,6 +10,7 @@
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use glam::Vec3;
@@ -25,6 +26,7 @@ use crate::io::{
 use crate::iso::{self, IsoRequest};
 use crate::level_set::LevelSet;
 use crate::mesh::TriMesh;
+use crate::recon::Sides;
 use crate::reconstructor::Reconstructor;
 use crate::report::FrameStats;
 use crate::spacing::estimate_spacing;
@@ -153,6 +155,19 @@ impl FramePipeline {
         self.config.post.frame_time
     }
 
+    /// Why a sequence that follows the fluid cannot average its fields along the flow (only
+    /// the narrow band and full gather engines sample them so, and a field fitted to a frame
+    /// does not hold for the frames beside it), if it cannot.
+    pub(super) fn flow_mean_missing(&self) -> Option<String> {
+        use crate::config::Engine;
+        let engine = self.config.engine;
+        if !matches!(engine, Engine::NarrowBand | Engine::FullGather) {
+            return Some(format!("the {} engine", engine.name()));
+        }
+        let kind = self.config.field.kind();
+        (kind == "anisotropic").then(|| format!("the {kind} field"))
+    }
+
     /// Whether a sequence's frames follow the fluid from their neighbours (`post.temporal`,
     /// for surfaces that are post-processed).
     pub(super) fn follows_fluid(&self) -> bool {
@@ -167,6 +182,20 @@ impl FramePipeline {
         loaded: Loaded,
         progress: &mut dyn Progress,
     ) -> Result<Ready> {
+        match self.stage(input, loaded, progress)? {
+            Staged::Made(made) => Ok(Ready::Made(*made)),
+            Staged::Particles(particles) => self.reconstruct(input, &particles, None, progress),
+        }
+    }
+
+    /// Frame `input`'s particles with what carries them to other frames and the attributes
+    /// asked for (an isosurface, or a frame without particles, is made whole).
+    pub(super) fn stage(
+        &mut self,
+        input: &Path,
+        loaded: Loaded,
+        progress: &mut dyn Progress,
+    ) -> Result<Staged> {
         let Loaded {
             positions,
             mut attributes,
@@ -180,7 +209,7 @@ impl FramePipeline {
             made.stats.timings.read = read;
             made.stats.particles_outside_box = outside_box;
             made.time = time;
-            return Ok(Ready::Made(made));
+            return Ok(Staged::Made(Box::new(made)));
         }
         let mut names = self.config.output.attributes.clone();
         if self.format == MeshFormat::Usd
@@ -215,14 +244,34 @@ impl FramePipeline {
             let mut stats = FrameStats::default();
             stats.timings.read = read;
             stats.particles_outside_box = outside_box;
-            return Ok(Ready::Made(Made {
+            return Ok(Staged::Made(Box::new(Made {
                 mesh: TriMesh::default(),
                 named,
                 stats,
                 time,
                 level_set: None,
-            }));
+            })));
         }
+        Ok(Staged::Particles(FrameParticles {
+            motion: Arc::new(motion),
+            ids_warning,
+            wanted,
+            outside_box,
+            read,
+            time,
+        }))
+    }
+
+    /// The post-processed surface of frame `input`'s `particles`; with `sides`, its field
+    /// averaged along the flow with the frames beside it.
+    pub(super) fn reconstruct(
+        &mut self,
+        input: &Path,
+        particles: &FrameParticles,
+        sides: Option<&Sides<'_>>,
+        progress: &mut dyn Progress,
+    ) -> Result<Ready> {
+        let motion = &particles.motion;
         let r = self.sequence_spacing(input, &motion.positions, progress)?;
         let reconstructor = match &mut self.reconstructor {
             Some(rec) => rec,
@@ -239,21 +288,21 @@ impl FramePipeline {
         }
         let mut observer = progress.observer();
         let rec = reconstructor
-            .reconstruct_observed(&motion.positions, observer.as_mut())
+            .reconstruct_along_flow(&motion.positions, sides, Some(observer.as_mut()))
             .map_err(|e| e.context("reconstruction failed"))?;
         drop(observer);
         let mut stats = rec.stats;
         progress.measured(&mut stats);
-        stats.particles_outside_box = outside_box;
-        stats.timings.read = read;
+        stats.particles_outside_box = particles.outside_box;
+        stats.timings.read = particles.read;
         Ok(Ready::Surface(Prepared {
             mesh: rec.mesh,
             close: rec.close,
-            motion,
-            ids_warning,
-            wanted,
+            motion: Arc::clone(motion),
+            ids_warning: particles.ids_warning.clone(),
+            wanted: particles.wanted.clone(),
             stats,
-            time,
+            time: particles.time,
         }))
     }
 
@@ -458,6 +507,25 @@ impl Loader {
     }
 }
 
+/// A frame made whole, or its particles waiting for their reconstruction.
+#[derive(Debug)]
+pub(super) enum Staged {
+    Made(Box<Made>),
+    Particles(FrameParticles),
+}
+
+/// A frame's particles, with what [`Prepared`] takes from them.
+#[derive(Debug)]
+pub(super) struct FrameParticles {
+    /// The particles, with their ids and velocities when the sequence follows the fluid.
+    pub(super) motion: Arc<FrameMotion>,
+    ids_warning: Option<String>,
+    wanted: Vec<(String, Attribute)>,
+    outside_box: usize,
+    read: Duration,
+    time: Option<u64>,
+}
+
 /// A frame made whole, or its surface waiting for its neighbours and its attributes.
 #[derive(Debug)]
 pub(super) enum Ready {
@@ -474,7 +542,7 @@ pub(super) struct Prepared {
     /// [`Reconstruction`](crate::Reconstruction)); empty where unknown.
     pub(super) close: Vec<bool>,
     /// The particles, with their ids and velocities when the sequence follows the fluid.
-    pub(super) motion: FrameMotion,
+    pub(super) motion: Arc<FrameMotion>,
     /// Why the file's ids cannot carry the particles, for a warning.
     pub(super) ids_warning: Option<String>,
     wanted: Vec<(String, Attribute)>,

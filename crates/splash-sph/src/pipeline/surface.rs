@@ -11,6 +11,7 @@ use glam::Vec3;
 use crate::error::{Error, Result};
 use crate::io::Attribute;
 use crate::mesh::TriMesh;
+use crate::recon::Sides;
 use crate::reconstructor::Reconstructor;
 use crate::report::{FrameStats, Observer};
 use crate::temporal::{Followed, FrameMotion, Neighbour, follow_fluid, neighbour_bins};
@@ -62,12 +63,13 @@ pub struct FrameParticles<'a> {
     pub ids: &'a [u32],
 }
 
-/// The [`surface`] of frame t (`frames[1]`) moved towards the surfaces of frames t−1 and t+1
-/// (`frames[0]`, `frames[2]`) carried to its time by the particles matched by id
-/// (what `post.temporal` does in a sequence; see [`Followed`]), with `attributes` (one value
-/// per particle of frame t) interpolated onto the moved vertices. The three frames are
-/// reconstructed alike (so about three times the work of [`surface`]); `observer` measures
-/// frame t's stages. Particles of frame t missing from a neighbour do not carry it. With
+/// The [`surface`] of frame t (`frames[1]`), its field averaged with those of frames t−1 and
+/// t+1 (`frames[0]`, `frames[2]`) where their particles, matched by id, carry each vertex, and
+/// moved towards their surfaces carried to its time (what `post.temporal` does in a sequence,
+/// where the neighbours' fields are averaged too; see [`Followed`]), with `attributes` (one
+/// value per particle of frame t) interpolated onto the moved vertices. The three frames are
+/// reconstructed (so about three times the work of [`surface`]); `observer` measures frame
+/// t's stages. Particles of frame t missing from a neighbour do not carry it. With
 /// `post.raw` the neighbours are not followed: [`Followed`] says nothing moved.
 ///
 /// Errors: those of [`surface`] for any of the three frames, [`Error::Input`] for ids that
@@ -88,12 +90,23 @@ pub fn surface_following(
         })
         .collect::<Result<Vec<_>>>()?;
     let own = &motions[1];
+    let follows = !reconstructor.config().post.raw;
+    let moves = follows.then(|| {
+        [0, 2].map(|k| {
+            own.displacements(&motions[k], k as i32 - 1, None)
+                .expect("frames with ids carry their particles")
+        })
+    });
+    let sides = moves.as_ref().map(|[back, ahead]| Sides {
+        particles: [&motions[0].positions, &motions[2].positions],
+        moves: [back, ahead],
+    });
     let rec = reconstructor
-        .reconstruct_observed(&own.positions, observer)
+        .reconstruct_along_flow(&own.positions, sides.as_ref(), Some(observer))
         .map_err(|e| e.context("reconstruction failed"))?;
     let mut mesh = rec.mesh;
     let mut followed = Followed::default();
-    if !reconstructor.config().post.raw && !mesh.triangles.is_empty() {
+    if follows && !mesh.triangles.is_empty() {
         let side = |k: usize| -> Result<TriMesh> {
             Ok(reconstructor
                 .reconstruct(&motions[k].positions)

@@ -19,10 +19,23 @@ use engines::full_grid::{self, Grid};
 use engines::{marching_slices, narrow_band, scatter, surface_following};
 
 pub use engines::prepared::Reconstruction;
+pub use stages::flow_mean::Sides;
 
 /// Reconstructs the surface of `particles` with `params.engine`, in the current rayon pool.
+#[cfg(test)]
 pub(crate) fn reconstruct(
     particles: &[Vec3],
+    params: &Params,
+    observer: Option<&mut dyn Observer>,
+) -> Result<Reconstruction> {
+    reconstruct_along_flow(particles, None, params, observer)
+}
+
+/// [`reconstruct`], with `sides` the field averaged along the flow with the frames beside
+/// (`stages/flow_mean`; the narrow band and full gather engines, else ignored).
+pub(crate) fn reconstruct_along_flow(
+    particles: &[Vec3],
+    sides: Option<&Sides<'_>>,
     params: &Params,
     observer: Option<&mut dyn Observer>,
 ) -> Result<Reconstruction> {
@@ -48,7 +61,7 @@ pub(crate) fn reconstruct(
         return surface_following::reconstruct(particles, params, baseline, stages);
     }
     match params.engine {
-        Engine::NarrowBand => narrow_band::gather(particles, params, stages),
+        Engine::NarrowBand => narrow_band::gather(particles, sides, params, stages),
         Engine::Slices => {
             marching_slices::reconstruct(particles, params, Default::default(), stages)
                 .map(|(r, _)| r)
@@ -60,7 +73,7 @@ pub(crate) fn reconstruct(
             if engine == Engine::Scatter {
                 scatter::reconstruct(particles, params, &grid, stages)
             } else {
-                narrow_band::gather(particles, params, stages)
+                narrow_band::gather(particles, sides, params, stages)
             }
         }
     }

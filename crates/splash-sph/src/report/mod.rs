@@ -191,6 +191,9 @@ pub struct FrameStats {
     /// Vertices whose sign the field settled far from its surface and whose value no
     /// triangle read, so it was never computed (included above; SSP07 only).
     pub deferred_values: usize,
+    /// Vertices whose value is the mean of the frame's field and its neighbour frames' where
+    /// the fluid carries them (the ends of the crossed edges; `post.temporal` in a sequence).
+    pub flow_mean_vertices: usize,
     /// Cells triangulated (the surface crosses them).
     pub surface_cells: usize,
     /// Triangles of the mesh.

@@ -113,12 +113,13 @@ pub struct PostConfig {
     /// every triangle's centroid within this distance of the undecimated surface, e.g. "0.1r"
     /// (default none). Applies with `raw` too.
     pub decimate: Option<Length>,
-    /// In a sequence, move each frame's surface towards its neighbours' carried to its time by
-    /// the fluid's motion (default false): a low-pass in time along the flow (issue 38). Frames
-    /// without both neighbours (a lone file, the ends of a sequence, a gap, a neighbour that
-    /// fails) are post-processed alone. Not with `raw`. Experimental: carried jitter on
-    /// dense-dambreak 0.0256 → 0.0166 r, on two simulated scenes 0.0101 → 0.0080 and
-    /// 0.0262 → 0.0228 r, for 1.72× the wall time, short of the issue's targets.
+    /// In a sequence, average each frame's field with its neighbours' where the fluid's motion
+    /// carries each vertex, and move its surface towards their surfaces carried to its time
+    /// (default false): a low-pass in time along the flow (issue 38). Frames without both
+    /// neighbours (a lone file, the ends of a sequence, a gap, a neighbour that fails) are
+    /// meshed and post-processed alone. Not with `raw`. Experimental: carried jitter against
+    /// the default's on dense-dambreak 0.0224 → 0.0166 r, on B2 (a ball thrown into a pool)
+    /// 0.0185 → 0.0135 r, for about 1.9× the wall time, short of the issue's targets.
     pub temporal: bool,
     /// Seconds between frames, to carry particles by their velocity when the files have no
     /// particle ids (default none: such sequences are post-processed frame by frame).

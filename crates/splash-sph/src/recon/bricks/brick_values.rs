@@ -81,6 +81,23 @@ impl BrickValues {
         self.values[self.starts[b] + k] = value;
     }
 
+    /// Sets the values of `band`'s vertices that `sub` holds (each of them in `band`) to
+    /// theirs in `sub_values`.
+    pub fn overwrite(&mut self, band: &Band, sub: &Band, sub_values: &BrickValues) {
+        for (j, (&brick, mask)) in sub.bricks.iter().zip(&sub.masks).enumerate() {
+            let b = band.brick_index(brick).expect("a vertex of the band");
+            let dense = sub_values.dense(mask, j);
+            for (z, &word) in mask.iter().enumerate() {
+                let mut bits = word;
+                while bits != 0 {
+                    let i = 64 * z + bits.trailing_zeros() as usize;
+                    bits &= bits - 1;
+                    self.set(&band.masks[b], b, i, dense[i]);
+                }
+            }
+        }
+    }
+
     /// Brick `b`'s values in word `z` of its mask `mask` (the plane of local z), by bit.
     #[inline]
     pub fn plane(&self, mask: &[u64; 8], b: usize, z: usize) -> &[f32] {

@@ -11,10 +11,12 @@ use crate::error::Result;
 use crate::field::ScalarField;
 use crate::neighbours::handler_array::HandlerArray;
 use crate::recon::bricks::band::Band;
-use crate::recon::budget::{self, PER_BRICK, mul};
+use crate::recon::bricks::brick_values::BrickValues;
+use crate::recon::budget::{self, PER_BRICK, PER_PARTICLE, mul};
 use crate::recon::stages::band_closure::close_band;
 use crate::recon::stages::deferred_values::Deferred;
 use crate::recon::stages::field_sampling::sample_field;
+use crate::recon::stages::flow_mean::{FlowMean, Sides};
 use crate::recon::stages::lone_particles::band_half_widths;
 use crate::recon::stages::surface_particles::SurfaceCriteria;
 use crate::recon::stages::triangulation::triangulate;
@@ -23,6 +25,7 @@ use crate::report::{Stage, Stages};
 /// Algorithm 1; with [`Engine::FullGather`], the same gather on every vertex of the grid.
 pub(crate) fn gather(
     particles: &[Vec3],
+    sides: Option<&Sides<'_>>,
     params: &Params,
     mut stages: Stages,
 ) -> Result<Reconstruction> {
@@ -53,17 +56,47 @@ pub(crate) fn gather(
     if params.engine == Engine::NarrowBand {
         stages.stats.planned_bytes = planned;
     }
-    let (mut values, deferred) = stages.run(Stage::ScalarField, || {
-        Deferred::sample(&band, samples, field)
+    // A field fitted to frame t's particles does not hold for its neighbours'.
+    let flow = sides
+        .filter(|_| !prepared.is_fitted())
+        .map(|s| {
+            let n = (particles.len() + s.particles.iter().map(|p| p.len()).sum::<usize>()) as u64;
+            // Three handler arrays, frame t's with eight channels more.
+            let need = held
+                .saturating_add(mul(n, PER_PARTICLE))
+                .saturating_add(mul(particles.len() as u64, 32));
+            budget::check(params, need, || {
+                format!("the particles of three frames ({n}) to average the field along the flow")
+            })?;
+            stages.run(Stage::ScalarField, || {
+                let lookup = prepared.handlers.cell_size();
+                FlowMean::new(particles, s, field, params.spacing, lookup)
+            })
+        })
+        .transpose()?;
+    let held = held + flow.as_ref().map_or(0, |f| f.heap_bytes() as u64);
+    // The means replace values that deferring would leave out: with them, all are sampled.
+    let (mut values, deferred) = stages.run(Stage::ScalarField, || match &flow {
+        Some(_) => Ok((sample_field(&band, samples, field)?, Deferred::none())),
+        None => Deferred::sample(&band, samples, field),
     })?;
     stages.stats.deferred_values = deferred.len();
-    let closed = stages.run(Stage::Band, || {
-        close_band(&mut band, &mut values, |grown, bricks| {
+    let mut added = 0;
+    let mut close = |band: &mut Band, values: &mut BrickValues| {
+        let closed = close_band(band, values, |grown, bricks| {
             limits.band(bricks)?;
             sample_field(grown, samples, field)
-        })
-    })?;
-    stages.stats.closure_vertices = closed.added;
+        })?;
+        added += closed.added;
+        Ok(closed)
+    };
+    let mut closed = stages.run(Stage::Band, || close(&mut band, &mut values))?;
+    if let Some(flow) = &flow {
+        stages.stats.flow_mean_vertices = stages.run(Stage::ScalarField, || {
+            flow.average_crossed(&mut band, &mut values, &mut closed, field, &mut close)
+        })?;
+    }
+    stages.stats.closure_vertices = added;
     stages.stats.deferred_values -= stages.run(Stage::ScalarField, || {
         deferred.resolve(&band, &mut values, &closed.tables, samples, field)
     })?;

@@ -66,6 +66,11 @@ impl Prepared {
         }
     }
 
+    /// Whether the field comes fitted to the frame (the anisotropic field).
+    pub fn is_fitted(&self) -> bool {
+        self.fitted.is_some()
+    }
+
     pub fn heap_bytes(&self) -> usize {
         self.handlers.heap_bytes() + self.fitted.as_ref().map_or(0, |f| f.handlers.heap_bytes())
     }

@@ -58,6 +58,11 @@ impl Deferred {
         Ok((values, Deferred::new(band, masks)))
     }
 
+    /// Nothing left out.
+    pub fn none() -> Deferred {
+        Deferred { bricks: Vec::new() }
+    }
+
     /// From `masks`, one per brick of `band`.
     fn new(band: &Band, masks: Vec<[u64; 8]>) -> Deferred {
         Deferred {
@@ -136,18 +141,7 @@ impl Deferred {
         }
         let sub = Band::from_vertices(&read, band.cell);
         let exact = sample_field(&sub, handlers, field)?;
-        for (j, (&brick, mask)) in sub.bricks.iter().zip(&sub.masks).enumerate() {
-            let b = band.brick_index(brick).expect("a deferred vertex's brick");
-            let dense = exact.dense(mask, j);
-            for (z, &word) in mask.iter().enumerate() {
-                let mut bits = word;
-                while bits != 0 {
-                    let i = 64 * z + bits.trailing_zeros() as usize;
-                    bits &= bits - 1;
-                    values.set(&band.masks[b], b, i, dense[i]);
-                }
-            }
-        }
+        values.overwrite(band, &sub, &exact);
         Ok(read.len())
     }
 }

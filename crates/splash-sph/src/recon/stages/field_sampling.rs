@@ -114,13 +114,13 @@ fn sample<F: ScalarField + ?Sized>(
 }
 
 /// Lowest corners of the cubes of side `step` tiling the cube of side `side` at `lo`.
-fn cubes(lo: IVec3, side: i32, step: i32) -> impl Iterator<Item = IVec3> {
+pub(crate) fn cubes(lo: IVec3, side: i32, step: i32) -> impl Iterator<Item = IVec3> {
     let n = side / step;
     (0..n * n * n).map(move |k| lo + IVec3::new(k % n, k / n % n, k / (n * n)) * step)
 }
 
 /// Whether the cube of side `side` at local corner `lo` holds a band vertex.
-fn has_vertices(mask: &[u64; 8], lo: IVec3, side: i32) -> bool {
+pub(crate) fn has_vertices(mask: &[u64; 8], lo: IVec3, side: i32) -> bool {
     let row = ((1u64 << side) - 1) << lo.x;
     let plane = (0..side).fold(0, |p, y| p | row << (BRICK * (lo.y + y)));
     mask[lo.z as usize..(lo.z + side) as usize]

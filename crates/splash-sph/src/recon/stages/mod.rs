@@ -5,6 +5,7 @@
 pub(crate) mod band_closure;
 pub(crate) mod deferred_values;
 pub(crate) mod field_sampling;
+pub(crate) mod flow_mean;
 pub(crate) mod lone_particles;
 pub(crate) mod normals;
 pub(crate) mod surface_particles;

@@ -1,8 +1,10 @@
 //! The engines and the triangulation: agreement between engines, Marching Cubes, whole
-//! reconstructions, Marching Slices, surface following and the vertex correction.
+//! reconstructions, Marching Slices, surface following, the vertex correction and the field
+//! averaged along the flow.
 
 mod agreement;
 mod correction;
+mod flow_mean;
 mod marching_cubes;
 mod reconstruction;
 mod slices;
