@@ -75,10 +75,8 @@ pub(crate) fn gather(
         })
         .transpose()?;
     let held = held + flow.as_ref().map_or(0, |f| f.heap_bytes() as u64);
-    // The means replace values that deferring would leave out: with them, all are sampled.
-    let (mut values, deferred) = stages.run(Stage::ScalarField, || match &flow {
-        Some(_) => Ok((sample_field(&band, samples, field)?, Deferred::none())),
-        None => Deferred::sample(&band, samples, field),
+    let (mut values, mut deferred) = stages.run(Stage::ScalarField, || {
+        Deferred::sample(&band, samples, field)
     })?;
     stages.stats.deferred_values = deferred.len();
     let mut added = 0;
@@ -91,15 +89,27 @@ pub(crate) fn gather(
         Ok(closed)
     };
     let mut closed = stages.run(Stage::Band, || close(&mut band, &mut values))?;
+    let mut resolved = stages.run(Stage::ScalarField, || {
+        deferred.resolve(&band, &mut values, &closed.tables, samples, field)
+    })?;
     if let Some(flow) = &flow {
+        // Every crossed edge's ends hold frame t's own values before they are averaged.
         stages.stats.flow_mean_vertices = stages.run(Stage::ScalarField, || {
-            flow.average_crossed(&mut band, &mut values, &mut closed, field, &mut close)
+            flow.average_crossed(
+                &mut band,
+                &mut values,
+                &mut closed,
+                field,
+                |band, values| {
+                    let closed = close(band, values)?;
+                    resolved += deferred.resolve(band, values, &closed.tables, samples, field)?;
+                    Ok(closed)
+                },
+            )
         })?;
     }
     stages.stats.closure_vertices = added;
-    stages.stats.deferred_values -= stages.run(Stage::ScalarField, || {
-        deferred.resolve(&band, &mut values, &closed.tables, samples, field)
-    })?;
+    stages.stats.deferred_values -= resolved;
     let held = held + (band.heap_bytes() + values.heap_bytes()) as u64;
     let triangulation = triangles_and_normals(
         &mut stages,

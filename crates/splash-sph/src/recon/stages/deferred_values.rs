@@ -58,11 +58,6 @@ impl Deferred {
         Ok((values, Deferred::new(band, masks)))
     }
 
-    /// Nothing left out.
-    pub fn none() -> Deferred {
-        Deferred { bricks: Vec::new() }
-    }
-
     /// From `masks`, one per brick of `band`.
     fn new(band: &Band, masks: Vec<[u64; 8]>) -> Deferred {
         Deferred {
@@ -83,9 +78,11 @@ impl Deferred {
     }
 
     /// Samples into `values` each left-out value that the triangulation of the closed `band`
-    /// with edge tables `tables` reads; returns how many.
+    /// with edge tables `tables` reads, and forgets it; returns how many. Called again after
+    /// the band changed (the field averaged along the flow), it samples only the values
+    /// newly read.
     pub fn resolve<F: ScalarField + ?Sized>(
-        self,
+        &mut self,
         band: &Band,
         values: &mut BrickValues,
         tables: &EdgeTables,
@@ -96,7 +93,7 @@ impl Deferred {
             return Ok(0);
         }
         let mut masks = vec![[0u64; 8]; band.bricks.len()];
-        for (brick, mask) in self.bricks {
+        for &(brick, mask) in &self.bricks {
             let b = band
                 .brick_index(brick)
                 .expect("closing a band keeps its bricks");
@@ -142,6 +139,13 @@ impl Deferred {
         let sub = Band::from_vertices(&read, band.cell);
         let exact = sample_field(&sub, handlers, field)?;
         values.overwrite(band, &sub, &exact);
+        for (brick, mask) in &mut self.bricks {
+            if let Some(j) = sub.brick_index(*brick) {
+                for (word, read) in mask.iter_mut().zip(sub.masks[j]) {
+                    *word &= !read;
+                }
+            }
+        }
         Ok(read.len())
     }
 }

@@ -95,7 +95,9 @@ impl FlowMean {
 
     /// Replaces the value at both ends of every edge that `closed` finds crossed by its mean
     /// along the flow, then closes the band again with `close` (which samples frame t's own
-    /// field where the band grows), until no crossed edge has an end left as sampled. Only
+    /// field where the band grows and wherever a crossed edge reads a value left out, so that
+    /// every end holds frame t's value first), until no crossed edge has an end left as
+    /// sampled. Only
     /// the values the triangles read are averaged: elsewhere the sign alone counts, and
     /// averaging the whole band took twice the sampling's time. Returns how many vertices.
     pub fn average_crossed(

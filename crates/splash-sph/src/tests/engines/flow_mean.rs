@@ -130,3 +130,45 @@ fn the_mean_does_not_depend_on_the_thread_count() {
     assert!(meshes[0].triangles == meshes[1].triangles);
     assert!(bits(&meshes[0]) == bits(&meshes[1]));
 }
+
+/// Deferring frame t's values far from its surface (on CPUs where it pays) leaves the averaged
+/// mesh as it is to the bit: every value a crossed edge reads is sampled before it is averaged.
+#[test]
+fn deferring_values_keeps_the_averaged_mesh_to_the_bit() {
+    use crate::recon::stages::deferred_values::tests::DEFER;
+    let ball = lattice_ball(Vec3::splat(0.3), 5.0 * R, R);
+    let side = |seed: u64, k: f32| -> Vec<Vec3> {
+        let mut next = uniform(seed);
+        let step = Vec3::new(0.3, 0.1, 0.0) * R * k;
+        ball.iter()
+            .map(|p| *p + step + (uniform_point(&mut next) - 0.5) * 0.2 * R)
+            .collect()
+    };
+    let (before, after) = (side(3, -1.0), side(4, 1.0));
+    let moves = |s: &[Vec3]| -> Vec<Option<Vec3>> {
+        ball.iter().zip(s).map(|(a, b)| Some(*b - *a)).collect()
+    };
+    let (back, ahead) = (moves(&before), moves(&after));
+    let sides = Sides {
+        particles: [&before, &after],
+        moves: [&back, &ahead],
+    };
+    let params = crate::tests::common::params(R, "r/2");
+    let run = |defer: bool| {
+        DEFER.set(Some(defer));
+        let out = crate::recon::reconstruct_along_flow(&ball, Some(&sides), &params, None);
+        DEFER.set(None);
+        out.unwrap()
+    };
+    let (all, deferred) = (run(false), run(true));
+    assert!(deferred.stats.deferred_values > 0 && all.stats.deferred_values == 0);
+    assert!(deferred.stats.flow_mean_vertices == all.stats.flow_mean_vertices);
+    let bits = |m: &TriMesh| -> Vec<[u32; 3]> {
+        m.vertices
+            .iter()
+            .map(|v| v.to_array().map(f32::to_bits))
+            .collect()
+    };
+    assert!(deferred.mesh.triangles == all.mesh.triangles);
+    assert!(bits(&deferred.mesh) == bits(&all.mesh));
+}
