@@ -5,11 +5,11 @@
 //! mean motion does not carry, is shared with the frames beside it; a surface that moves with
 //! the fluid stays where it is.
 
+use std::ops::Range;
+
 use glam::{IVec3, Vec3};
 use rayon::prelude::*;
 use rustc_hash::FxHashSet;
-
-use std::ops::Range;
 
 use super::band_closure::Closed;
 use super::field_sampling::{cubes, has_vertices, vertex_position};
@@ -97,9 +97,9 @@ impl FlowMean {
     /// along the flow, then closes the band again with `close` (which samples frame t's own
     /// field where the band grows and wherever a crossed edge reads a value left out, so that
     /// every end holds frame t's value first), until no crossed edge has an end left as
-    /// sampled. Only
-    /// the values the triangles read are averaged: elsewhere the sign alone counts, and
-    /// averaging the whole band took twice the sampling's time. Returns how many vertices.
+    /// sampled. Only the values the triangles read are averaged: elsewhere the sign alone
+    /// counts, and averaging every vertex within 1.5 cells of zero took 2.6× the sampling's
+    /// time for the same jitter. Returns how many vertices.
     pub fn average_crossed(
         &self,
         band: &mut Band,
