@@ -110,20 +110,20 @@ fn prepare(
     progress: &mut dyn Progress,
 ) -> Result<Ready> {
     let input = &selection.inputs[j];
-    if !matches!(staged.get(&j), Some(Ok(Staged::Particles(_)))) {
-        // The frame's own outcome; frames beside it see only that it has no particles.
-        let why = Error::input(format!("'{}' has no particles", input.display()));
-        return match staged
-            .insert(j, Err(why))
-            .expect("staged before it is prepared")
-        {
-            Ok(Staged::Made(made)) => Ok(Ready::Made(*made)),
-            Ok(Staged::Particles(_)) => unreachable!("matched above"),
-            Err(e) => Err(e),
-        };
-    }
-    let Some(Ok(Staged::Particles(own))) = staged.get(&j) else {
-        unreachable!("matched above")
+    let own = match staged.get(&j) {
+        Some(Ok(Staged::Particles(own))) => own,
+        _ => {
+            // The frame's own outcome; frames beside it see only that it has no particles.
+            let why = Error::input(format!("'{}' has no particles", input.display()));
+            return match staged
+                .insert(j, Err(why))
+                .expect("staged before it is prepared")
+            {
+                Ok(Staged::Made(made)) => Ok(Ready::Made(*made)),
+                Ok(Staged::Particles(_)) => unreachable!("matched above"),
+                Err(e) => Err(e),
+            };
+        }
     };
     let side = |i: Option<usize>| {
         let i = i.filter(|&i| i < selection.inputs.len() && !selection.gap_between(j, i))?;
@@ -133,19 +133,15 @@ fn prepare(
         }
     };
     let frame_time = pipeline.frame_time();
-    let moves = side(j.checked_sub(1))
-        .zip(side(Some(j + 1)))
-        .and_then(|(before, after)| {
-            let back = own.motion.displacements(before, -1, frame_time)?;
-            let ahead = own.motion.displacements(after, 1, frame_time)?;
-            Some((
-                [before.positions.as_slice(), after.positions.as_slice()],
-                [back, ahead],
-            ))
-        });
-    let sides = moves.as_ref().map(|(particles, [back, ahead])| Sides {
-        particles: *particles,
-        moves: [back.as_slice(), ahead.as_slice()],
+    let beside = side(j.checked_sub(1)).zip(side(Some(j + 1)));
+    let moves = beside.and_then(|(before, after)| {
+        let back = own.motion.displacements(before, -1, frame_time)?;
+        let ahead = own.motion.displacements(after, 1, frame_time)?;
+        Some((before, after, [back, ahead]))
+    });
+    let sides = moves.as_ref().map(|(before, after, [back, ahead])| Sides {
+        particles: [&before.positions, &after.positions],
+        moves: [back, ahead],
     });
     pipeline.reconstruct(input, own, sides.as_ref(), progress)
 }
