@@ -596,10 +596,19 @@ impl<'a> Decimation<'a> {
                     // They touch disjoint stars, so the order changes nothing else.
                     share.sort_unstable_by_key(|&(slot, _, _)| slot);
                     let this = &*self;
-                    let checked: Vec<Option<Collapse>> = share
-                        .par_iter()
-                        .map(|&(_, a, b)| this.check(a, b))
-                        .collect();
+                    // The next share is selected while this one is checked: the selection is
+                    // serial, and it takes what it would take after these collapses (an edge
+                    // they change has an end in a locked region: kept for the next round, where
+                    // it is dropped as it would have been at once).
+                    let (checked, next) = rayon::join(
+                        || {
+                            share
+                                .par_iter()
+                                .map(|&(_, a, b)| this.check(a, b))
+                                .collect::<Vec<Option<Collapse>>>()
+                        },
+                        || this.select(&mut keys, &mut at, &mut locked),
+                    );
                     for (&(slot, _, _), c) in share.iter().zip(checked) {
                         let Some(c) = c else {
                             costs[slot] = -costs[slot];
@@ -613,7 +622,7 @@ impl<'a> Decimation<'a> {
                         self.collapse(&c);
                         accepted += 1;
                     }
-                    share = self.select(&mut keys, &mut at, &mut locked);
+                    share = next;
                 }
                 keys.truncate(at.kept);
             }
