@@ -27,14 +27,16 @@ pub struct Neighbour<'a> {
 /// Each vertex of frame t's mesh is moved along its normal to the mean of where the surfaces
 /// of frames t−1, t and t+1 lie once carried to time t by the fluid's own motion (the kernel
 /// mean of the particles' displacements around the vertex, support 2r; a vertex with no
-/// particle that near keeps its place).
+/// particle that near keeps its place), the neighbours weighing a little more than the frame
+/// itself ([`WEIGHT`]).
 /// Where the fluid carries the surface as it moves, the neighbours agree with frame t and
 /// nothing moves; what jumps at one frame alone is shared with its neighbours, a low-pass in
 /// time along the flow (the explicit surfaces of Yu, Wojtan, Turk & Yap 2012 follow the fluid
 /// in the same sense). A neighbour's surface weighs less the farther it lies from the carried
-/// vertex, smoothly down to nothing at r (a topology change, a droplet that left), so that no
-/// surface is pulled towards another. Where faces cross after all, their vertices and a ring around them
-/// keep their own frame's places.
+/// vertex, smoothly down to nothing at [`REACH`] (a topology change, a droplet that left), and
+/// no vertex moves farther than [`MAX_MOVE`], so that no surface is pulled into another.
+/// Where faces cross after all, their vertices and a ring around them keep their own frame's
+/// places.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct Followed {
     /// Vertices moved.
@@ -70,22 +72,37 @@ fn with_folds(
 
 /// A neighbour's mesh binned for [`follow_fluid`] at spacing `spacing` (r).
 pub fn neighbour_bins(mesh: &TriMesh, spacing: f32) -> SurfaceBins {
-    SurfaceBins::new(&mesh.vertices, &mesh.triangles, spacing)
+    SurfaceBins::new(&mesh.vertices, &mesh.triangles, REACH * spacing)
 }
 
-/// Each neighbour's share of the mean: the three frames weigh alike. Measured on
-/// dense-dambreak 120–135, A and B (`splash bench temporal`, carried jitter): 1/3 gives 0.0182,
-/// 0.0083, 0.0231 r against 0.0197, 0.0088, 0.0237 with the binomial's 1/4; 1/2 (the
-/// neighbours alone) 0.0206 on dense-dambreak.
-const WEIGHT: f32 = 1.0 / 3.0;
+/// Each neighbour's share of the mean. Measured with the fields averaged along the flow, reach
+/// 3r (`splash bench temporal`, carried jitter, dense-dambreak 120–135 and B2): 0.4 gives
+/// 0.0159 and 0.0119 r, 1/3 (the three frames alike) 0.0159 and 0.0123 r, 0.45 0.0162 and
+/// 0.0118 r. Before the fields were averaged, 1/3 had read 0.0182 r on dense-dambreak against
+/// 0.0197 r with the binomial's 1/4 and 0.0206 r with 1/2 (the neighbours alone).
+const WEIGHT: f32 = 0.4;
+
+/// How far, in spacings r, a neighbour's surface may lie from the carried vertex and still
+/// count: its weight falls as (1 − (e/reach)²)² to nothing there. With weight 1/3, carried
+/// jitter on dense-dambreak 120–135 and B2: reach r 0.0166 and 0.0135 r, 1.5r 0.0165 and
+/// 0.0126 r, 2r 0.0163 and 0.0124 r, 3r 0.0159 and 0.0123 r, 4r (weight 0.4) as 3r. A vertex
+/// whose neighbours' surfaces lie between r and 3r away (a droplet that splits off, a sheet
+/// that tears) eases into the change over the frames instead of jumping at one.
+const REACH: f32 = 3.0;
+
+/// The farthest a vertex moves, in spacings r: less than half the post-processing's clearance
+/// (at least r/2), so that two sides of the surface that do not face each other within it
+/// cannot meet. Capped at 0.2r, carried jitter on dense-dambreak 120–135 reads 0.0164 r
+/// against 0.0159 r uncapped, B2 0.0119 r either way.
+const MAX_MOVE: f32 = 0.2;
 
 /// Moves the vertices of `mesh` (frame t, with `own` its particles) towards the surfaces of
 /// `neighbours` (frames t−1 and t+1) carried to time t by the displacements of `own`'s
 /// particles to each (matched by id, else velocity × `frame_time`), as [`Followed`] says, and
 /// recomputes its normals when it has them. `spacing`: r; the motion's kernel has support 2r,
-/// the neighbours count within r. `close`: per vertex, whether another side of the surface
-/// faces it within the post-processing's clearance (at least r/2: more than twice the
-/// farthest a vertex moves here, 0.19 r); with cells up to r only their faces and those near
+/// the neighbours count within [`REACH`]. `close`: per vertex, whether another side of the
+/// surface faces it within the post-processing's clearance (at least r/2: more than twice the
+/// farthest a vertex moves here, [`MAX_MOVE`]); with cells up to r only their faces and those near
 /// a fold are tested for crossings, as the post-processing's guard tests them, else (empty, or
 /// larger cells) every face. None, with nothing moved, when the particles cannot be carried
 /// (no ids, and no velocities with a frame time).
@@ -108,7 +125,7 @@ pub fn follow_fluid(
         return Ok(Some(Followed::default()));
     }
     let normals = area_weighted_normals(&mesh.vertices, &mesh.triangles);
-    let (support, reach) = (2.0 * spacing, spacing);
+    let (support, reach) = (2.0 * spacing, REACH * spacing);
     let mut offsets = vec![0.0f32; mesh.vertices.len()];
     let motions = mean_motions(
         &mesh.vertices,
@@ -138,6 +155,7 @@ pub fn follow_fluid(
         if *n == Vec3::ZERO {
             *offset = 0.0;
         } else {
+            *offset = offset.clamp(-MAX_MOVE * spacing, MAX_MOVE * spacing);
             *x += *n * *offset;
         }
     }
