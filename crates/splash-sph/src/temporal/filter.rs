@@ -28,13 +28,13 @@ pub struct Neighbour<'a> {
 /// of frames t−1, t and t+1 lie once carried to time t by the fluid's own motion (the kernel
 /// mean of the particles' displacements around the vertex, support 2r; a vertex with no
 /// particle that near keeps its place), the neighbours weighing a little more than the frame
-/// itself ([`WEIGHT`]).
+/// itself (0.4 each, 0.2 for frame t).
 /// Where the fluid carries the surface as it moves, the neighbours agree with frame t and
 /// nothing moves; what jumps at one frame alone is shared with its neighbours, a low-pass in
 /// time along the flow (the explicit surfaces of Yu, Wojtan, Turk & Yap 2012 follow the fluid
 /// in the same sense). A neighbour's surface weighs less the farther it lies from the carried
-/// vertex, smoothly down to nothing at [`REACH`] (a topology change, a droplet that left), and
-/// no vertex moves farther than [`MAX_MOVE`], so that no surface is pulled into another.
+/// vertex, smoothly down to nothing at 3r (a topology change, a droplet that left), and
+/// no vertex moves farther than 0.2 r, so that no surface is pulled into another.
 /// Where faces cross after all, their vertices and a ring around them keep their own frame's
 /// places.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -100,9 +100,9 @@ const MAX_MOVE: f32 = 0.2;
 /// `neighbours` (frames t−1 and t+1) carried to time t by the displacements of `own`'s
 /// particles to each (matched by id, else velocity × `frame_time`), as [`Followed`] says, and
 /// recomputes its normals when it has them. `spacing`: r; the motion's kernel has support 2r,
-/// the neighbours count within [`REACH`]. `close`: per vertex, whether another side of the
+/// the neighbours count within 3r. `close`: per vertex, whether another side of the
 /// surface faces it within the post-processing's clearance (at least r/2: more than twice the
-/// farthest a vertex moves here, [`MAX_MOVE`]); with cells up to r only their faces and those near
+/// farthest a vertex moves here, 0.2 r); with cells up to r only their faces and those near
 /// a fold are tested for crossings, as the post-processing's guard tests them, else (empty, or
 /// larger cells) every face. None, with nothing moved, when the particles cannot be carried
 /// (no ids, and no velocities with a frame time).
