@@ -1,5 +1,6 @@
-//! The field averaged along the flow (issue 38): near the surface, a vertex takes the mean of
-//! frame t's field there and of frames t−1 and t+1's fields where the fluid carries the vertex
+//! The field averaged along the flow (issue 38): near the surface, a vertex takes a weighted
+//! mean ([`SIDE_WEIGHT`]) of frame t's field there and of frames t−1 and t+1's fields where the
+//! fluid carries the vertex
 //! (the cubic-spline mean, support 2r, of frame t's particles' displacements to them, as
 //! `temporal::motion` takes it). What the field does as the particles rearrange, which their
 //! mean motion does not carry, is shared with the frames beside it; a surface that moves with
@@ -40,6 +41,13 @@ pub struct Sides<'a> {
 /// field lacks (a droplet the frames beside it hold). Measured on dense-dambreak 120–135,
 /// `--temporal`: 0.0170 r carried with the ends alone, 0.0166 r at 0.5, 1 or 1.5 cells.
 const NEAR_CELLS: f32 = 0.5;
+
+/// Each side's share of the mean, frame t keeping the rest (0.44). Carried jitter with
+/// `--temporal` (following at reach 3r, weight 0.4), dense-dambreak 120–135, all 40 frames
+/// and B2: 0.28 gives 0.0157, 0.0148 and 0.0118 r; 1/3 (the three frames alike) 0.0164, 0.0152
+/// and 0.0119 r; 0.25 0.0160 and 0.0121 r (120–135, B2); 0.2 0.0161 and 0.0123 r; 0.4 0.0165 and
+/// 0.0116 r. The droplets make most of the difference (120–135: 0.0666 against 0.0729 r).
+const SIDE_WEIGHT: f32 = 0.28;
 
 /// Rounds of averaging the ends of newly crossed edges at most (each round's mean can move
 /// the surface across a vertex not averaged yet; two rounds sufficed on every frame measured).
@@ -220,7 +228,7 @@ impl FlowMean {
             }
             for (i, (v, sum)) in out.iter_mut().zip(sums).enumerate() {
                 if mask[i / 64] >> (i % 64) & 1 == 1 {
-                    *v += sum / 3.0;
+                    *v += sum * SIDE_WEIGHT;
                 }
             }
             out
