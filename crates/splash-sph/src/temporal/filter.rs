@@ -75,10 +75,10 @@ pub fn neighbour_bins(mesh: &TriMesh, spacing: f32) -> SurfaceBins {
     SurfaceBins::new(&mesh.vertices, &mesh.triangles, REACH * spacing)
 }
 
-/// Each neighbour's share of the mean. Measured with the fields averaged along the flow, reach
-/// 3r (`splash bench temporal`, carried jitter, dense-dambreak 120–135 and B2): 0.4 gives
-/// 0.0159 and 0.0119 r, 1/3 (the three frames alike) 0.0159 and 0.0123 r, 0.45 0.0162 and
-/// 0.0118 r. Before the fields were averaged, 1/3 had read 0.0182 r on dense-dambreak against
+/// Each neighbour's share of the mean. Measured with the fields averaged along the flow (each
+/// side then weighing 1/3 there), reach 3r (`splash bench temporal`, carried jitter,
+/// dense-dambreak 120–135 and B2): 0.4 gives 0.0159 and 0.0119 r, 1/3 (the three frames
+/// alike) 0.0159 and 0.0123 r, 0.45 0.0162 and 0.0118 r. Before the fields were averaged, 1/3 had read 0.0182 r on dense-dambreak against
 /// 0.0197 r with the binomial's 1/4 and 0.0206 r with 1/2 (the neighbours alone).
 const WEIGHT: f32 = 0.4;
 
@@ -92,8 +92,8 @@ const REACH: f32 = 3.0;
 
 /// The farthest a vertex moves, in spacings r: less than half the post-processing's clearance
 /// (at least r/2), so that two sides of the surface that do not face each other within it
-/// cannot meet. Capped at 0.2r, carried jitter on dense-dambreak 120–135 reads 0.0164 r
-/// against 0.0159 r uncapped, B2 0.0119 r either way.
+/// cannot meet. Capped at 0.2r (the field mean's sides then at 1/3), carried jitter on
+/// dense-dambreak 120–135 reads 0.0164 r against 0.0159 r uncapped, B2 0.0119 r either way.
 const MAX_MOVE: f32 = 0.2;
 
 /// Moves the vertices of `mesh` (frame t, with `own` its particles) towards the surfaces of
