@@ -79,19 +79,7 @@ impl Reconstructor {
     /// array bytes; no times: see [`reconstruct_observed`](Self::reconstruct_observed)).
     /// Coordinates must be finite.
     pub fn reconstruct(&self, positions: &[Vec3]) -> Result<Reconstruction> {
-        self.run(positions, None, None)
-    }
-
-    /// [`reconstruct`](Self::reconstruct) with the field averaged along the flow with the
-    /// frames beside (`sides`: their particles, and the moves of `positions` to them), where
-    /// the engine and field allow it.
-    pub(crate) fn reconstruct_along_flow(
-        &self,
-        positions: &[Vec3],
-        sides: Option<&Sides<'_>>,
-        observer: Option<&mut dyn Observer>,
-    ) -> Result<Reconstruction> {
-        self.run(positions, sides, observer)
+        self.reconstruct_along_flow(positions, None, None)
     }
 
     /// [`reconstruct`](Self::reconstruct), with `observer` measuring each stage for the report.
@@ -100,10 +88,14 @@ impl Reconstructor {
         positions: &[Vec3],
         observer: &mut dyn Observer,
     ) -> Result<Reconstruction> {
-        self.run(positions, None, Some(observer))
+        self.reconstruct_along_flow(positions, None, Some(observer))
     }
 
-    fn run(
+    /// [`reconstruct`](Self::reconstruct) with the field averaged along the flow with the
+    /// frames beside (`sides`: their particles, and the moves of `positions` to them), where
+    /// the engine and field allow it; `observer` as in
+    /// [`reconstruct_observed`](Self::reconstruct_observed).
+    pub(crate) fn reconstruct_along_flow(
         &self,
         positions: &[Vec3],
         sides: Option<&Sides<'_>>,

@@ -121,9 +121,8 @@ impl FlowMean {
         for round in 0..ROUNDS {
             let mut ends = crossed_ends(band, &closed.tables, &done);
             if let (0, Some(near)) = (round, near) {
+                // Some are ends too: the sub-band and `done` take each vertex once.
                 ends.extend(near_zero(band, values, near));
-                ends.par_sort_unstable_by_key(|v| (v.z, v.y, v.x));
-                ends.dedup();
             }
             if ends.is_empty() {
                 break;
