@@ -13,7 +13,7 @@ use crate::io::Attribute;
 use crate::mesh::TriMesh;
 use crate::mesh::post::{Volumes, stages as post_stages};
 use crate::recon::engines::full_grid::{self, Grid};
-use crate::recon::{self, Reconstruction, Sides};
+use crate::recon::{self, Reconstruction, Sampled, Sides};
 use crate::report::{Observer, Stage, Stages};
 use crate::worker_pool::worker_pool;
 
@@ -79,7 +79,7 @@ impl Reconstructor {
     /// array bytes; no times: see [`reconstruct_observed`](Self::reconstruct_observed)).
     /// Coordinates must be finite.
     pub fn reconstruct(&self, positions: &[Vec3]) -> Result<Reconstruction> {
-        self.reconstruct_along_flow(positions, None, None)
+        self.reconstruct_along_flow(positions, None, None, None)
     }
 
     /// [`reconstruct`](Self::reconstruct), with `observer` measuring each stage for the report.
@@ -88,19 +88,24 @@ impl Reconstructor {
         positions: &[Vec3],
         observer: &mut dyn Observer,
     ) -> Result<Reconstruction> {
-        self.reconstruct_along_flow(positions, None, Some(observer))
+        self.reconstruct_along_flow(positions, None, None, Some(observer))
     }
 
-    /// [`reconstruct`](Self::reconstruct) with the field averaged along the flow with the
-    /// frames beside (`sides`: their particles, and the moves of `positions` to them), where
-    /// the engine and field allow it; `observer` as in
-    /// [`reconstruct_observed`](Self::reconstruct_observed).
-    pub(crate) fn reconstruct_along_flow(
+    /// Frame `positions`' field sampled on its closed band, for
+    /// [`reconstruct_along_flow`](Self::reconstruct_along_flow) to make its surface from and
+    /// the frames beside it to average their fields with (None where the engine does not
+    /// sample so, or there are no particles); `observer` measures its stages.
+    pub(crate) fn sample(
         &self,
         positions: &[Vec3],
-        sides: Option<&Sides<'_>>,
-        mut observer: Option<&mut dyn Observer>,
-    ) -> Result<Reconstruction> {
+        observer: Option<&mut dyn Observer>,
+    ) -> Result<Option<Sampled>> {
+        self.check_positions(positions)?;
+        self.install(|| recon::sample(positions, &self.params, observer))
+    }
+
+    /// Non-finite coordinates, and grids too fine for the frame, as errors.
+    fn check_positions(&self, positions: &[Vec3]) -> Result<()> {
         if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
             let p = positions[i];
             return Err(Error::input(format!(
@@ -108,14 +113,31 @@ impl Reconstructor {
                 p.x, p.y, p.z
             )));
         }
-        self.check_resolution(positions)?;
+        self.check_resolution(positions)
+    }
+
+    /// [`reconstruct`](Self::reconstruct) with the field averaged along the flow with the
+    /// frames beside (`sides`: their sampled fields, and the moves of `positions` to them),
+    /// where the engine and field allow it, made from `own` ([`sample`](Self::sample) of
+    /// `positions`) where given; `observer` as in
+    /// [`reconstruct_observed`](Self::reconstruct_observed).
+    pub(crate) fn reconstruct_along_flow(
+        &self,
+        positions: &[Vec3],
+        own: Option<&Sampled>,
+        sides: Option<&Sides<'_>>,
+        mut observer: Option<&mut dyn Observer>,
+    ) -> Result<Reconstruction> {
+        if own.is_none() {
+            self.check_positions(positions)?;
+        }
         self.install(|| {
             let reborrowed: Option<&mut dyn Observer> = match &mut observer {
                 Some(o) => Some(&mut **o),
                 None => None,
             };
             let mut out =
-                recon::reconstruct_along_flow(positions, sides, &self.params, reborrowed)?;
+                recon::reconstruct_along_flow(positions, own, sides, &self.params, reborrowed)?;
             let post = &self.config.post;
             if post.changes_mesh() && !out.mesh.is_empty() {
                 let (r, cell) = (self.params.spacing, self.params.cell);

@@ -4,10 +4,11 @@
 //! neighbours' surfaces carried to its time ([`follow_fluid`]). A frame's neighbours are
 //! reconstructed too, also where another job writes them (`--shard`) or their output exists
 //! (`skip_existing`), so that every job writes the bytes one run over the whole sequence
-//! writes. At most five frames' particles (t−2 … t+2) and three prepared frames are held at
-//! once, with their triangles binned for distance queries (each frame's once, for both frames
-//! beside it), and one file read ahead while the last mesh is written, as frames meshed alone
-//! are. A frame without both neighbours (the ends of the selection, a gap in its frame
+//! writes. Each frame's field is sampled once, for its own surface and the means of both
+//! frames beside it. At most five frames' particles (t−2 … t+2), three frames' sampled fields
+//! (t … t+2) and three prepared frames are held at once, with their triangles binned for
+//! distance queries (each frame's once, for both frames beside it), and one file read ahead
+//! while the last mesh is written, as frames meshed alone are. A frame without both neighbours (the ends of the selection, a gap in its frame
 //! numbers, a neighbour that fails or has no particles, particles that cannot be matched) is
 //! meshed from its own field and post-processed alone, with a warning.
 
@@ -21,7 +22,7 @@ use super::{FramePipeline, Plan, Progress, RunReport};
 use crate::error::{Error, Result};
 use crate::frames::path_frame_number;
 use crate::mesh::SurfaceBins;
-use crate::recon::Sides;
+use crate::recon::{Sampled, Sides};
 use crate::temporal::{Neighbour, follow_fluid, neighbour_bins};
 
 /// Runs the plan's frames of the selection `inputs`, each following the fluid from its
@@ -55,6 +56,9 @@ pub(super) fn run_following(
     let mut held: BTreeMap<usize, Result<Ready>> = BTreeMap::new();
     // Their triangles binned as neighbours, each once for both frames beside it.
     let mut bins: BTreeMap<usize, SurfaceBins> = BTreeMap::new();
+    // Frames' fields sampled, by position: each frame's surface is made from its own, and the
+    // frames beside it read it for their means along the flow (None: not sampled so).
+    let mut fields: BTreeMap<usize, Option<Sampled>> = BTreeMap::new();
     let make = |pipeline: &mut FramePipeline,
                 _: &Path,
                 reads: &mut dyn Reads,
@@ -63,6 +67,7 @@ pub(super) fn run_following(
         staged.retain(|&j, _| staged_kept(j, at));
         held.retain(|&j, _| kept(j, at));
         bins.retain(|&j, _| kept(j, at));
+        fields.retain(|&j, _| j >= at);
         for j in near(at, inputs.len()) {
             if held.contains_key(&j) {
                 continue;
@@ -75,7 +80,7 @@ pub(super) fn run_following(
                     );
                 }
             }
-            let prepared = prepare(pipeline, &selection, j, &mut staged, progress);
+            let prepared = prepare(pipeline, &selection, j, &mut staged, &mut fields, progress);
             held.insert(j, prepared);
         }
         // The frame's own error stays its outcome; its neighbours keep only its message.
@@ -101,49 +106,73 @@ pub(super) fn run_following(
 }
 
 /// Frame `j`'s surface from its particles in `staged`, its field averaged along the flow with
-/// the frames beside it where both are there and can be matched (else its own field alone).
+/// the frames beside it where both are there and can be matched (else its own field alone);
+/// the fields it needs are sampled into `fields` where they are not there yet.
 fn prepare(
     pipeline: &mut FramePipeline,
     selection: &Selection,
     j: usize,
     staged: &mut BTreeMap<usize, Result<Staged>>,
+    fields: &mut BTreeMap<usize, Option<Sampled>>,
     progress: &mut dyn Progress,
 ) -> Result<Ready> {
     let input = &selection.inputs[j];
-    let own = match staged.get(&j) {
-        Some(Ok(Staged::Particles(own))) => own,
-        _ => {
-            // The frame's own outcome; frames beside it see only that it has no particles.
-            let why = Error::input(format!("'{}' has no particles", input.display()));
-            return match staged
-                .insert(j, Err(why))
-                .expect("staged before it is prepared")
-            {
-                Ok(Staged::Made(made)) => Ok(Ready::Made(*made)),
-                Ok(Staged::Particles(_)) => unreachable!("matched above"),
-                Err(e) => Err(e),
-            };
-        }
+    if !matches!(staged.get(&j), Some(Ok(Staged::Particles(_)))) {
+        // The frame's own outcome; frames beside it see only that it has no particles.
+        let why = Error::input(format!("'{}' has no particles", input.display()));
+        return match staged
+            .insert(j, Err(why))
+            .expect("staged before it is prepared")
+        {
+            Ok(Staged::Made(made)) => Ok(Ready::Made(*made)),
+            Ok(Staged::Particles(_)) => unreachable!("matched above"),
+            Err(e) => Err(e),
+        };
+    }
+    let beside = |i: Option<usize>| {
+        i.filter(|&i| i < selection.inputs.len() && !selection.gap_between(j, i))
+            .filter(|i| matches!(staged.get(i), Some(Ok(Staged::Particles(_)))))
     };
-    let side = |i: Option<usize>| {
-        let i = i.filter(|&i| i < selection.inputs.len() && !selection.gap_between(j, i))?;
-        match staged.get(&i)? {
-            Ok(Staged::Particles(p)) => Some(&p.motion),
-            _ => None,
+    let sides = beside(j.checked_sub(1)).zip(beside(Some(j + 1)));
+    // A field that fails to sample is left out here; its frame reports the error itself.
+    let needed = [Some(j), sides.map(|s| s.0), sides.map(|s| s.1)];
+    for i in needed.into_iter().flatten() {
+        if let (Entry::Vacant(slot), Some(Ok(Staged::Particles(p)))) =
+            (fields.entry(i), staged.get(&i))
+        {
+            slot.insert(
+                pipeline
+                    .sample(&selection.inputs[i], p, progress)
+                    .ok()
+                    .flatten(),
+            );
         }
+    }
+    let particles = |i: usize| match staged.get(&i) {
+        Some(Ok(Staged::Particles(p))) => p,
+        _ => unreachable!("checked above"),
     };
+    let own = particles(j);
     let frame_time = pipeline.frame_time();
-    let beside = side(j.checked_sub(1)).zip(side(Some(j + 1)));
-    let moves = beside.and_then(|(before, after)| {
-        let back = own.motion.displacements(before, -1, frame_time)?;
-        let ahead = own.motion.displacements(after, 1, frame_time)?;
-        Some((before, after, [back, ahead]))
+    let moves = sides.and_then(|(before, after)| {
+        let fields = [
+            fields.get(&before)?.as_ref()?,
+            fields.get(&after)?.as_ref()?,
+        ];
+        let back = own
+            .motion
+            .displacements(&particles(before).motion, -1, frame_time)?;
+        let ahead = own
+            .motion
+            .displacements(&particles(after).motion, 1, frame_time)?;
+        Some((fields, [back, ahead]))
     });
-    let sides = moves.as_ref().map(|(before, after, [back, ahead])| Sides {
-        particles: [&before.positions, &after.positions],
+    let sides = moves.as_ref().map(|(fields, [back, ahead])| Sides {
+        fields: *fields,
         moves: [back, ahead],
     });
-    pipeline.reconstruct(input, own, sides.as_ref(), progress)
+    let own_field = fields.get(&j).and_then(Option::as_ref);
+    pipeline.reconstruct(input, own, own_field, sides.as_ref(), progress)
 }
 
 /// The frames of the selection that making frame `at` needs prepared: it and those beside it.

@@ -26,7 +26,7 @@ use crate::io::{
 use crate::iso::{self, IsoRequest};
 use crate::level_set::LevelSet;
 use crate::mesh::TriMesh;
-use crate::recon::Sides;
+use crate::recon::{Sampled, Sides};
 use crate::reconstructor::Reconstructor;
 use crate::report::FrameStats;
 use crate::spacing::estimate_spacing;
@@ -184,7 +184,9 @@ impl FramePipeline {
     ) -> Result<Ready> {
         match self.stage(input, loaded, progress)? {
             Staged::Made(made) => Ok(Ready::Made(*made)),
-            Staged::Particles(particles) => self.reconstruct(input, &particles, None, progress),
+            Staged::Particles(particles) => {
+                self.reconstruct(input, &particles, None, None, progress)
+            }
         }
     }
 
@@ -262,17 +264,15 @@ impl FramePipeline {
         }))
     }
 
-    /// The post-processed surface of frame `input`'s `particles`; with `sides`, its field
-    /// averaged along the flow with the frames beside it.
-    pub(super) fn reconstruct(
+    /// The sequence's reconstructor, made with the spacing of its first frame (`input`,
+    /// `positions`) and checked against it.
+    fn sequence_reconstructor(
         &mut self,
         input: &Path,
-        particles: &FrameParticles,
-        sides: Option<&Sides<'_>>,
+        positions: &[Vec3],
         progress: &mut dyn Progress,
-    ) -> Result<Ready> {
-        let motion = &particles.motion;
-        let r = self.sequence_spacing(input, &motion.positions, progress)?;
+    ) -> Result<&Reconstructor> {
+        let r = self.sequence_spacing(input, positions, progress)?;
         let reconstructor = match &mut self.reconstructor {
             Some(rec) => rec,
             slot => slot.insert(Reconstructor::new(Config {
@@ -282,13 +282,45 @@ impl FramePipeline {
         };
         if !self.checked {
             self.checked = true;
-            for warning in reconstructor.warnings(&motion.positions) {
+            for warning in reconstructor.warnings(positions) {
                 progress.warning(Some(input), &warning);
             }
         }
+        Ok(reconstructor)
+    }
+
+    /// Frame `input`'s field sampled on its closed band, for its own surface and the means
+    /// along the flow of the frames beside it (None where the engine does not sample so).
+    pub(super) fn sample(
+        &mut self,
+        input: &Path,
+        particles: &FrameParticles,
+        progress: &mut dyn Progress,
+    ) -> Result<Option<Sampled>> {
+        let positions = &particles.motion.positions;
+        let reconstructor = self.sequence_reconstructor(input, positions, progress)?;
+        let mut observer = progress.observer();
+        reconstructor
+            .sample(positions, Some(observer.as_mut()))
+            .map_err(|e| e.context("reconstruction failed"))
+    }
+
+    /// The post-processed surface of frame `input`'s `particles`, from `own` (its field
+    /// [`sample`](Self::sample)d) where given; with `sides`, its field averaged along the
+    /// flow with the frames beside it.
+    pub(super) fn reconstruct(
+        &mut self,
+        input: &Path,
+        particles: &FrameParticles,
+        own: Option<&Sampled>,
+        sides: Option<&Sides<'_>>,
+        progress: &mut dyn Progress,
+    ) -> Result<Ready> {
+        let motion = &particles.motion;
+        let reconstructor = self.sequence_reconstructor(input, &motion.positions, progress)?;
         let mut observer = progress.observer();
         let rec = reconstructor
-            .reconstruct_along_flow(&motion.positions, sides, Some(observer.as_mut()))
+            .reconstruct_along_flow(&motion.positions, own, sides, Some(observer.as_mut()))
             .map_err(|e| e.context("reconstruction failed"))?;
         drop(observer);
         let mut stats = rec.stats;

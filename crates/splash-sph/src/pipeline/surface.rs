@@ -97,19 +97,38 @@ pub fn surface_following(
                 .expect("frames with ids carry their particles")
         })
     });
-    let sides = moves.as_ref().map(|[back, ahead]| Sides {
-        particles: [&motions[0].positions, &motions[2].positions],
-        moves: [back, ahead],
+    // Each frame's field sampled once: frame t's surface is made from its own, averaged
+    // with the others', and the neighbours' surfaces from theirs.
+    let fields = motions
+        .iter()
+        .zip(NAMES)
+        .map(|(m, name)| {
+            let observed: Option<&mut dyn Observer> = (name == NAMES[1]).then_some(&mut *observer);
+            reconstructor
+                .sample(&m.positions, observed)
+                .map_err(|e| e.context(format!("reconstruction of {name} failed")))
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let sides = moves.as_ref().and_then(|[back, ahead]| {
+        Some(Sides {
+            fields: [fields[0].as_ref()?, fields[2].as_ref()?],
+            moves: [back, ahead],
+        })
     });
     let rec = reconstructor
-        .reconstruct_along_flow(&own.positions, sides.as_ref(), Some(observer))
+        .reconstruct_along_flow(
+            &own.positions,
+            fields[1].as_ref(),
+            sides.as_ref(),
+            Some(observer),
+        )
         .map_err(|e| e.context("reconstruction failed"))?;
     let mut mesh = rec.mesh;
     let mut followed = Followed::default();
     if follows && !mesh.triangles.is_empty() {
         let side = |k: usize| -> Result<TriMesh> {
             Ok(reconstructor
-                .reconstruct(&motions[k].positions)
+                .reconstruct_along_flow(&motions[k].positions, fields[k].as_ref(), None, None)
                 .map_err(|e| e.context(format!("reconstruction of {} failed", NAMES[k])))?
                 .mesh)
         };

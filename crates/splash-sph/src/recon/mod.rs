@@ -18,8 +18,8 @@ use crate::report::{FrameStats, Observer, Stages};
 use engines::full_grid::{self, Grid};
 use engines::{marching_slices, narrow_band, scatter, surface_following};
 
+pub use engines::narrow_band::{Sampled, Sides};
 pub use engines::prepared::Reconstruction;
-pub use stages::flow_mean::Sides;
 
 /// Reconstructs the surface of `particles` with `params.engine`, in the current rayon pool.
 #[cfg(test)]
@@ -28,18 +28,16 @@ pub(crate) fn reconstruct(
     params: &Params,
     observer: Option<&mut dyn Observer>,
 ) -> Result<Reconstruction> {
-    reconstruct_along_flow(particles, None, params, observer)
+    reconstruct_along_flow(particles, None, None, params, observer)
 }
 
-/// [`reconstruct`], with `sides` the field averaged along the flow with the frames beside
-/// (`stages/flow_mean`; the narrow band and full gather engines, else ignored).
-pub(crate) fn reconstruct_along_flow(
+/// The figures a frame's reconstruction starts from.
+fn start<'a>(
     particles: &[Vec3],
-    sides: Option<&Sides<'_>>,
     params: &Params,
-    observer: Option<&mut dyn Observer>,
-) -> Result<Reconstruction> {
-    let mut stages = Stages::start(
+    observer: Option<&'a mut dyn Observer>,
+) -> Stages<'a> {
+    Stages::start(
         FrameStats {
             spacing: params.spacing,
             cell: params.cell,
@@ -48,7 +46,25 @@ pub(crate) fn reconstruct_along_flow(
             ..FrameStats::default()
         },
         observer,
-    );
+    )
+}
+
+/// [`reconstruct`], with `sides` the field averaged along the flow with the frames beside
+/// (`stages/flow_mean`; the narrow band and full gather engines, else ignored), from `own`,
+/// frame t's field as [`sample`] sampled it, where given.
+pub(crate) fn reconstruct_along_flow(
+    particles: &[Vec3],
+    own: Option<&Sampled>,
+    sides: Option<&Sides<'_>>,
+    params: &Params,
+    observer: Option<&mut dyn Observer>,
+) -> Result<Reconstruction> {
+    if let Some(own) = own {
+        let mut stages = Stages::start(own.stats, observer);
+        stages.stats.threads = rayon::current_num_threads();
+        return narrow_band::gather_along_flow(own, sides, particles, stages);
+    }
+    let mut stages = start(particles, params, observer);
     if particles.is_empty() {
         return Ok(Reconstruction::new(TriMesh::default(), stages.stats));
     }
@@ -61,7 +77,7 @@ pub(crate) fn reconstruct_along_flow(
         return surface_following::reconstruct(particles, params, baseline, stages);
     }
     match params.engine {
-        Engine::NarrowBand => narrow_band::gather(particles, sides, params, stages),
+        Engine::NarrowBand => narrow_band::gather(particles, params, stages),
         Engine::Slices => {
             marching_slices::reconstruct(particles, params, Default::default(), stages)
                 .map(|(r, _)| r)
@@ -73,8 +89,32 @@ pub(crate) fn reconstruct_along_flow(
             if engine == Engine::Scatter {
                 scatter::reconstruct(particles, params, &grid, stages)
             } else {
-                narrow_band::gather(particles, sides, params, stages)
+                narrow_band::gather(particles, params, stages)
             }
         }
     }
+}
+
+/// Frame t's field sampled on its closed band, for [`reconstruct_along_flow`] to make its
+/// surface from and the frames beside it to average theirs with; None where the engine does
+/// not sample so (the scatter, Marching Slices, the baselines) or there are no particles.
+pub(crate) fn sample(
+    particles: &[Vec3],
+    params: &Params,
+    observer: Option<&mut dyn Observer>,
+) -> Result<Option<Sampled>> {
+    let flows = matches!(params.engine, Engine::NarrowBand | Engine::FullGather);
+    if particles.is_empty() || params.baseline.is_some() || !flows {
+        return Ok(None);
+    }
+    let mut stages = start(particles, params, observer);
+    let grid = Grid::around(particles, params.cell, params.support);
+    if let Ok(g) = &grid {
+        stages.stats.grid = g.resolution();
+    }
+    if params.engine == Engine::FullGather {
+        stages.stats.planned_bytes =
+            full_grid::check(params, &grid?, particles.len())?.unwrap_or(0);
+    }
+    narrow_band::sample(particles, params, &mut stages).map(Some)
 }

@@ -20,6 +20,7 @@ pub const BRICK_VERTICES: usize = 512;
 /// Vertex coordinates must stay far from i32 overflow, also after adding halos.
 const MAX_VERTEX_COORD: f64 = (1 << 29) as f64;
 
+#[derive(Clone)]
 pub struct Band {
     pub cell: f32,
     /// Brick coordinates, sorted by (z, y, x): the order of every per-brick output.
@@ -150,6 +151,11 @@ impl Band {
             band.masks[b][l.z as usize] |= 1 << (l.x + BRICK * l.y);
         }
         band
+    }
+
+    /// A band of `bricks` (sorted by (z, y, x)) with their vertex `masks`.
+    pub fn from_masks(cell: f32, bricks: Vec<IVec3>, masks: Vec<[u64; 8]>) -> Band {
+        Band::from_parts(cell, bricks, masks)
     }
 
     pub(super) fn from_parts(cell: f32, bricks: Vec<IVec3>, masks: Vec<[u64; 8]>) -> Band {

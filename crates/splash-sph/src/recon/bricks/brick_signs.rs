@@ -18,6 +18,7 @@ const CHUNK: usize = 1024;
 
 /// Sign planes of a band's bricks; only bricks with an inside vertex (or a NaN value) keep a
 /// plane, so a band of mostly empty bricks around droplets costs 4 bytes a brick.
+#[derive(Clone)]
 pub struct Signs {
     /// Per brick: 0 when it has no inside vertex and every vertex of its mask has a value;
     /// else 1 + the index of its inside plane, with [`HOLES`] maybe set.

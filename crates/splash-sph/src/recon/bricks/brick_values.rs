@@ -11,7 +11,7 @@ use crate::error::Result;
 use crate::recon::budget;
 
 /// Field values of a band's surface vertices; NaN where a vertex is not in the band.
-#[derive(Debug, Default)]
+#[derive(Debug, Default, Clone)]
 pub struct BrickValues {
     /// Where each brick's values start in `values`; one more entry than bricks.
     starts: Vec<usize>,
@@ -70,9 +70,31 @@ impl BrickValues {
     }
 
     /// The value of vertex `local` of brick `b`, whose mask is `mask`; NaN outside the band.
-    #[cfg(test)]
     pub fn get(&self, mask: &[u64; 8], b: usize, local: usize) -> f32 {
         slot(mask, local).map_or(f32::NAN, |k| self.values[self.starts[b] + k])
+    }
+
+    /// The `index`th value of all, in brick order and bit order within each brick.
+    #[inline]
+    pub fn at(&self, index: usize) -> f32 {
+        self.values[index]
+    }
+
+    /// Per brick of `band` (whose values these are) and word of its mask, the index in
+    /// [`at`](Self::at) of the word's first value.
+    pub fn word_starts(&self, band: &Band) -> Vec<[u32; 8]> {
+        band.masks
+            .iter()
+            .zip(&self.starts)
+            .map(|(mask, &start)| {
+                let mut next = start as u32;
+                mask.map(|w| {
+                    let first = next;
+                    next += w.count_ones();
+                    first
+                })
+            })
+            .collect()
     }
 
     /// Sets the value of vertex `local` of brick `b`, whose mask `mask` holds it.

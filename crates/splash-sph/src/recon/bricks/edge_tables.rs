@@ -15,6 +15,7 @@ use crate::mesh::marching_cubes::cases;
 
 /// The edge vertices owned by one brick: bit `3 * local_index + axis` marks an edge that holds
 /// one, numbered in bit order from `first`; and where the brick's triangles start.
+#[derive(Clone)]
 pub struct BrickEdges {
     bits: [u64; 24],
     /// Vertices in the words before each word.
@@ -63,6 +64,7 @@ pub const PER_BRICK_EDGES: u64 = size_of::<BrickEdges>() as u64;
 
 /// One edge table per brick of a band, in brick order; none for bricks without vertices or
 /// triangles.
+#[derive(Clone)]
 pub struct EdgeTables(pub Vec<Option<Box<BrickEdges>>>);
 
 impl EdgeTables {

@@ -1,11 +1,15 @@
 //! The reconstructor of Akinci et al. 2012, Algorithm 1: surface particles, the band of surface
 //! vertices around them, the handler array for the gather, the scalar field on the band, and
-//! the triangulation of the surface cells.
+//! the triangulation of the surface cells. A sequence that follows the fluid runs it in two
+//! steps: [`sample`] up to the field on the closed band, kept for the frames beside, then
+//! [`gather_along_flow`], which averages the field with theirs first.
 
 use glam::Vec3;
 
 use super::full_grid;
-use super::prepared::{Reconstruction, finish, prepare, triangles_and_normals};
+use super::prepared::{
+    Prepared, Reconstruction, finish as finish_reconstruction, prepare, triangles_and_normals,
+};
 use crate::config::{Engine, Params};
 use crate::error::Result;
 use crate::field::ScalarField;
@@ -13,86 +17,240 @@ use crate::neighbours::handler_array::HandlerArray;
 use crate::recon::bricks::band::Band;
 use crate::recon::bricks::brick_values::BrickValues;
 use crate::recon::budget::{self, PER_BRICK, PER_PARTICLE, mul};
-use crate::recon::stages::band_closure::close_band;
+use crate::recon::stages::band_closure::{Closed, close_band};
 use crate::recon::stages::deferred_values::Deferred;
 use crate::recon::stages::field_sampling::sample_field;
-use crate::recon::stages::flow_mean::{FlowMean, Sides};
+use crate::recon::stages::flow_mean::{FlowMean, SideField};
 use crate::recon::stages::lone_particles::band_half_widths;
 use crate::recon::stages::surface_particles::SurfaceCriteria;
 use crate::recon::stages::triangulation::triangulate;
-use crate::report::{Stage, Stages};
+use crate::report::{FrameStats, Stage, Stages};
 
 /// Algorithm 1; with [`Engine::FullGather`], the same gather on every vertex of the grid.
 pub(crate) fn gather(
     particles: &[Vec3],
-    sides: Option<&Sides<'_>>,
     params: &Params,
     mut stages: Stages,
 ) -> Result<Reconstruction> {
+    let sampled = sample(particles, params, &mut stages)?;
+    let Sampled {
+        prepared,
+        surface,
+        params,
+        held,
+        surface_count,
+        ..
+    } = sampled;
+    finish(
+        &prepared,
+        &params,
+        held,
+        surface_count,
+        surface,
+        None,
+        stages,
+    )
+}
+
+/// Frames t−1 and t+1 beside the frame reconstructed, for the mean along the flow.
+#[derive(Clone, Copy)]
+pub struct Sides<'a> {
+    /// Their fields, sampled.
+    pub fields: [&'a Sampled; 2],
+    /// Each of frame t's particles' displacement to each; None where it has no match there.
+    pub moves: [&'a [Option<Vec3>]; 2],
+}
+
+/// Frame t sampled: Algorithm 1 up to the field on the closed band, what its own surface is
+/// made from ([`gather_along_flow`]) and what the frames beside it read where the fluid
+/// carries their vertices ([`Sampled::side`]).
+pub struct Sampled {
+    prepared: Prepared,
+    surface: Surface,
+    /// Per brick of the band, the vertices whose values it holds (not left out), and where
+    /// each word's values start.
+    known: Vec<[u64; 8]>,
+    word_starts: Vec<[u32; 8]>,
+    /// The parameters, the full grid's support the field's.
+    params: Params,
+    held: u64,
+    surface_count: u64,
+    /// The figures so far.
+    pub stats: FrameStats,
+}
+
+/// The closed band and its values, before a mean along the flow changes them.
+#[derive(Clone)]
+struct Surface {
+    band: Band,
+    values: BrickValues,
+    closed: Closed,
+    deferred: Deferred,
+    added: usize,
+    resolved: usize,
+}
+
+impl Sampled {
+    /// Its field as the frames beside it read it.
+    pub fn side(&self) -> SideField<'_> {
+        SideField {
+            band: &self.surface.band,
+            values: &self.surface.values,
+            known: &self.known,
+            word_starts: &self.word_starts,
+            handlers: self.prepared.sampling().1,
+        }
+    }
+
+    /// Whether the field comes fitted to the frame, which does not hold for its neighbours.
+    pub fn is_fitted(&self) -> bool {
+        self.prepared.is_fitted()
+    }
+}
+
+/// Algorithm 1 up to the field on the closed band; see [`Sampled`].
+pub(crate) fn sample(particles: &[Vec3], params: &Params, stages: &mut Stages) -> Result<Sampled> {
     let criteria = SurfaceCriteria::of(params);
     let narrow = params.engine == Engine::NarrowBand;
-    let mut prepared = prepare(particles, params, &mut stages, narrow.then_some(&criteria))?;
+    let mut prepared = prepare(particles, params, stages, narrow.then_some(&criteria))?;
     let surface = prepared.surface.take();
     let (field, samples) = prepared.sampling();
     // The full grid reaches as far as the fitted kernels do.
-    let params = &Params {
+    let params = Params {
         support: field.support(),
         ..params.clone()
     };
     let held = prepared.heap_bytes() as u64;
-    let (mut band, limits) = if let Some(surface) = surface {
+    let (mut band, surface_count) = if let Some(surface) = surface {
         stages.stats.surface_particles = surface.len();
         let band = stages.run(Stage::Band, || {
-            band_around(&surface, &prepared.handlers, field, params, held)
+            band_around(&surface, &prepared.handlers, field, &params, held)
         })?;
-        (band, Limits::new(params, held, surface.len() as u64))
+        (band, surface.len() as u64)
     } else {
         // The full gather has no surface particles; its estimate was checked on the grid.
-        let band = stages.run(Stage::Band, || full_grid::band(particles, params))?;
-        let surface = budget::surface_guess(particles.len());
-        (band, Limits::new(params, held, surface))
+        let band = stages.run(Stage::Band, || full_grid::band(particles, &params))?;
+        (band, budget::surface_guess(particles.len()))
     };
+    let limits = Limits::new(&params, held, surface_count);
     let planned = limits.band(band.bricks.len())?;
     if params.engine == Engine::NarrowBand {
         stages.stats.planned_bytes = planned;
     }
-    // A field fitted to frame t's particles does not hold for its neighbours'.
-    let flow = sides
-        .filter(|_| !prepared.is_fitted())
-        .map(|s| {
-            let n = (particles.len() + s.particles.iter().map(|p| p.len()).sum::<usize>()) as u64;
-            // Three handler arrays, frame t's with eight channels more.
-            let need = held
-                .saturating_add(mul(n, PER_PARTICLE))
-                .saturating_add(mul(particles.len() as u64, 32));
-            budget::check(params, need, || {
-                format!("the particles of three frames ({n}) to average the field along the flow")
-            })?;
-            stages.run(Stage::ScalarField, || {
-                let lookup = prepared.handlers.cell_size();
-                FlowMean::new(particles, s, field, params.spacing, lookup)
-            })
-        })
-        .transpose()?;
-    let held = held + flow.as_ref().map_or(0, |f| f.heap_bytes() as u64);
     let (mut values, mut deferred) = stages.run(Stage::ScalarField, || {
         Deferred::sample(&band, samples, field)
     })?;
     stages.stats.deferred_values = deferred.len();
-    let mut added = 0;
-    let mut close = |band: &mut Band, values: &mut BrickValues| {
-        let closed = close_band(band, values, |grown, bricks| {
+    let closed = stages.run(Stage::Band, || {
+        close_band(&mut band, &mut values, |grown, bricks| {
             limits.band(bricks)?;
             sample_field(grown, samples, field)
-        })?;
-        added += closed.added;
-        Ok(closed)
-    };
-    let mut closed = stages.run(Stage::Band, || close(&mut band, &mut values))?;
-    let mut resolved = stages.run(Stage::ScalarField, || {
+        })
+    })?;
+    let resolved = stages.run(Stage::ScalarField, || {
         deferred.resolve(&band, &mut values, &closed.tables, samples, field)
     })?;
+    let known = band
+        .masks
+        .iter()
+        .zip(deferred.masks(&band))
+        .map(|(mask, left_out)| std::array::from_fn(|w| mask[w] & !left_out[w]))
+        .collect();
+    let word_starts = values.word_starts(&band);
+    let added = closed.added;
+    Ok(Sampled {
+        surface: Surface {
+            band,
+            values,
+            closed,
+            deferred,
+            added,
+            resolved,
+        },
+        known,
+        word_starts,
+        held,
+        surface_count,
+        params,
+        stats: stages.stats,
+        prepared,
+    })
+}
+
+/// Frame t's surface from its sampled field `own`; with `flow`, the field averaged along the
+/// flow first with the frames beside it (`stages/flow_mean`), unless the field is fitted to
+/// the frame.
+pub(crate) fn gather_along_flow(
+    own: &Sampled,
+    flow: Option<&Sides<'_>>,
+    particles: &[Vec3],
+    stages: Stages,
+) -> Result<Reconstruction> {
+    let flow = flow
+        .filter(|s| !own.is_fitted() && !s.fields.iter().any(|f| f.is_fitted()))
+        .map(|s| (particles, s));
+    finish(
+        &own.prepared,
+        &own.params,
+        own.held,
+        own.surface_count,
+        own.surface.clone(),
+        flow,
+        stages,
+    )
+}
+
+/// The surface from the closed band `surface` of a frame `prepared`, averaged along the flow
+/// where `flow` gives frame t's particles and the sides.
+fn finish(
+    prepared: &Prepared,
+    params: &Params,
+    held: u64,
+    surface_count: u64,
+    surface: Surface,
+    flow: Option<(&[Vec3], &Sides<'_>)>,
+    mut stages: Stages,
+) -> Result<Reconstruction> {
+    let (field, samples) = prepared.sampling();
+    let limits = Limits::new(params, held, surface_count);
+    let Surface {
+        mut band,
+        mut values,
+        mut closed,
+        mut deferred,
+        mut added,
+        mut resolved,
+    } = surface;
+    let flow = flow
+        .map(|(particles, sides)| {
+            // Frame t's handler array with eight channels more.
+            let need = held
+                .saturating_add(mul(particles.len() as u64, PER_PARTICLE))
+                .saturating_add(mul(particles.len() as u64, 32));
+            budget::check(params, need, || {
+                format!(
+                    "the particles of frame t ({}) with their moves to average the field \
+                     along the flow",
+                    particles.len()
+                )
+            })?;
+            stages.run(Stage::ScalarField, || {
+                let lookup = prepared.handlers.cell_size();
+                let fields = sides.fields.map(Sampled::side);
+                FlowMean::new(particles, sides.moves, fields, params.spacing, lookup)
+            })
+        })
+        .transpose()?;
+    let held = held + flow.as_ref().map_or(0, |f| f.heap_bytes() as u64);
     if let Some(flow) = &flow {
+        let mut close = |band: &mut Band, values: &mut BrickValues| {
+            let closed = close_band(band, values, |grown, bricks| {
+                limits.band(bricks)?;
+                sample_field(grown, samples, field)
+            })?;
+            added += closed.added;
+            Ok(closed)
+        };
         // Every crossed edge's ends hold frame t's own values before they are averaged.
         stages.stats.flow_mean_vertices = stages.run(Stage::ScalarField, || {
             flow.average_crossed(
@@ -122,7 +280,7 @@ pub(crate) fn gather(
         },
         || Ok(samples),
     )?;
-    Ok(finish(
+    Ok(finish_reconstruction(
         stages.stats,
         &band,
         &values,

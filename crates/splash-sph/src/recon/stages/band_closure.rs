@@ -21,6 +21,7 @@ use crate::recon::bricks::surface_cells::BrickCells;
 
 /// The band once closed: the vertices closure added, the sign planes of its values and the
 /// edge tables of its bricks.
+#[derive(Clone)]
 pub struct Closed {
     pub added: usize,
     pub signs: Signs,

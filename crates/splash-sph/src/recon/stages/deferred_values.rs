@@ -22,6 +22,7 @@ use crate::recon::bricks::halo::neighbour_slot;
 
 /// The vertices whose values were left out, as bits per brick, by brick coordinates (closing
 /// the band renumbers the bricks).
+#[derive(Clone)]
 pub struct Deferred {
     bricks: Vec<(IVec3, [u64; 8])>,
 }
@@ -77,6 +78,19 @@ impl Deferred {
         self.bricks.iter().map(|(_, m)| bits(m)).sum()
     }
 
+    /// The vertices still left out, as bits per brick of `band` (this band, or one closing
+    /// grew from it).
+    pub fn masks(&self, band: &Band) -> Vec<[u64; 8]> {
+        let mut masks = vec![[0u64; 8]; band.bricks.len()];
+        for &(brick, mask) in &self.bricks {
+            let b = band
+                .brick_index(brick)
+                .expect("closing a band keeps its bricks");
+            masks[b] = mask;
+        }
+        masks
+    }
+
     /// Samples into `values` each left-out value that the triangulation of the closed `band`
     /// with edge tables `tables` reads, and forgets it; returns how many. Called again after
     /// the band changed (the field averaged along the flow), it samples only the values
@@ -92,13 +106,7 @@ impl Deferred {
         if self.bricks.is_empty() {
             return Ok(0);
         }
-        let mut masks = vec![[0u64; 8]; band.bricks.len()];
-        for &(brick, mask) in &self.bricks {
-            let b = band
-                .brick_index(brick)
-                .expect("closing a band keeps its bricks");
-            masks[b] = mask;
-        }
+        let masks = self.masks(band);
         let mut read: Vec<IVec3> = tables
             .0
             .par_iter()

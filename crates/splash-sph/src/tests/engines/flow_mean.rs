@@ -7,8 +7,8 @@ use glam::Vec3;
 use crate::config::Config;
 use crate::length::Length;
 use crate::mesh::SignedDistance;
-use crate::recon::Sides;
-use crate::tests::common::{lattice_ball, same_mesh, uniform, uniform_point};
+use crate::recon::{Sampled, Sides};
+use crate::tests::common::{lattice_ball, uniform, uniform_point};
 use crate::{Reconstructor, TriMesh};
 
 const R: f32 = 0.05;
@@ -26,6 +26,13 @@ fn reconstructor(field: &str, threads: Option<usize>) -> Reconstructor {
     Reconstructor::new(config).unwrap()
 }
 
+/// `particles`' field sampled on its closed band, as a sequence samples each frame's.
+fn sampled(rec: &Reconstructor, particles: &[Vec3]) -> Sampled {
+    rec.sample(particles, None)
+        .unwrap()
+        .expect("the narrow band samples")
+}
+
 /// Frame t's raw surface with its field averaged with frames `before` and `after`, whose
 /// particles are frame t's in the same order (matched by index).
 fn along_flow(rec: &Reconstructor, own: &[Vec3], before: &[Vec3], after: &[Vec3]) -> TriMesh {
@@ -33,21 +40,26 @@ fn along_flow(rec: &Reconstructor, own: &[Vec3], before: &[Vec3], after: &[Vec3]
         own.iter().zip(side).map(|(a, b)| Some(*b - *a)).collect()
     };
     let (back, ahead) = (moves(before), moves(after));
+    let fields = [own, before, after].map(|p| sampled(rec, p));
     let sides = Sides {
-        particles: [before, after],
+        fields: [&fields[1], &fields[2]],
         moves: [&back, &ahead],
     };
-    let out = rec.reconstruct_along_flow(own, Some(&sides), None).unwrap();
+    let out = rec
+        .reconstruct_along_flow(own, Some(&fields[0]), Some(&sides), None)
+        .unwrap();
     assert!(out.stats.flow_mean_vertices > 0);
     out.mesh
 }
 
-/// A ball stepping 0.37 cell a frame: the fields of the frames beside, sampled where the
-/// fluid carries each vertex, are frame t's own, so the surface stays frame t's, up to float
-/// rounding; with any field that averages.
+/// A ball stepping 0.37 cell a frame: the fields of the frames beside are frame t's own
+/// carried with it, read between the grid's vertices by trilinear interpolation, which lies
+/// above a convex field and so moves the surface in by a nearly even 0.007 r (SSP07, ZB05;
+/// the density field, bumpier between vertices, up to 0.05 r): the surface stays frame t's
+/// within that, with any field that averages.
 #[test]
 fn a_fluid_moving_as_a_whole_keeps_its_own_surface() {
-    for field in ["ssp07", "zb05", "density"] {
+    for (field, within) in [("ssp07", 0.01), ("zb05", 0.01), ("density", 0.05)] {
         let rec = reconstructor(field, None);
         let ball = lattice_ball(Vec3::splat(0.3), 5.0 * R, R);
         let step = Vec3::new(0.37, 0.11, -0.23) * 0.5 * R;
@@ -55,7 +67,14 @@ fn a_fluid_moving_as_a_whole_keeps_its_own_surface() {
         let own = rec.reconstruct(&ball).unwrap().mesh;
         let mean = along_flow(&rec, &ball, &shifted(-1.0), &shifted(1.0));
         assert!(own.triangles.len() > 1000);
-        same_mesh(&mean, &own, 1e-4 * R).unwrap_or_else(|e| panic!("{field}: {e}"));
+        let surface = SignedDistance::new(&own.vertices, &own.triangles, 4.0 * R);
+        for v in &mean.vertices {
+            let d = surface.at(*v).unwrap() / R;
+            assert!(
+                d.abs() < within,
+                "{field}: a vertex {d} r off frame t's own surface"
+            );
+        }
     }
 }
 
@@ -79,13 +98,14 @@ fn a_bump_of_one_frame_is_shared_with_the_frames_beside_it() {
             .collect()
     };
     let (back, ahead) = (moves(-1.0), moves(1.0));
+    let fields = [&frame, &before, &after].map(|p| sampled(&rec, p));
     let sides = Sides {
-        particles: [&before, &after],
+        fields: [&fields[1], &fields[2]],
         moves: [&back, &ahead],
     };
     let own = rec.reconstruct(&frame).unwrap().mesh;
     let mean = rec
-        .reconstruct_along_flow(&frame, Some(&sides), None)
+        .reconstruct_along_flow(&frame, Some(&fields[0]), Some(&sides), None)
         .unwrap()
         .mesh;
     let plain = rec.reconstruct(&ball).unwrap().mesh;
@@ -149,14 +169,23 @@ fn deferring_values_keeps_the_averaged_mesh_to_the_bit() {
         ball.iter().zip(s).map(|(a, b)| Some(*b - *a)).collect()
     };
     let (back, ahead) = (moves(&before), moves(&after));
-    let sides = Sides {
-        particles: [&before, &after],
-        moves: [&back, &ahead],
-    };
     let params = crate::tests::common::params(R, "r/2");
+    // Each frame's field sampled as it defers, the sides' left-out corners sampled by the mean.
     let run = |defer: bool| {
         DEFER.set(Some(defer));
-        let out = crate::recon::reconstruct_along_flow(&ball, Some(&sides), &params, None);
+        let fields = [&ball, &before, &after]
+            .map(|p| crate::recon::sample(p, &params, None).unwrap().unwrap());
+        let sides = Sides {
+            fields: [&fields[1], &fields[2]],
+            moves: [&back, &ahead],
+        };
+        let out = crate::recon::reconstruct_along_flow(
+            &ball,
+            Some(&fields[0]),
+            Some(&sides),
+            &params,
+            None,
+        );
         DEFER.set(None);
         out.unwrap()
     };
