@@ -6,6 +6,7 @@
 use std::collections::BTreeMap;
 
 use glam::Vec3;
+use rayon::prelude::*;
 use rustc_hash::FxHashMap;
 
 use crate::attribute_names;
@@ -98,21 +99,51 @@ impl FrameMotion {
         frame_time: Option<f32>,
     ) -> Option<Vec<Option<Vec3>>> {
         if let (Some(ids), Some(other_ids)) = (&self.ids, &other.ids) {
-            let at: FxHashMap<u32, u32> = other_ids
-                .iter()
-                .enumerate()
-                .map(|(i, &id)| (id, i as u32))
-                .collect();
+            let at = IdIndex::new(other_ids);
             return Some(
-                ids.iter()
+                ids.par_iter()
                     .zip(&self.positions)
-                    .map(|(id, p)| at.get(id).map(|&j| other.positions[j as usize] - *p))
+                    .map(|(&id, p)| at.get(id).map(|j| other.positions[j as usize] - *p))
                     .collect(),
             );
         }
         let (velocities, dt) = (self.velocities.as_ref()?, frame_time?);
         let scale = steps as f32 * dt;
         Some(velocities.iter().map(|v| Some(*v * scale)).collect())
+    }
+}
+
+/// Where each id sits in a frame: a table indexed by id where the largest id is at most a few
+/// times the particle count (SPlisHSPlasH numbers its particles from 0), else a hash map.
+enum IdIndex {
+    Table(Vec<u32>),
+    Map(FxHashMap<u32, u32>),
+}
+
+impl IdIndex {
+    fn new(ids: &[u32]) -> IdIndex {
+        let largest = ids.iter().copied().max().unwrap_or(0) as usize;
+        if largest < 4 * ids.len() + 1024 {
+            let mut table = vec![u32::MAX; largest + 1];
+            for (i, &id) in ids.iter().enumerate() {
+                table[id as usize] = i as u32;
+            }
+            IdIndex::Table(table)
+        } else {
+            IdIndex::Map(
+                ids.iter()
+                    .enumerate()
+                    .map(|(i, &id)| (id, i as u32))
+                    .collect(),
+            )
+        }
+    }
+
+    fn get(&self, id: u32) -> Option<u32> {
+        match self {
+            IdIndex::Table(t) => t.get(id as usize).copied().filter(|&i| i != u32::MAX),
+            IdIndex::Map(m) => m.get(&id).copied(),
+        }
     }
 }
 
@@ -133,8 +164,22 @@ fn exact_ids(ids: &[f32]) -> std::result::Result<Vec<u32>, String> {
     Ok(ids)
 }
 
-/// An id that appears more than once in `ids`, if any.
+/// The least id that appears more than once in `ids`, if any: marked off in a bit per id
+/// where the ids are numbered densely (as [`IdIndex`] takes them), else found by sorting.
 fn repeated(ids: &[u32]) -> Option<u32> {
+    let largest = ids.iter().copied().max().unwrap_or(0) as usize;
+    if largest < 4 * ids.len() + 1024 {
+        let mut seen = vec![0u64; largest / 64 + 1];
+        let mut least = None;
+        for &id in ids {
+            let (w, bit) = (id as usize / 64, 1u64 << (id % 64));
+            if seen[w] & bit != 0 {
+                least = Some(least.map_or(id, |l: u32| l.min(id)));
+            }
+            seen[w] |= bit;
+        }
+        return least;
+    }
     let mut sorted = ids.to_vec();
     sorted.sort_unstable();
     sorted.windows(2).find(|w| w[0] == w[1]).map(|w| w[0])
@@ -191,4 +236,40 @@ pub fn mean_motions(
             Attribute::Scalar(_) => unreachable!("displacements are vectors"),
         })
         .collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use glam::Vec3;
+
+    use super::{FrameMotion, repeated};
+
+    /// Ids numbered densely (a table) and sparsely (a hash map) match the same particles, and
+    /// the least repeated id is the one named either way.
+    #[test]
+    fn ids_match_dense_or_sparse() {
+        for scale in [1u32, 1 << 20] {
+            let ids: Vec<u32> = (0..50u32).map(|i| ((i * 7) % 50) * scale).collect();
+            let at = |i: u32| Vec3::splat((i / scale) as f32);
+            let positions: Vec<Vec3> = ids.iter().map(|&i| at(i)).collect();
+            let later: Vec<u32> = ids
+                .iter()
+                .rev()
+                .copied()
+                .filter(|&i| i != 3 * scale)
+                .collect();
+            let moved: Vec<Vec3> = later.iter().map(|&i| at(i) + Vec3::ONE).collect();
+            let a = FrameMotion::with_ids(positions, ids.clone()).unwrap();
+            let b = FrameMotion::with_ids(moved, later).unwrap();
+            let d = a.displacements(&b, 1, None).unwrap();
+            for (id, d) in ids.iter().zip(&d) {
+                let want = (*id != 3 * scale).then_some(Vec3::ONE);
+                assert_eq!(*d, want, "id {id}");
+            }
+            let mut twice = ids.clone();
+            twice.extend([9 * scale, 4 * scale]);
+            assert_eq!(repeated(&twice), Some(4 * scale));
+            assert_eq!(repeated(&ids), None);
+        }
+    }
 }

@@ -97,27 +97,41 @@ impl BrickValues {
             .collect()
     }
 
-    /// Sets the value of vertex `local` of brick `b`, whose mask `mask` holds it.
-    pub fn set(&mut self, mask: &[u64; 8], b: usize, local: usize, value: f32) {
-        let k = slot(mask, local).expect("a band vertex");
-        self.values[self.starts[b] + k] = value;
-    }
-
     /// Sets the values of `band`'s vertices that `sub` holds (each of them in `band`) to
-    /// theirs in `sub_values`.
+    /// theirs in `sub_values`, brick by brick in parallel.
     pub fn overwrite(&mut self, band: &Band, sub: &Band, sub_values: &BrickValues) {
-        for (j, (&brick, mask)) in sub.bricks.iter().zip(&sub.masks).enumerate() {
-            let b = band.brick_index(brick).expect("a vertex of the band");
-            let dense = sub_values.dense(mask, j);
-            for (z, &word) in mask.iter().enumerate() {
-                let mut bits = word;
-                while bits != 0 {
-                    let i = 64 * z + bits.trailing_zeros() as usize;
-                    bits &= bits - 1;
-                    self.set(&band.masks[b], b, i, dense[i]);
-                }
-            }
+        let mut slices = Vec::with_capacity(band.bricks.len());
+        let mut rest = self.values.as_mut_slice();
+        for w in self.starts.windows(2) {
+            let (head, tail) = rest.split_at_mut(w[1] - w[0]);
+            slices.push(head);
+            rest = tail;
         }
+        slices
+            .into_par_iter()
+            .with_max_len(TASK_BRICKS)
+            .enumerate()
+            .for_each(|(b, out)| {
+                let Some(j) = sub.brick_index(band.bricks[b]) else {
+                    return;
+                };
+                let from = sub_values.brick(j);
+                // Both packed in bit order: walk the band's bits, taking the sub-band's.
+                let (mut k, mut n) = (0, 0);
+                for (&word, &taken) in band.masks[b].iter().zip(&sub.masks[j]) {
+                    debug_assert!(taken & !word == 0, "a sub-band vertex outside the band");
+                    let mut bits = word;
+                    while bits != 0 {
+                        let bit = bits & bits.wrapping_neg();
+                        if taken & bit != 0 {
+                            out[k] = from[n];
+                            n += 1;
+                        }
+                        k += 1;
+                        bits &= bits - 1;
+                    }
+                }
+            });
     }
 
     /// Brick `b`'s values in word `z` of its mask `mask` (the plane of local z), by bit.
