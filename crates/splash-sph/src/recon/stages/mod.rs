@@ -8,6 +8,7 @@ pub(crate) mod field_sampling;
 pub(crate) mod flow_mean;
 pub(crate) mod lone_particles;
 pub(crate) mod normals;
+pub(crate) mod side_field;
 pub(crate) mod surface_particles;
 pub(crate) mod triangulation;
 pub(crate) mod vertex_correction;
