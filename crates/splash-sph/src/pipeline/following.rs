@@ -8,9 +8,10 @@
 //! frames beside it. At most five frames' particles (t−2 … t+2), three frames' sampled fields
 //! (t … t+2) and three prepared frames are held at once, with their triangles binned for
 //! distance queries (each frame's once, for both frames beside it), and one file read ahead
-//! while the last mesh is written, as frames meshed alone are. A frame without both neighbours (the ends of the selection, a gap in its frame
-//! numbers, a neighbour that fails or has no particles, particles that cannot be matched) is
-//! meshed from its own field and post-processed alone, with a warning.
+//! while the last mesh is written, as frames meshed alone are. A frame without both
+//! neighbours (the ends of the selection, a gap in its frame numbers, a neighbour that fails
+//! or has no particles, particles that cannot be matched) is meshed from its own field and
+//! post-processed alone, with a warning.
 
 use std::collections::btree_map::Entry;
 use std::collections::{BTreeMap, BTreeSet};

@@ -32,21 +32,29 @@ pub(crate) fn reconstruct(
 }
 
 /// The figures a frame's reconstruction starts from.
-fn start<'a>(
+fn first_stats(particles: &[Vec3], params: &Params) -> FrameStats {
+    FrameStats {
+        spacing: params.spacing,
+        cell: params.cell,
+        particles: particles.len(),
+        threads: rayon::current_num_threads(),
+        ..FrameStats::default()
+    }
+}
+
+/// The stages of a frame's reconstruction (with particles), and the grid of the full-grid
+/// engines (the others report it without allocating it).
+fn begin<'a>(
     particles: &[Vec3],
     params: &Params,
     observer: Option<&'a mut dyn Observer>,
-) -> Stages<'a> {
-    Stages::start(
-        FrameStats {
-            spacing: params.spacing,
-            cell: params.cell,
-            particles: particles.len(),
-            threads: rayon::current_num_threads(),
-            ..FrameStats::default()
-        },
-        observer,
-    )
+) -> (Stages<'a>, Result<Grid>) {
+    let mut stages = Stages::start(first_stats(particles, params), observer);
+    let grid = Grid::around(particles, params.cell, params.support);
+    if let Ok(g) = &grid {
+        stages.stats.grid = g.resolution();
+    }
+    (stages, grid)
 }
 
 /// [`reconstruct`], with `sides` the field averaged along the flow with the frames beside
@@ -64,15 +72,11 @@ pub(crate) fn reconstruct_along_flow(
         stages.stats.threads = rayon::current_num_threads();
         return narrow_band::gather_along_flow(own, sides, particles, stages);
     }
-    let mut stages = start(particles, params, observer);
     if particles.is_empty() {
-        return Ok(Reconstruction::new(TriMesh::default(), stages.stats));
+        let stats = first_stats(particles, params);
+        return Ok(Reconstruction::new(TriMesh::default(), stats));
     }
-    // The grid of the full-grid engines; the others report it without allocating it.
-    let grid = Grid::around(particles, params.cell, params.support);
-    if let Ok(g) = &grid {
-        stages.stats.grid = g.resolution();
-    }
+    let (mut stages, grid) = begin(particles, params, observer);
     if let Some(baseline) = params.baseline {
         return surface_following::reconstruct(particles, params, baseline, stages);
     }
@@ -107,11 +111,7 @@ pub(crate) fn sample(
     if particles.is_empty() || params.baseline.is_some() || !flows {
         return Ok(None);
     }
-    let mut stages = start(particles, params, observer);
-    let grid = Grid::around(particles, params.cell, params.support);
-    if let Ok(g) = &grid {
-        stages.stats.grid = g.resolution();
-    }
+    let (mut stages, grid) = begin(particles, params, observer);
     if params.engine == Engine::FullGather {
         stages.stats.planned_bytes =
             full_grid::check(params, &grid?, particles.len())?.unwrap_or(0);

@@ -78,8 +78,9 @@ pub fn neighbour_bins(mesh: &TriMesh, spacing: f32) -> SurfaceBins {
 /// Each neighbour's share of the mean. Measured with the fields averaged along the flow (each
 /// side then weighing 1/3 there), reach 3r (`splash bench temporal`, carried jitter,
 /// dense-dambreak 120–135 and B2): 0.4 gives 0.0159 and 0.0119 r, 1/3 (the three frames
-/// alike) 0.0159 and 0.0123 r, 0.45 0.0162 and 0.0118 r. Before the fields were averaged, 1/3 had read 0.0182 r on dense-dambreak against
-/// 0.0197 r with the binomial's 1/4 and 0.0206 r with 1/2 (the neighbours alone).
+/// alike) 0.0159 and 0.0123 r, 0.45 0.0162 and 0.0118 r. Before the fields were averaged,
+/// 1/3 had read 0.0182 r on dense-dambreak against 0.0197 r with the binomial's 1/4 and
+/// 0.0206 r with 1/2 (the neighbours alone).
 const WEIGHT: f32 = 0.4;
 
 /// How far, in spacings r, a neighbour's surface may lie from the carried vertex and still

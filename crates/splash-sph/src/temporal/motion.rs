@@ -122,8 +122,7 @@ enum IdIndex {
 
 impl IdIndex {
     fn new(ids: &[u32]) -> IdIndex {
-        let largest = ids.iter().copied().max().unwrap_or(0) as usize;
-        if largest < 4 * ids.len() + 1024 {
+        if let Some(largest) = dense_largest(ids) {
             let mut table = vec![u32::MAX; largest + 1];
             for (i, &id) in ids.iter().enumerate() {
                 table[id as usize] = i as u32;
@@ -147,6 +146,13 @@ impl IdIndex {
     }
 }
 
+/// The largest of `ids` where it is at most a few times their count (a table by id then
+/// costs memory like the ids themselves), else None.
+fn dense_largest(ids: &[u32]) -> Option<usize> {
+    let largest = ids.iter().copied().max().unwrap_or(0) as usize;
+    (largest < 4 * ids.len() + 1024).then_some(largest)
+}
+
 /// Unique integer ids, or why not.
 fn exact_ids(ids: &[f32]) -> std::result::Result<Vec<u32>, String> {
     if let Some(bad) = ids
@@ -167,8 +173,7 @@ fn exact_ids(ids: &[f32]) -> std::result::Result<Vec<u32>, String> {
 /// The least id that appears more than once in `ids`, if any: marked off in a bit per id
 /// where the ids are numbered densely (as [`IdIndex`] takes them), else found by sorting.
 fn repeated(ids: &[u32]) -> Option<u32> {
-    let largest = ids.iter().copied().max().unwrap_or(0) as usize;
-    if largest < 4 * ids.len() + 1024 {
+    if let Some(largest) = dense_largest(ids) {
         let mut seen = vec![0u64; largest / 64 + 1];
         let mut least = None;
         for &id in ids {

@@ -118,8 +118,8 @@ pub struct PostConfig {
     /// (default false): a low-pass in time along the flow (issue 38). Frames without both
     /// neighbours (a lone file, the ends of a sequence, a gap, a neighbour that fails) are
     /// meshed and post-processed alone. Not with `raw`. Experimental: carried jitter against
-    /// the default's on dense-dambreak 0.0224 → 0.0157 r, on B2 (a ball thrown into a pool)
-    /// 0.0185 → 0.0118 r, for about 1.9× the wall time, short of the issue's targets.
+    /// the default's on dense-dambreak 0.0224 → 0.0145 r, on B2 (a ball thrown into a pool)
+    /// 0.0185 → 0.0123 r, for about 1.8× the wall time, short of the issue's targets.
     pub temporal: bool,
     /// Seconds between frames, to carry particles by their velocity when the files have no
     /// particle ids (default none: such sequences are post-processed frame by frame).

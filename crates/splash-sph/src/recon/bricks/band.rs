@@ -82,7 +82,7 @@ impl Band {
         budget(count)?;
         let len = usize::try_from(count).unwrap_or(usize::MAX);
         if len == 0 {
-            return Ok(Band::from_parts(cell, Vec::new(), Vec::new()));
+            return Ok(Band::from_masks(cell, Vec::new(), Vec::new()));
         }
         // Brick coordinates from the lowest brick, in as few bits as the band's extent needs:
         // most bands sort 8-byte keys instead of 16-byte ones.
@@ -129,7 +129,7 @@ impl Band {
                 }
             }
         }
-        Ok(Band::from_parts(cell, bricks, masks))
+        Ok(Band::from_masks(cell, bricks, masks))
     }
 
     /// First and last grid vertex of [`Band::full`]'s box, without building it.
@@ -144,7 +144,7 @@ impl Band {
         let mut bricks: Vec<IVec3> = vertices.iter().map(|&v| brick_of(v)).collect();
         bricks.sort_unstable_by_key(|b| (b.z, b.y, b.x));
         bricks.dedup();
-        let mut band = Band::from_parts(cell, bricks.clone(), vec![[0; 8]; bricks.len()]);
+        let mut band = Band::from_masks(cell, bricks.clone(), vec![[0; 8]; bricks.len()]);
         for &v in vertices {
             let b = band.index[&brick_of(v)] as usize;
             let l = v - brick_of(v) * BRICK;
@@ -155,10 +155,6 @@ impl Band {
 
     /// A band of `bricks` (sorted by (z, y, x)) with their vertex `masks`.
     pub fn from_masks(cell: f32, bricks: Vec<IVec3>, masks: Vec<[u64; 8]>) -> Band {
-        Band::from_parts(cell, bricks, masks)
-    }
-
-    pub(super) fn from_parts(cell: f32, bricks: Vec<IVec3>, masks: Vec<[u64; 8]>) -> Band {
         let index = bricks
             .iter()
             .enumerate()
@@ -278,7 +274,7 @@ fn band_of_pairs<K: PairKey>(
             (brick, mask)
         })
         .unzip();
-    Ok(Band::from_parts(cell, bricks, masks))
+    Ok(Band::from_masks(cell, bricks, masks))
 }
 
 /// Grid vertices in the box of half-width `w` around `p`.

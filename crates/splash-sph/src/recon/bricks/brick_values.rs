@@ -49,12 +49,7 @@ impl BrickValues {
             format!("the field values of {total} band vertices")
         })?;
         let mut slices: Vec<&mut [f32]> = budget::try_vec(band.bricks.len(), what)?;
-        let mut rest = values.as_mut_slice();
-        for w in starts.windows(2) {
-            let (head, tail) = rest.split_at_mut(w[1] - w[0]);
-            slices.push(head);
-            rest = tail;
-        }
+        slices.extend(brick_slices(&starts, &mut values));
         // Bricks differ in cost a hundredfold: small tasks keep both threads busy to the end.
         let extras = slices
             .into_par_iter()
@@ -100,14 +95,8 @@ impl BrickValues {
     /// Sets the values of `band`'s vertices that `sub` holds (each of them in `band`) to
     /// theirs in `sub_values`, brick by brick in parallel.
     pub fn overwrite(&mut self, band: &Band, sub: &Band, sub_values: &BrickValues) {
-        let mut slices = Vec::with_capacity(band.bricks.len());
-        let mut rest = self.values.as_mut_slice();
-        for w in self.starts.windows(2) {
-            let (head, tail) = rest.split_at_mut(w[1] - w[0]);
-            slices.push(head);
-            rest = tail;
-        }
-        slices
+        brick_slices(&self.starts, &mut self.values)
+            .collect::<Vec<_>>()
             .into_par_iter()
             .with_max_len(TASK_BRICKS)
             .enumerate()
@@ -167,6 +156,19 @@ impl BrickValues {
     pub fn heap_bytes(&self) -> usize {
         self.starts.capacity() * size_of::<usize>() + self.values.capacity() * size_of::<f32>()
     }
+}
+
+/// `values` cut into each brick's values (`starts`: where each brick's values begin).
+fn brick_slices<'a>(
+    starts: &'a [usize],
+    values: &'a mut [f32],
+) -> impl Iterator<Item = &'a mut [f32]> + 'a {
+    let mut rest = values;
+    starts.windows(2).map(move |w| {
+        let (head, tail) = std::mem::take(&mut rest).split_at_mut(w[1] - w[0]);
+        rest = tail;
+        head
+    })
 }
 
 /// Bricks per task at most.
@@ -229,7 +231,7 @@ pub fn merge(
         })
         .collect();
     let bricks = sources.iter().map(|s| s.0).collect();
-    let merged = Band::from_parts(band.cell, bricks, masks);
+    let merged = Band::from_masks(band.cell, bricks, masks);
     let merged_values = BrickValues::sample(
         &merged,
         || (),

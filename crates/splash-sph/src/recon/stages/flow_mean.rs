@@ -139,7 +139,7 @@ impl<'a> FlowMean<'a> {
         let carried = self.carried(sub);
         // Per vertex and side, the corners' weighted values that the side's own sampling
         // gave; the corners it left out or never reached (few) are sampled below.
-        let known: Vec<(Vec<[f32; 2]>, Vec<Miss>)> = carried
+        let mut known: Vec<(Vec<[f32; 2]>, Vec<Miss>)> = carried
             .par_iter()
             .with_max_len(TASK_BRICKS)
             .map_init(
@@ -189,6 +189,13 @@ impl<'a> FlowMean<'a> {
         });
         let [back, ahead] = sampled;
         let sampled = [back?, ahead?];
+        known.par_iter_mut().for_each(|(sums, misses)| {
+            for m in misses.iter() {
+                let (corners, values) = &sampled[m.side as usize];
+                sums[m.vertex as usize][m.side as usize] +=
+                    m.weight * value_at(corners, values, m.corner);
+            }
+        });
         BrickValues::sample(
             sub,
             || (),
@@ -197,14 +204,7 @@ impl<'a> FlowMean<'a> {
                     .brick_index(sub.bricks[j])
                     .expect("a band vertex's brick");
                 let mut out = values.dense(&band.masks[b], b);
-                let (sums, misses) = &known[j];
-                let mut sums = sums.clone();
-                for m in misses {
-                    let (corners, values) = &sampled[m.side as usize];
-                    sums[m.vertex as usize][m.side as usize] +=
-                        m.weight * value_at(corners, values, m.corner);
-                }
-                for (&(v, _), [back, ahead]) in carried[j].iter().zip(sums) {
+                for (&(v, _), &[back, ahead]) in carried[j].iter().zip(&known[j].0) {
                     let i = local_index(v - sub.bricks[j] * BRICK);
                     out[i] += ((back - out[i]) + (ahead - out[i])) * SIDE_WEIGHT;
                 }
