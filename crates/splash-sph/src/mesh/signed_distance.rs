@@ -3,10 +3,11 @@
 //! §5.1.5), signed by the angle-weighted pseudonormal of the feature it lies on — face, edge or
 //! vertex (Bærentzen & Aanæs 2005, *Signed distance computation using the angle weighted
 //! pseudonormal*), which is exact for any closed manifold mesh. Negative inside. The triangles
-//! are binned in a hash grid of cells a quarter of the reach wide, searched shell by shell
-//! around the query until no farther cell can hold a nearer triangle, so that a point near the
-//! surface visits a few dozen triangles, and the structure grows with the surface, not the
-//! volume it encloses.
+//! are binned in cells about a triangle and a half wide, searched shell by shell around the
+//! query until no farther cell can hold a nearer triangle, so that a point near the surface
+//! visits a few dozen triangles. The cells are grouped in bricks of 4³ that a hash map finds,
+//! so that the structure grows with the surface, not the volume it encloses, and a run of
+//! nearby queries ([`Cursor`]) hashes a brick once.
 
 use std::borrow::Cow;
 
@@ -32,10 +33,13 @@ pub struct SurfaceBins {
     /// The bins' edge, and how many shells of bins cover the reach.
     cell: f32,
     shells: i32,
-    /// The cells' numbering: [`CellKeys`].
-    keys: CellKeys,
-    /// Triangles by cell: a range of `binned` per non-empty cell.
-    cells: FxHashMap<u32, (u32, u32)>,
+    /// The bricks' numbering ([`CellKeys`] of the bricks, 4³ bins each), and each occupied
+    /// brick's place in `starts`: a query hashes a brick once for the bins around it.
+    bricks: CellKeys,
+    places: FxHashMap<u32, u32>,
+    /// Per occupied brick, where each of its bins' triangles start in `binned` (the bin after
+    /// it, or the next brick's first, says where they end).
+    starts: Vec<u32>,
     binned: Vec<u32>,
 }
 
@@ -68,6 +72,16 @@ struct Nearest {
     /// The triangles tied (a triangle binned in several cells is met again), in the order met.
     faces: [(u32, Feature); 16],
     count: usize,
+}
+
+impl Nearest {
+    /// None yet: every triangle is nearer.
+    const NONE: Nearest = Nearest {
+        d2: f32::INFINITY,
+        point: Vec3::ZERO,
+        faces: [(0, Feature::Face); 16],
+        count: 0,
+    };
 }
 
 impl<'a> SignedDistance<'a> {
@@ -115,10 +129,10 @@ impl SurfaceBins {
             .fold((Vec3::MAX, Vec3::MIN), |(lo, hi), &v| {
                 (lo.min(v), hi.max(v))
             });
-        let (keys, cell) = CellKeys::fitting(bounds, cell);
+        let (bricks, cell) = CellKeys::fitting_bricks(bounds, cell);
         let shells = (reach / cell).ceil() as i32 + 1;
-        // `cell << 32 | triangle` for every cell a triangle's box meets, in triangle order,
-        // then sorted by cell, stably: each cell lists its triangles in order.
+        // `bin key << 32 | triangle` for every bin a triangle's box meets, in triangle order,
+        // then sorted by bin, stably: each bin lists its triangles in order.
         let mut entries: Vec<u64> = triangles
             .par_chunks(CHUNK)
             .enumerate()
@@ -134,7 +148,7 @@ impl SurfaceBins {
                     for z in lo.z..=hi.z {
                         for y in lo.y..=hi.y {
                             for x in lo.x..=hi.x {
-                                let key = keys.packed(IVec3::new(x, y, z));
+                                let key = bin_key(&bricks, IVec3::new(x, y, z));
                                 entries.push(u64::from(key) << 32 | t);
                             }
                         }
@@ -145,15 +159,26 @@ impl SurfaceBins {
             .collect::<Vec<_>>()
             .concat();
         radsort::sort_by_key(&mut entries, |&e| (e >> 32) as u32);
-        let mut cells = FxHashMap::default();
-        cells.reserve(entries.len() / 8);
-        let mut start = 0;
-        for (i, &e) in entries.iter().enumerate() {
-            if i + 1 == entries.len() || entries[i + 1] >> 32 != e >> 32 {
-                cells.insert((e >> 32) as u32, (start as u32, i as u32 + 1));
-                start = i + 1;
+        // The occupied bricks in key order, and how many triangles each bin lists.
+        let mut places = FxHashMap::default();
+        let mut starts: Vec<u32> = Vec::new();
+        let mut brick = None;
+        for &e in &entries {
+            let key = (e >> 32) as u32;
+            if brick != Some(key >> 6) {
+                brick = Some(key >> 6);
+                places.insert(key >> 6, (starts.len() / BRICK_BINS) as u32);
+                starts.resize(starts.len() + BRICK_BINS, 0);
             }
+            let last = starts.len() - BRICK_BINS;
+            starts[last + (key & 63) as usize] += 1;
         }
+        // Counts to starts, the total last.
+        let mut sum = 0;
+        for s in starts.iter_mut() {
+            (*s, sum) = (sum, sum + *s);
+        }
+        starts.push(sum);
         // Collected afresh, not in place: in place would keep the entries' larger buffer.
         let binned: Vec<u32> = entries.iter().map(|&e| e as u32).collect();
         drop(entries);
@@ -161,11 +186,54 @@ impl SurfaceBins {
             reach,
             cell,
             shells,
-            keys,
-            cells,
+            bricks,
+            places,
+            starts,
             binned,
         }
     }
+
+    /// The triangles binned at bin `c`, the brick of the last bin asked for kept in `last`
+    /// (the bins a query visits mostly share one).
+    #[inline]
+    fn at(&self, c: IVec3, last: &mut Option<(IVec3, Option<u32>)>) -> &[u32] {
+        let brick = c >> 2;
+        let place = match *last {
+            Some((b, place)) if b == brick => place,
+            _ => {
+                let place = self
+                    .bricks
+                    .key(brick)
+                    .and_then(|k| self.places.get(&k).copied());
+                *last = Some((brick, place));
+                place
+            }
+        };
+        let Some(place) = place else { return &[] };
+        let i = place as usize * BRICK_BINS + local_bin(c);
+        &self.binned[self.starts[i] as usize..self.starts[i + 1] as usize]
+    }
+}
+
+/// Where a run of queries ([`SignedDistance::at_from`]) last looked: a brick of bins.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Cursor {
+    last: Option<(IVec3, Option<u32>)>,
+}
+
+/// Bins to a brick: 4³.
+const BRICK_BINS: usize = 64;
+
+/// Bin `c`'s place in its brick.
+fn local_bin(c: IVec3) -> usize {
+    let l = c & 3;
+    (l.x | l.y << 2 | l.z << 4) as usize
+}
+
+/// Bin `c`'s key: its brick's, then its place in it, so that sorting by key groups each
+/// brick's bins.
+fn bin_key(bricks: &CellKeys, c: IVec3) -> u32 {
+    bricks.packed(c >> 2) << 6 | local_bin(c) as u32
 }
 
 /// Triangles a task bins at once.
@@ -176,6 +244,12 @@ impl SignedDistance<'_> {
     /// lies within the reach. The triangles are visited in a fixed order, so that the answer
     /// does not depend on the thread.
     pub fn at(&self, p: Vec3) -> Option<f32> {
+        self.at_from(p, &mut Cursor::default())
+    }
+
+    /// [`at`](Self::at) for a run of nearby points: `cursor` keeps the brick of bins the last
+    /// query ended in.
+    pub fn at_from(&self, p: Vec3, cursor: &mut Cursor) -> Option<f32> {
         let bins = &*self.bins;
         let home = cell_of(p, bins.cell);
         // How far p lies inside its home cell: the searched cells reach this much beyond
@@ -185,7 +259,7 @@ impl SignedDistance<'_> {
             .min(corner + Vec3::splat(bins.cell) - p)
             .min_element()
             .max(0.0);
-        let mut best: Option<Nearest> = None;
+        let mut best = Nearest::NONE;
         for shell in 0..=bins.shells {
             for dz in -shell..=shell {
                 for dy in -shell..=shell {
@@ -201,22 +275,17 @@ impl SignedDistance<'_> {
                         // A cell whose box is farther than the nearest triangle holds no nearer one.
                         let lo = key.as_vec3() * bins.cell;
                         let gap = (lo - p).max(p - (lo + bins.cell)).max(Vec3::ZERO);
-                        if best.is_some_and(|b| gap.length_squared() > b.d2 * (1.0 + TIE)) {
+                        if gap.length_squared() > best.d2 * (1.0 + TIE) {
                             continue;
                         }
-                        let cell = bins.keys.key(key).and_then(|k| bins.cells.get(&k));
-                        if let Some(&(s, e)) = cell {
-                            for &t in &bins.binned[s as usize..e as usize] {
-                                let tri = self.triangles[t as usize];
-                                if best.is_some_and(|n| {
-                                    box_gap(p, tri, self.vertices)
-                                        > n.d2 * (1.0 + TIE) + f32::MIN_POSITIVE
-                                }) {
-                                    continue;
-                                }
-                                let t = std::iter::once(t);
-                                nearest_in(p, t, self.vertices, self.triangles, &mut best);
+                        for &t in bins.at(key, &mut cursor.last) {
+                            let tri = self.triangles[t as usize];
+                            let near = best.d2 * (1.0 + TIE) + f32::MIN_POSITIVE;
+                            if box_gap(p, tri, self.vertices) > near {
+                                continue;
                             }
+                            let t = std::iter::once(t);
+                            nearest_in(p, t, self.vertices, self.triangles, &mut best);
                         }
                     }
                 }
@@ -224,12 +293,12 @@ impl SignedDistance<'_> {
             // Cells beyond this shell lie at least `shell` cells and `inside` away: past the
             // reach, or past the nearest triangle, none can give an answer.
             let bound = shell as f32 * bins.cell + inside;
-            if bound > bins.reach || best.is_some_and(|b| b.d2 * (1.0 + TIE) < bound * bound) {
+            if bound > bins.reach || best.d2 * (1.0 + TIE) < bound * bound {
                 break;
             }
         }
-        let b = best?;
-        (b.d2.sqrt() <= bins.reach).then(|| signed(p, &b, self.vertices, self.triangles))
+        (best.count > 0 && best.d2.sqrt() <= bins.reach)
+            .then(|| signed(p, &best, self.vertices, self.triangles))
     }
 }
 
@@ -242,9 +311,9 @@ pub fn signed_distance_among(
     vertices: &[Vec3],
     triangles: &[[u32; 3]],
 ) -> Option<f32> {
-    let mut best = None;
+    let mut best = Nearest::NONE;
     nearest_in(p, candidates, vertices, triangles, &mut best);
-    best.map(|b| signed(p, &b, vertices, triangles))
+    (best.count > 0).then(|| signed(p, &best, vertices, triangles))
 }
 
 /// The unsigned distance from `p` to the triangle `tri` of `vertices`.
@@ -294,35 +363,31 @@ fn nearest_in(
     candidates: impl IntoIterator<Item = u32>,
     vertices: &[Vec3],
     triangles: &[[u32; 3]],
-    best: &mut Option<Nearest>,
+    best: &mut Nearest,
 ) {
     for t in candidates {
         let tri = triangles[t as usize];
         let (q, feature) = closest_on_triangle(p, tri, vertices);
         let d2 = p.distance_squared(q);
-        match best {
-            Some(n) if d2 > n.d2 * (1.0 + TIE) + f32::MIN_POSITIVE => {}
-            Some(n) if d2 >= n.d2 * (1.0 - TIE) => {
-                if n.faces[..n.count].iter().any(|&(f, _)| f == t) || n.count == n.faces.len() {
-                    continue;
-                }
-                n.faces[n.count] = (t, feature);
-                n.count += 1;
-                if d2 < n.d2 {
-                    n.d2 = d2;
-                    n.point = q;
-                }
+        if d2 > best.d2 * (1.0 + TIE) + f32::MIN_POSITIVE {
+            continue;
+        }
+        if d2 >= best.d2 * (1.0 - TIE) {
+            let tied = &best.faces[..best.count];
+            if tied.iter().any(|&(f, _)| f == t) || best.count == best.faces.len() {
+                continue;
             }
-            _ => {
-                let mut faces = [(0, Feature::Face); 16];
-                faces[0] = (t, feature);
-                *best = Some(Nearest {
-                    d2,
-                    point: q,
-                    faces,
-                    count: 1,
-                })
+            best.faces[best.count] = (t, feature);
+            best.count += 1;
+            if d2 < best.d2 {
+                best.d2 = d2;
+                best.point = q;
             }
+        } else {
+            best.faces[0] = (t, feature);
+            best.count = 1;
+            best.d2 = d2;
+            best.point = q;
         }
     }
 }

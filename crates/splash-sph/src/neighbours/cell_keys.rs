@@ -22,16 +22,33 @@ impl CellKeys {
     /// meets, or None when it needs more than 32 bits.
     pub(crate) fn new((lo, hi): (Vec3, Vec3), cell: f32) -> Option<CellKeys> {
         // The floor is monotone: the cells of the lowest and highest coordinates.
-        let low = cell_of(lo, cell);
-        let high = cell_of(hi, cell).max(low);
+        CellKeys::spanning(cell_of(lo, cell), cell_of(hi, cell), 32)
+    }
+
+    /// The numbering of the cells from `low` to `high` in at most `bits` bits, if they fit.
+    fn spanning(low: IVec3, high: IVec3, bits: u32) -> Option<CellKeys> {
+        let high = high.max(low);
         let span = (high.as_i64vec3() - low.as_i64vec3()).max(glam::I64Vec3::ZERO);
-        let bits = span.to_array().map(|s| 64 - (s as u64).leading_zeros());
-        (bits.iter().sum::<u32>() <= 32).then_some(CellKeys {
+        let widths = span.to_array().map(|s| 64 - (s as u64).leading_zeros());
+        (widths.iter().sum::<u32>() <= bits).then_some(CellKeys {
             low,
             high,
-            y: bits[0],
-            z: bits[0] + bits[1],
+            y: widths[0],
+            z: widths[0] + widths[1],
         })
+    }
+
+    /// The numbering of the bricks of 4³ cells (a cell c in brick c >> 2) over the box
+    /// `bounds`, in 26 bits so that a cell's place in its brick fits beside, and the cells'
+    /// width: `cell`, doubled until they fit.
+    pub(crate) fn fitting_bricks((lo, hi): (Vec3, Vec3), mut cell: f32) -> (CellKeys, f32) {
+        loop {
+            let bricks = CellKeys::spanning(cell_of(lo, cell) >> 2, cell_of(hi, cell) >> 2, 26);
+            match bricks {
+                Some(keys) => return (keys, cell),
+                None => cell *= 2.0,
+            }
+        }
     }
 
     /// The numbering of cells at least `cell` wide over the box `bounds`, and their width:

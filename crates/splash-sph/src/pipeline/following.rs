@@ -1,14 +1,15 @@
 //! A sequence whose surfaces follow the fluid (`post.temporal`, issue 38): frame t's field is
 //! averaged with those of the frames beside it where the fluid carries each vertex
 //! (`recon/stages/flow_mean`), and its post-processed surface is moved towards its
-//! neighbours' surfaces carried to its time ([`follow_fluid`]). A frame's neighbours are
+//! neighbours' surfaces carried to its time ([`follow_carried`]). A frame's neighbours are
 //! reconstructed too, also where another job writes them (`--shard`) or their output exists
 //! (`skip_existing`), so that every job writes the bytes one run over the whole sequence
 //! writes. Each frame's field is sampled once, for its own surface and the means of both
-//! frames beside it. At most five frames' particles (t−2 … t+2), three frames' sampled fields
-//! (t … t+2) and three prepared frames are held at once, with their triangles binned for
-//! distance queries (each frame's once, for both frames beside it), and one file read ahead
-//! while the last mesh is written, as frames meshed alone are. A frame without both
+//! frames beside it, while the frame two before it is reconstructed (on the same threads: each
+//! fills what the other leaves idle). At most six frames' particles (t−2 … t+3), four frames'
+//! sampled fields (t … t+3) and three prepared frames are held at once, with their triangles
+//! binned for distance queries (each frame's once, for both frames beside it), and one file
+//! read ahead while the last mesh is written, as frames meshed alone are. A frame without both
 //! neighbours (the ends of the selection, a gap in its frame numbers, a neighbour that fails
 //! or has no particles, particles that cannot be matched) is meshed from its own field and
 //! post-processed alone, with a warning.
@@ -24,7 +25,7 @@ use crate::error::{Error, Result};
 use crate::frames::path_frame_number;
 use crate::mesh::SurfaceBins;
 use crate::recon::{Sampled, Sides};
-use crate::temporal::{Neighbour, follow_fluid, neighbour_bins};
+use crate::temporal::{carry, follow_carried, neighbour_bins};
 
 /// Runs the plan's frames of the selection `inputs`, each following the fluid from its
 /// neighbours, the next file read and the last mesh written on threads of their own
@@ -73,7 +74,7 @@ pub(super) fn run_following(
             if held.contains_key(&j) {
                 continue;
             }
-            for i in near(j, inputs.len()) {
+            for i in needs(j, inputs.len()) {
                 if let Entry::Vacant(slot) = staged.entry(i) {
                     let read = reads.next();
                     slot.insert(
@@ -173,12 +174,30 @@ fn prepare(
         moves: [back, ahead],
     });
     let own_field = fields.get(&j).and_then(Option::as_ref);
-    pipeline.reconstruct(input, own, own_field, sides.as_ref(), progress)
+    // The field two frames on is sampled meanwhile, ready for the next frame's mean.
+    let ahead = j + 2;
+    let ahead_particles = match staged.get(&ahead) {
+        Some(Ok(Staged::Particles(p))) if !fields.contains_key(&ahead) => Some(p),
+        _ => None,
+    };
+    let Some(later) = ahead_particles else {
+        return pipeline.reconstruct(input, own, own_field, sides.as_ref(), progress);
+    };
+    let own_fields = (own_field, sides.as_ref());
+    let (ready, sampled) = pipeline.reconstruct_sampling(input, own, own_fields, later, progress);
+    fields.insert(ahead, sampled);
+    ready
 }
 
 /// The frames of the selection that making frame `at` needs prepared: it and those beside it.
 fn near(at: usize, frames: usize) -> std::ops::Range<usize> {
     at.saturating_sub(1)..(at + 2).min(frames)
+}
+
+/// The frames whose particles preparing frame `j` needs: it, those beside it, and the frame
+/// two on, whose field is sampled meanwhile.
+fn needs(j: usize, frames: usize) -> impl Iterator<Item = usize> {
+    near(j, frames).chain(Some(j + 2).filter(|&i| i < frames))
 }
 
 /// Whether frame `j` is still held prepared when frame `at` is made (frames are made in order).
@@ -202,7 +221,7 @@ fn read_order(positions: &[usize], frames: usize) -> Vec<usize> {
         held.retain(|&j| kept(j, at));
         for j in near(at, frames) {
             if held.insert(j) {
-                order.extend(near(j, frames).filter(|&i| staged.insert(i)));
+                order.extend(needs(j, frames).filter(|&i| staged.insert(i)));
             }
         }
     }
@@ -242,38 +261,40 @@ fn follow(
     let frame_time = pipeline.frame_time();
     let followed = neighbour(at.checked_sub(1), "before").and_then(|before| {
         let after = neighbour(Some(at + 1), "after")?;
-        let mut mesh = own.mesh.clone();
         let sides = [(at - 1, before), (at + 1, after)];
-        for (j, p) in sides {
-            bins.entry(j)
-                .or_insert_with(|| neighbour_bins(&p.mesh, spacing));
-        }
-        let neighbours = sides.map(|(j, p)| Neighbour {
-            mesh: &p.mesh,
-            bins: &bins[&j],
-            motion: &p.motion,
+        let missing: Vec<(usize, &Prepared)> = sides
+            .into_iter()
+            .filter(|(j, _)| !bins.contains_key(j))
+            .collect();
+        // The new neighbour's triangles are binned while the fluid carries the vertices: the
+        // binning's sort runs on one thread.
+        let reconstructor = pipeline.prepared_reconstructor();
+        let (carried, built) = reconstructor.install(|| {
+            rayon::join(
+                || {
+                    let motions = [&*before.motion, &*after.motion];
+                    carry(&own.mesh, &own.motion, motions, frame_time, spacing, cell)
+                },
+                || {
+                    missing
+                        .iter()
+                        .map(|&(j, p)| (j, neighbour_bins(&p.mesh, spacing)))
+                        .collect::<Vec<_>>()
+                },
+            )
         });
-        pipeline
-            .prepared_reconstructor()
-            .install(|| {
-                follow_fluid(
-                    &mut mesh,
-                    &own.close,
-                    &own.motion,
-                    neighbours,
-                    frame_time,
-                    spacing,
-                    cell,
-                )
+        bins.extend(built);
+        let carried = carried.map_err(|e| e.to_string())?.ok_or_else(|| {
+            own.ids_warning.clone().unwrap_or_else(|| {
+                "the particles have no ids (and post.frame_time is not set to carry them by \
+                 their velocities)"
+                    .to_string()
             })
-            .map_err(|e| e.to_string())?
-            .ok_or_else(|| {
-                own.ids_warning.clone().unwrap_or_else(|| {
-                    "the particles have no ids (and post.frame_time is not set to carry them \
-                     by their velocities)"
-                        .to_string()
-                })
-            })?;
+        })?;
+        let surfaces = sides.map(|(j, p)| (&p.mesh, &bins[&j]));
+        let mut mesh = own.mesh.clone();
+        reconstructor
+            .install(|| follow_carried(&mut mesh, &own.close, carried, surfaces, spacing, cell));
         Ok(mesh)
     });
     followed.unwrap_or_else(|why| {

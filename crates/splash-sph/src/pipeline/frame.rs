@@ -26,7 +26,7 @@ use crate::io::{
 use crate::iso::{self, IsoRequest};
 use crate::level_set::LevelSet;
 use crate::mesh::TriMesh;
-use crate::recon::{Sampled, Sides};
+use crate::recon::{Reconstruction, Sampled, Sides};
 use crate::reconstructor::Reconstructor;
 use crate::report::FrameStats;
 use crate::spacing::estimate_spacing;
@@ -321,21 +321,47 @@ impl FramePipeline {
         let mut observer = progress.observer();
         let rec = reconstructor
             .reconstruct_along_flow(&motion.positions, own, sides, Some(observer.as_mut()))
-            .map_err(|e| e.context("reconstruction failed"))?;
+            .map_err(|e| e.context("reconstruction failed"));
         drop(observer);
-        let mut stats = rec.stats;
-        progress.measured(&mut stats);
-        stats.particles_outside_box = particles.outside_box;
-        stats.timings.read = particles.read;
-        Ok(Ready::Surface(Prepared {
-            mesh: rec.mesh,
-            close: rec.close,
-            motion: Arc::clone(motion),
-            ids_warning: particles.ids_warning.clone(),
-            wanted: particles.wanted.clone(),
-            stats,
-            time: particles.time,
-        }))
+        Ok(ready(rec?, particles, progress))
+    }
+
+    /// [`reconstruct`](Self::reconstruct), and meanwhile on the same threads the
+    /// [`sample`](Self::sample) of the frame `ahead` that a sequence needs next: neither keeps
+    /// both threads busy throughout (a frame's stages are not all parallel), so each fills what
+    /// the other leaves. The sample's error is left to its own frame to report.
+    pub(super) fn reconstruct_sampling(
+        &mut self,
+        input: &Path,
+        particles: &FrameParticles,
+        (own, sides): (Option<&Sampled>, Option<&Sides<'_>>),
+        ahead: &FrameParticles,
+        progress: &mut dyn Progress,
+    ) -> (Result<Ready>, Option<Sampled>) {
+        let motion = &particles.motion;
+        if let Err(e) = self.sequence_reconstructor(input, &motion.positions, progress) {
+            return (Err(e), None);
+        }
+        let reconstructor = self.prepared_reconstructor();
+        let (mut observer, mut beside) = (progress.observer(), progress.observer());
+        let (rec, sampled) = reconstructor.install(|| {
+            rayon::join(
+                || {
+                    let positions = &motion.positions;
+                    reconstructor.reconstruct_along_flow(
+                        positions,
+                        own,
+                        sides,
+                        Some(&mut *observer),
+                    )
+                },
+                || reconstructor.sample(&ahead.motion.positions, Some(&mut *beside)),
+            )
+        });
+        drop((observer, beside));
+        let rec = rec.map_err(|e| e.context("reconstruction failed"));
+        let ready = rec.map(|rec| ready(rec, particles, progress));
+        (ready, sampled.ok().flatten())
     }
 
     /// A prepared frame made whole with `mesh` (its own surface, or that surface moved): its
@@ -499,6 +525,24 @@ impl FramePipeline {
         self.spacing = Some(r);
         Ok(r)
     }
+}
+
+/// Frame `particles`' reconstruction `rec` as a prepared frame, with what only the caller
+/// measures (`progress`).
+fn ready(rec: Reconstruction, particles: &FrameParticles, progress: &mut dyn Progress) -> Ready {
+    let mut stats = rec.stats;
+    progress.measured(&mut stats);
+    stats.particles_outside_box = particles.outside_box;
+    stats.timings.read = particles.read;
+    Ready::Surface(Prepared {
+        mesh: rec.mesh,
+        close: rec.close,
+        motion: Arc::clone(&particles.motion),
+        ids_warning: particles.ids_warning.clone(),
+        wanted: particles.wanted.clone(),
+        stats,
+        time: particles.time,
+    })
 }
 
 /// Reads frames: the particles in the particle box and their attributes. Holds only settings,

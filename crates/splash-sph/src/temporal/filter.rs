@@ -7,7 +7,7 @@ use rayon::prelude::*;
 use super::motion::{FrameMotion, mean_motions};
 use crate::error::Result;
 use crate::mesh::post::put_back_near;
-use crate::mesh::{SignedDistance, SurfaceBins, TriMesh, area_weighted_normals};
+use crate::mesh::{Cursor, SignedDistance, SurfaceBins, TriMesh, area_weighted_normals};
 
 /// Frame t's neighbours for [`follow_fluid`]: a neighbour frame's mesh and particles.
 #[derive(Debug, Clone, Copy)]
@@ -100,13 +100,9 @@ const MAX_MOVE: f32 = 0.2;
 /// Moves the vertices of `mesh` (frame t, with `own` its particles) towards the surfaces of
 /// `neighbours` (frames t−1 and t+1) carried to time t by the displacements of `own`'s
 /// particles to each (matched by id, else velocity × `frame_time`), as [`Followed`] says, and
-/// recomputes its normals when it has them. `spacing`: r; the motion's kernel has support 2r,
-/// the neighbours count within 3r. `close`: per vertex, whether another side of the
-/// surface faces it within the post-processing's clearance (at least r/2: more than twice the
-/// farthest a vertex moves here, 0.2 r); with cells up to r only their faces and those near
-/// a fold are tested for crossings, as the post-processing's guard tests them, else (empty, or
-/// larger cells) every face. None, with nothing moved, when the particles cannot be carried
-/// (no ids, and no velocities with a frame time).
+/// recomputes its normals when it has them: [`carry`], then [`follow_carried`]. None, with
+/// nothing moved, when the particles cannot be carried (no ids, and no velocities with a frame
+/// time).
 pub fn follow_fluid(
     mesh: &mut TriMesh,
     close: &[bool],
@@ -116,35 +112,91 @@ pub fn follow_fluid(
     spacing: f32,
     cell: f32,
 ) -> Result<Option<Followed>> {
+    let motions = neighbours.map(|n| n.motion);
+    let Some(carried) = carry(mesh, own, motions, frame_time, spacing, cell)? else {
+        return Ok(None);
+    };
+    let surfaces = neighbours.map(|n| (n.mesh, n.bins));
+    Ok(Some(follow_carried(
+        mesh, close, carried, surfaces, spacing, cell,
+    )))
+}
+
+/// Frame t's vertices as [`carry`] carries them to the frames beside it.
+pub struct Carried {
+    /// The mesh's area-weighted normals.
+    normals: Vec<Vec3>,
+    /// Per side (t−1, t+1), the fluid's mean displacement at each vertex, if a particle is
+    /// near enough to tell.
+    motions: Vec<Vec<Option<Vec3>>>,
+}
+
+/// Where the fluid carries the vertices of `mesh` (frame t, `own` its particles) to the times
+/// of the frames whose particles are `sides` (t−1, t+1): the kernel mean (support 2r,
+/// `spacing` r) of the displacements of `own`'s particles, matched by id, else velocity ×
+/// `frame_time`. None when the particles cannot be carried.
+pub fn carry(
+    mesh: &TriMesh,
+    own: &FrameMotion,
+    sides: [&FrameMotion; 2],
+    frame_time: Option<f32>,
+    spacing: f32,
+    cell: f32,
+) -> Result<Option<Carried>> {
     let (Some(back), Some(ahead)) = (
-        own.displacements(neighbours[0].motion, -1, frame_time),
-        own.displacements(neighbours[1].motion, 1, frame_time),
+        own.displacements(sides[0], -1, frame_time),
+        own.displacements(sides[1], 1, frame_time),
     ) else {
         return Ok(None);
     };
     if mesh.triangles.is_empty() {
-        return Ok(Some(Followed::default()));
+        return Ok(Some(Carried {
+            normals: Vec::new(),
+            motions: Vec::new(),
+        }));
     }
     let normals = area_weighted_normals(&mesh.vertices, &mesh.triangles);
-    let (support, reach) = (2.0 * spacing, REACH * spacing);
-    let mut offsets = vec![0.0f32; mesh.vertices.len()];
     let motions = mean_motions(
         &mesh.vertices,
         &own.positions,
         &[&back, &ahead],
-        support,
+        2.0 * spacing,
         cell,
     )?;
-    for (n, carried) in neighbours.iter().zip(&motions) {
-        let surface = SignedDistance::with_bins(&n.mesh.vertices, &n.mesh.triangles, n.bins);
+    Ok(Some(Carried { normals, motions }))
+}
+
+/// Moves the vertices of `mesh`, [`carry`]'s `carried`, towards the `surfaces` beside it (each
+/// a mesh and its [`neighbour_bins`]) as [`Followed`] says. `spacing`: r; the neighbours count
+/// within 3r. `close`: per vertex, whether another side of the surface faces it within the
+/// post-processing's clearance (at least r/2: more than twice the farthest a vertex moves
+/// here, 0.2 r); with cells up to r only their faces and those near a fold are tested for
+/// crossings, as the post-processing's guard tests them, else (empty, or larger cells) every
+/// face.
+pub fn follow_carried(
+    mesh: &mut TriMesh,
+    close: &[bool],
+    carried: Carried,
+    surfaces: [(&TriMesh, &SurfaceBins); 2],
+    spacing: f32,
+    cell: f32,
+) -> Followed {
+    if mesh.triangles.is_empty() {
+        return Followed::default();
+    }
+    let Carried { normals, motions } = carried;
+    let reach = REACH * spacing;
+    let mut offsets = vec![0.0f32; mesh.vertices.len()];
+    for ((side, bins), carried) in surfaces.iter().zip(&motions) {
+        let surface = SignedDistance::with_bins(&side.vertices, &side.triangles, bins);
         offsets
             .par_iter_mut()
             .zip(&mesh.vertices)
             .zip(carried)
-            .for_each(|((offset, &x), &a)| {
+            .for_each_init(Cursor::default, |cursor, ((offset, &x), &a)| {
                 // Where no particle says how the fluid moves, the vertex keeps its place.
                 let Some(a) = a else { return };
-                if let Some(e) = surface.at(x + a) {
+                if let Some(e) = surface.at_from(x + a, cursor) {
                     let taper = (1.0 - (e / reach).powi(2)).max(0.0);
                     *offset -= WEIGHT * e * taper * taper;
                 }
@@ -183,5 +235,5 @@ pub fn follow_fluid(
     if !mesh.normals.is_empty() {
         mesh.normals = area_weighted_normals(&mesh.vertices, &mesh.triangles);
     }
-    Ok(Some(followed))
+    followed
 }

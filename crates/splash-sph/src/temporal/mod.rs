@@ -8,7 +8,7 @@ mod jitter;
 mod motion;
 
 pub use filter::Followed;
-pub(crate) use filter::{Neighbour, follow_fluid, neighbour_bins};
+pub(crate) use filter::{Neighbour, carry, follow_carried, follow_fluid, neighbour_bins};
 
 pub use jitter::{DROPLET, Jitter, PARTS, Part, Window, frame_jitter};
 pub use motion::FrameMotion;
