@@ -196,7 +196,7 @@ impl SurfaceBins {
     /// The triangles binned at bin `c`, the brick of the last bin asked for kept in `last`
     /// (the bins a query visits mostly share one).
     #[inline]
-    fn at(&self, c: IVec3, last: &mut Option<(IVec3, Option<u32>)>) -> &[u32] {
+    fn in_bin(&self, c: IVec3, last: &mut Option<(IVec3, Option<u32>)>) -> &[u32] {
         let brick = c >> 2;
         let place = match *last {
             Some((b, place)) if b == brick => place,
@@ -278,7 +278,7 @@ impl SignedDistance<'_> {
                         if gap.length_squared() > best.d2 * (1.0 + TIE) {
                             continue;
                         }
-                        for &t in bins.at(key, &mut cursor.last) {
+                        for &t in bins.in_bin(key, &mut cursor.last) {
                             let tri = self.triangles[t as usize];
                             let near = best.d2 * (1.0 + TIE) + f32::MIN_POSITIVE;
                             if box_gap(p, tri, self.vertices) > near {

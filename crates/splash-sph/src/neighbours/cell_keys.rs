@@ -1,5 +1,6 @@
-//! Cells numbered by one 32-bit key (the signed-distance bins, the clearance's vertex grid):
-//! sorting by cell takes a radix sort of few passes, or entries of one word with an index.
+//! Cells numbered by one 32-bit key (the clearance's vertex grid; the signed-distance bins
+//! number their bricks so): sorting by cell takes a radix sort of few passes, or entries of
+//! one word with an index.
 
 use glam::{IVec3, Vec3};
 
@@ -18,13 +19,6 @@ pub(crate) struct CellKeys {
 }
 
 impl CellKeys {
-    /// The numbering of the cells `cell` wide that the box `(lo, hi)` around a mesh's vertices
-    /// meets, or None when it needs more than 32 bits.
-    pub(crate) fn new((lo, hi): (Vec3, Vec3), cell: f32) -> Option<CellKeys> {
-        // The floor is monotone: the cells of the lowest and highest coordinates.
-        CellKeys::spanning(cell_of(lo, cell), cell_of(hi, cell), 32)
-    }
-
     /// The numbering of the cells from `low` to `high` in at most `bits` bits, if they fit.
     fn spanning(low: IVec3, high: IVec3, bits: u32) -> Option<CellKeys> {
         let high = high.max(low);
@@ -38,25 +32,27 @@ impl CellKeys {
         })
     }
 
-    /// The numbering of the bricks of 4³ cells (a cell c in brick c >> 2) over the box
-    /// `bounds`, in 26 bits so that a cell's place in its brick fits beside, and the cells'
-    /// width: `cell`, doubled until they fit.
-    pub(crate) fn fitting_bricks((lo, hi): (Vec3, Vec3), mut cell: f32) -> (CellKeys, f32) {
-        loop {
-            let bricks = CellKeys::spanning(cell_of(lo, cell) >> 2, cell_of(hi, cell) >> 2, 26);
-            match bricks {
-                Some(keys) => return (keys, cell),
-                None => cell *= 2.0,
-            }
-        }
+    /// The numbering of cells at least `cell` wide over the box `bounds` (around a mesh's
+    /// vertices), and their width: `cell`, doubled until the span fits in 32 bits (a box
+    /// thousands of cells across in every direction gets wider cells, each holding more).
+    pub(crate) fn fitting(bounds: (Vec3, Vec3), cell: f32) -> (CellKeys, f32) {
+        CellKeys::fit(bounds, cell, 0, 32)
     }
 
-    /// The numbering of cells at least `cell` wide over the box `bounds`, and their width:
-    /// `cell`, doubled until the span fits in 32 bits (a box thousands of cells across in
-    /// every direction gets wider cells, each holding more).
-    pub(crate) fn fitting(bounds: (Vec3, Vec3), mut cell: f32) -> (CellKeys, f32) {
+    /// The numbering of the bricks of 4³ cells (a cell c in brick c >> 2) over the box
+    /// `bounds`, in 26 bits so that a cell's place in its brick fits beside, and the cells'
+    /// width, doubled as [`fitting`](Self::fitting) doubles it.
+    pub(crate) fn fitting_bricks(bounds: (Vec3, Vec3), cell: f32) -> (CellKeys, f32) {
+        CellKeys::fit(bounds, cell, 2, 26)
+    }
+
+    /// The numbering of the groups of cells `cell` wide (a cell c in group c >> `shift`) over
+    /// the box `(lo, hi)` in `bits` bits, `cell` doubled until they fit.
+    fn fit((lo, hi): (Vec3, Vec3), mut cell: f32, shift: i32, bits: u32) -> (CellKeys, f32) {
         loop {
-            match CellKeys::new(bounds, cell) {
+            // The floor is monotone: the cells of the lowest and highest coordinates.
+            let (low, high) = (cell_of(lo, cell) >> shift, cell_of(hi, cell) >> shift);
+            match CellKeys::spanning(low, high, bits) {
                 Some(keys) => return (keys, cell),
                 None => cell *= 2.0,
             }

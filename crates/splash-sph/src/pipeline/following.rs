@@ -176,16 +176,15 @@ fn prepare(
     let own_field = fields.get(&j).and_then(Option::as_ref);
     // The field two frames on is sampled meanwhile, ready for the next frame's mean.
     let ahead = j + 2;
-    let ahead_particles = match staged.get(&ahead) {
+    let later = match staged.get(&ahead) {
         Some(Ok(Staged::Particles(p))) if !fields.contains_key(&ahead) => Some(p),
         _ => None,
     };
-    let Some(later) = ahead_particles else {
-        return pipeline.reconstruct(input, own, own_field, sides.as_ref(), progress);
-    };
     let own_fields = (own_field, sides.as_ref());
     let (ready, sampled) = pipeline.reconstruct_sampling(input, own, own_fields, later, progress);
-    fields.insert(ahead, sampled);
+    if later.is_some() {
+        fields.insert(ahead, sampled);
+    }
     ready
 }
 

@@ -316,52 +316,47 @@ impl FramePipeline {
         sides: Option<&Sides<'_>>,
         progress: &mut dyn Progress,
     ) -> Result<Ready> {
-        let motion = &particles.motion;
-        let reconstructor = self.sequence_reconstructor(input, &motion.positions, progress)?;
-        let mut observer = progress.observer();
-        let rec = reconstructor
-            .reconstruct_along_flow(&motion.positions, own, sides, Some(observer.as_mut()))
-            .map_err(|e| e.context("reconstruction failed"));
-        drop(observer);
-        Ok(ready(rec?, particles, progress))
+        let fields = (own, sides);
+        self.reconstruct_sampling(input, particles, fields, None, progress)
+            .0
     }
 
     /// [`reconstruct`](Self::reconstruct), and meanwhile on the same threads the
-    /// [`sample`](Self::sample) of the frame `ahead` that a sequence needs next: neither keeps
-    /// both threads busy throughout (a frame's stages are not all parallel), so each fills what
-    /// the other leaves. The sample's error is left to its own frame to report.
+    /// [`sample`](Self::sample) of the frame `ahead` (if any) that a sequence needs next:
+    /// neither keeps both threads busy throughout (a frame's stages are not all parallel), so
+    /// each fills what the other leaves. The sample's error is left to its own frame to report.
     pub(super) fn reconstruct_sampling(
         &mut self,
         input: &Path,
         particles: &FrameParticles,
         (own, sides): (Option<&Sampled>, Option<&Sides<'_>>),
-        ahead: &FrameParticles,
+        ahead: Option<&FrameParticles>,
         progress: &mut dyn Progress,
     ) -> (Result<Ready>, Option<Sampled>) {
-        let motion = &particles.motion;
-        if let Err(e) = self.sequence_reconstructor(input, &motion.positions, progress) {
+        let positions = &particles.motion.positions;
+        if let Err(e) = self.sequence_reconstructor(input, positions, progress) {
             return (Err(e), None);
         }
         let reconstructor = self.prepared_reconstructor();
-        let (mut observer, mut beside) = (progress.observer(), progress.observer());
+        let mut observer = progress.observer();
+        let mut beside = ahead.map(|_| progress.observer());
         let (rec, sampled) = reconstructor.install(|| {
-            rayon::join(
-                || {
-                    let positions = &motion.positions;
-                    reconstructor.reconstruct_along_flow(
-                        positions,
-                        own,
-                        sides,
-                        Some(&mut *observer),
-                    )
-                },
-                || reconstructor.sample(&ahead.motion.positions, Some(&mut *beside)),
-            )
+            let mut surface = || {
+                reconstructor.reconstruct_along_flow(positions, own, sides, Some(&mut *observer))
+            };
+            match ahead.zip(beside.as_mut()) {
+                Some((later, beside)) => {
+                    let sample =
+                        || reconstructor.sample(&later.motion.positions, Some(&mut **beside));
+                    let (rec, sampled) = rayon::join(surface, sample);
+                    (rec, sampled.ok().flatten())
+                }
+                None => (surface(), None),
+            }
         });
         drop((observer, beside));
         let rec = rec.map_err(|e| e.context("reconstruction failed"));
-        let ready = rec.map(|rec| ready(rec, particles, progress));
-        (ready, sampled.ok().flatten())
+        (rec.map(|rec| ready(rec, particles, progress)), sampled)
     }
 
     /// A prepared frame made whole with `mesh` (its own surface, or that surface moved): its
