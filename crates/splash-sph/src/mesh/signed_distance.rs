@@ -131,13 +131,15 @@ impl SurfaceBins {
             });
         let (bricks, cell) = CellKeys::fitting_bricks(bounds, cell);
         let shells = (reach / cell).ceil() as i32 + 1;
-        // `bin key << 32 | triangle` for every bin a triangle's box meets, in triangle order,
-        // then sorted by bin, stably: each bin lists its triangles in order.
-        let mut entries: Vec<u64> = triangles
+        // Per chunk of triangles, `bin key << 32 | triangle` for every bin a triangle's box
+        // meets, in triangle order, and the bricks they lie in (a run of one brick told once:
+        // neighbouring triangles mostly share theirs).
+        let chunks: Vec<(Vec<u64>, Vec<u32>)> = triangles
             .par_chunks(CHUNK)
             .enumerate()
             .map(|(chunk, tris)| {
                 let mut entries = Vec::with_capacity(4 * tris.len());
+                let mut keys: Vec<u32> = Vec::new();
                 for (k, tri) in tris.iter().enumerate() {
                     let [a, b, c] = tri.map(|i| vertices[i as usize]);
                     let (lo, hi) = (
@@ -150,38 +152,46 @@ impl SurfaceBins {
                             for x in lo.x..=hi.x {
                                 let key = bin_key(&bricks, IVec3::new(x, y, z));
                                 entries.push(u64::from(key) << 32 | t);
+                                if keys.last() != Some(&(key >> 6)) {
+                                    keys.push(key >> 6);
+                                }
                             }
                         }
                     }
                 }
-                entries
+                (entries, keys)
             })
-            .collect::<Vec<_>>()
-            .concat();
-        radsort::sort_by_key(&mut entries, |&e| (e >> 32) as u32);
-        // The occupied bricks in key order, and how many triangles each bin lists.
-        let mut places = FxHashMap::default();
-        let mut starts: Vec<u32> = Vec::new();
-        let mut brick = None;
-        for &e in &entries {
-            let key = (e >> 32) as u32;
-            if brick != Some(key >> 6) {
-                brick = Some(key >> 6);
-                places.insert(key >> 6, (starts.len() / BRICK_BINS) as u32);
-                starts.resize(starts.len() + BRICK_BINS, 0);
+            .collect();
+        // The occupied bricks in key order, numbered in that order.
+        let mut keys: Vec<u32> = chunks.iter().flat_map(|(_, keys)| keys).copied().collect();
+        radsort::sort(&mut keys);
+        keys.dedup();
+        let places: FxHashMap<u32, u32> = keys.iter().zip(0..).map(|(&k, i)| (k, i)).collect();
+        // A counting sort of the entries by bin, stable: each bin lists its triangles in order
+        // (a radix sort of the entries took twice as long on dense-dambreak's meshes).
+        let mut last = (u32::MAX, 0);
+        let mut bin = |key: u32| {
+            if key >> 6 != last.0 {
+                last = (key >> 6, places[&(key >> 6)] as usize * BRICK_BINS);
             }
-            let last = starts.len() - BRICK_BINS;
-            starts[last + (key & 63) as usize] += 1;
+            last.1 + (key & 63) as usize
+        };
+        let entries = || chunks.iter().flat_map(|(entries, _)| entries);
+        let mut starts = vec![0u32; keys.len() * BRICK_BINS + 1];
+        for &e in entries() {
+            starts[bin((e >> 32) as u32) + 1] += 1;
         }
-        // Counts to starts, the total last.
-        let mut sum = 0;
-        for s in starts.iter_mut() {
-            (*s, sum) = (sum, sum + *s);
+        for i in 1..starts.len() {
+            starts[i] += starts[i - 1];
         }
-        starts.push(sum);
-        // Collected afresh, not in place: in place would keep the entries' larger buffer.
-        let binned: Vec<u32> = entries.iter().map(|&e| e as u32).collect();
-        drop(entries);
+        let mut next = starts.clone();
+        let mut binned = vec![0u32; starts[starts.len() - 1] as usize];
+        for &e in entries() {
+            let at = &mut next[bin((e >> 32) as u32)];
+            binned[*at as usize] = e as u32;
+            *at += 1;
+        }
+        drop(chunks);
         SurfaceBins {
             reach,
             cell,
@@ -236,8 +246,10 @@ fn bin_key(bricks: &CellKeys, c: IVec3) -> u32 {
     bricks.packed(c >> 2) << 6 | local_bin(c) as u32
 }
 
-/// Triangles a task bins at once.
-const CHUNK: usize = 8192;
+/// Triangles a task bins at once: their entries take about 1 MiB, which glibc maps for them
+/// and returns when freed (at 8192 the allocator's arenas kept them: dense-dambreak's
+/// `--temporal` peaked 5 MiB higher).
+const CHUNK: usize = 32768;
 
 impl SignedDistance<'_> {
     /// The signed distance from `p` to the mesh (negative inside), or None when no triangle

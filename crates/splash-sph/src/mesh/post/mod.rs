@@ -119,7 +119,7 @@ pub struct PostConfig {
     /// neighbours (a lone file, the ends of a sequence, a gap, a neighbour that fails) are
     /// meshed and post-processed alone. Not with `raw`. Experimental: carried jitter against
     /// the default's on dense-dambreak 0.0224 → 0.0145 r, on B2 (a ball thrown into a pool)
-    /// 0.0185 → 0.0123 r, for 1.4–1.6× the wall time (B2 1.39–1.46×, dense-dambreak
+    /// 0.0184 → 0.0127 r, for 1.4–1.6× the wall time (B2 1.38–1.46×, dense-dambreak
     /// 1.53–1.62×, two pinned cores), short of the targets.
     pub temporal: bool,
     /// Seconds between frames, to carry particles by their velocity when the files have no
