@@ -25,9 +25,9 @@ import time
 R = 0.01  # particle radius (--radius); lattice spacing 2R, splash's r. Lengths below are in D.
 D = 2 * R
 POOL = (44, 16, 44)  # FluidBlock's size: 43 x 15 x 43 = 27,735 particles
-# The block stands GAP off the floor and the walls: its outer particles are then 3r from the walls.
-# At 2r (no gap) the volume maps give them 1.3 times the rest density (2.7 in the corners) and the
-# pool erupts along the walls; at 3r they start at 0.86 of it and merely settle.
+# The block stands GAP off the floor and the walls: its outer particles are then 3 radii from the
+# walls. At 2 radii (no gap) the volume maps give them 1.3 times the rest density (2.7 in the
+# corners) and the pool erupts along the walls; at 3 radii they start at 0.86 of it and settle.
 GAP = 0.5
 BOX = (POOL[0] + 2 * GAP, 62.5, POOL[2] + 2 * GAP)
 BALL_CELLS2 = 98.5  # lattice points (i+1/2, j+1/2, k)*D with squared norm <= this: 4,116

@@ -139,7 +139,7 @@ impl SurfaceBins {
             .enumerate()
             .map(|(chunk, tris)| {
                 let mut entries = Vec::with_capacity(4 * tris.len());
-                let mut keys: Vec<u32> = Vec::new();
+                let mut occupied: Vec<u32> = Vec::new();
                 for (k, tri) in tris.iter().enumerate() {
                     let [a, b, c] = tri.map(|i| vertices[i as usize]);
                     let (lo, hi) = (
@@ -152,21 +152,21 @@ impl SurfaceBins {
                             for x in lo.x..=hi.x {
                                 let key = bin_key(&bricks, IVec3::new(x, y, z));
                                 entries.push(u64::from(key) << 32 | t);
-                                if keys.last() != Some(&(key >> 6)) {
-                                    keys.push(key >> 6);
+                                if occupied.last() != Some(&(key >> 6)) {
+                                    occupied.push(key >> 6);
                                 }
                             }
                         }
                     }
                 }
-                (entries, keys)
+                (entries, occupied)
             })
             .collect();
         // The occupied bricks in key order, numbered in that order.
-        let mut keys: Vec<u32> = chunks.iter().flat_map(|(_, keys)| keys).copied().collect();
-        radsort::sort(&mut keys);
-        keys.dedup();
-        let places: FxHashMap<u32, u32> = keys.iter().zip(0..).map(|(&k, i)| (k, i)).collect();
+        let mut occupied: Vec<u32> = chunks.iter().flat_map(|(_, o)| o).copied().collect();
+        radsort::sort(&mut occupied);
+        occupied.dedup();
+        let places: FxHashMap<u32, u32> = occupied.iter().zip(0..).map(|(&k, i)| (k, i)).collect();
         // A counting sort of the entries by bin, stable: each bin lists its triangles in order
         // (a radix sort of the entries took twice as long on dense-dambreak's meshes).
         let mut last = (u32::MAX, 0);
@@ -177,7 +177,7 @@ impl SurfaceBins {
             last.1 + (key & 63) as usize
         };
         let entries = || chunks.iter().flat_map(|(entries, _)| entries);
-        let mut starts = vec![0u32; keys.len() * BRICK_BINS + 1];
+        let mut starts = vec![0u32; occupied.len() * BRICK_BINS + 1];
         for &e in entries() {
             starts[bin((e >> 32) as u32) + 1] += 1;
         }
