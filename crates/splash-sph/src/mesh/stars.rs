@@ -5,6 +5,7 @@ use super::TriMesh;
 use super::adjacency::vertex_rows;
 use crate::error::{Error, Result};
 use glam::Vec3;
+use rayon::prelude::*;
 
 /// Triangle marked removed in a working triangle array: [`Stars::rebuild`] skips it.
 pub(crate) const DEAD: u32 = u32::MAX;
@@ -73,16 +74,24 @@ pub(crate) fn validate(mesh: &TriMesh) -> Result<()> {
 /// Unit normals from the area-weighted sum of the face normals around each vertex; zero for a
 /// vertex without a triangle of non-zero area.
 pub(crate) fn area_weighted_normals(vertices: &[Vec3], triangles: &[[u32; 3]]) -> Vec<Vec3> {
+    // The faces' normals in parallel, their sums in triangle order (the same bits on any
+    // number of threads).
+    let faces: Vec<Vec3> = triangles
+        .par_iter()
+        .map(|t| {
+            let [a, b, c] = t.map(|i| vertices[i as usize]);
+            // The cross product's length is twice the area: the weighting comes for free.
+            (b - a).cross(c - a)
+        })
+        .collect();
     let mut sums = vec![Vec3::ZERO; vertices.len()];
-    for t in triangles {
-        let [a, b, c] = t.map(|i| vertices[i as usize]);
-        // The cross product's length is twice the area: the weighting comes for free.
-        let n = (b - a).cross(c - a);
+    for (t, &n) in triangles.iter().zip(&faces) {
         for &v in t {
             sums[v as usize] += n;
         }
     }
-    sums.iter().map(|n| n.normalize_or_zero()).collect()
+    sums.par_iter_mut().for_each(|n| *n = n.normalize_or_zero());
+    sums
 }
 
 /// Keeps the vertices that `triangles` reference, in their order, with their normals when

@@ -57,15 +57,17 @@ fn with_folds(
     vertices: &[Vec3],
     normals: &[Vec3],
 ) -> Vec<bool> {
+    let folded: Vec<&[u32; 3]> = triangles
+        .par_iter()
+        .filter(|t| {
+            let [a, b, c] = t.map(|v| vertices[v as usize]);
+            let n = (b - a).cross(c - a);
+            t.iter().any(|&v| normals[v as usize].dot(n) < 0.0)
+        })
+        .collect();
     let mut out = close.to_vec();
-    for t in triangles {
-        let [a, b, c] = t.map(|v| vertices[v as usize]);
-        let n = (b - a).cross(c - a);
-        if t.iter().any(|&v| normals[v as usize].dot(n) < 0.0) {
-            for &v in t {
-                out[v as usize] = true;
-            }
-        }
+    for &v in folded.into_iter().flatten() {
+        out[v as usize] = true;
     }
     out
 }
@@ -203,15 +205,20 @@ pub fn follow_carried(
             });
     }
     let own = mesh.vertices.clone();
-    for ((x, n), offset) in mesh.vertices.iter_mut().zip(&normals).zip(&mut offsets) {
-        // A vertex without a normal (its faces enclose nothing) stays, and counts as unmoved.
-        if *n == Vec3::ZERO {
-            *offset = 0.0;
-        } else {
-            *offset = offset.clamp(-MAX_MOVE * spacing, MAX_MOVE * spacing);
-            *x += *n * *offset;
-        }
-    }
+    mesh.vertices
+        .par_iter_mut()
+        .zip(&normals)
+        .zip(&mut offsets)
+        .for_each(|((x, n), offset)| {
+            // A vertex without a normal (its faces enclose nothing) stays, and counts as
+            // unmoved.
+            if *n == Vec3::ZERO {
+                *offset = 0.0;
+            } else {
+                *offset = offset.clamp(-MAX_MOVE * spacing, MAX_MOVE * spacing);
+                *x += *n * *offset;
+            }
+        });
     // Where following made faces cross (two sheets pulled towards different neighbours'
     // surfaces), their corners and a ring keep their own frame's places.
     // Measured against testing every face, the same meshes at r/2 and r (dense-dambreak's 40
