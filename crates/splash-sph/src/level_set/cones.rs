@@ -15,6 +15,7 @@
 use glam::Vec3;
 
 use crate::data::TriMesh;
+use crate::mesh::{area_weighted_normals, unit_normal};
 
 /// Each vertex's axis and the spread of its faces' normals about it.
 pub(super) struct Cones {
@@ -27,16 +28,10 @@ pub(super) struct Cones {
 
 impl Cones {
     pub(super) fn new(mesh: &TriMesh) -> Cones {
-        let mut sum = vec![Vec3::ZERO; mesh.vertices.len()];
-        for t in &mesh.triangles {
-            let [a, b, c] = t.map(|i| mesh.vertices[i as usize]);
-            let n = (b - a).cross(c - a);
-            t.iter().for_each(|&v| sum[v as usize] += n);
-        }
-        let axis: Vec<Vec3> = sum.into_iter().map(Vec3::normalize_or_zero).collect();
+        let axis = area_weighted_normals(&mesh.vertices, &mesh.triangles);
         let mut spread = vec![1.0f32; mesh.vertices.len()];
         for t in &mesh.triangles {
-            let n = face_normal(t, &mesh.vertices);
+            let n = unit_normal(t, &mesh.vertices);
             for &v in t {
                 let s = &mut spread[v as usize];
                 *s = s.min(n.dot(axis[v as usize]));
@@ -61,12 +56,6 @@ impl Cones {
             ca > 0.0 && cb > 0.0 && ca * cb - sine(ca) * sine(cb) > 0.0
         })
     }
-}
-
-/// The unit normal of triangle `t` (counter-clockwise seen from outside), zero if degenerate.
-pub(super) fn face_normal(t: &[u32; 3], vertices: &[Vec3]) -> Vec3 {
-    let [a, b, c] = t.map(|i| vertices[i as usize]);
-    (b - a).cross(c - a).normalize_or_zero()
 }
 
 fn sine(cos: f32) -> f32 {

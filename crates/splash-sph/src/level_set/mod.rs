@@ -26,7 +26,8 @@ use crate::data::{Attribute, TriMesh};
 use crate::error::Result;
 use crate::io::{self, VdbGrid, VdbLeaf, VdbTree, VdbValues};
 use crate::mesh::signed_distance::signed_distance_among;
-use cones::{Cones, face_normal};
+use crate::mesh::unit_normal;
+use cones::Cones;
 use scan::Work;
 
 /// The level set's grid in a `.vdb` file.
@@ -201,7 +202,7 @@ impl Signs<'_> {
     fn signed(&self, p: Vec3, d: f32, t: u32) -> f32 {
         let (vertices, triangles) = (&self.mesh.vertices, &self.mesh.triangles);
         let tri = triangles[t as usize];
-        let n = face_normal(&tri, vertices);
+        let n = unit_normal(&tri, vertices);
         if n != Vec3::ZERO && self.cones.narrow(tri, n) {
             // The nearest point lies in the face's plane, so its offset along the normal is
             // that of any corner.

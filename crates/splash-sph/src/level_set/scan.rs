@@ -17,12 +17,12 @@ use glam::{IVec3, Vec3};
 use rayon::prelude::*;
 use rustc_hash::{FxHashMap, FxHashSet};
 
-use super::cones::{Cones, face_normal};
+use super::cones::Cones;
 use super::{Fans, voxel_bit};
 use crate::data::TriMesh;
 use crate::io::vdb_file_order;
-use crate::mesh::cells_between;
 use crate::mesh::signed_distance::triangle_distance;
+use crate::mesh::{cells_between, unit_normal};
 use crate::neighbours::{ceil_i32, floor_i32};
 
 /// Slack, in voxels, on every side of a region: rounding never leaves a voxel out.
@@ -182,7 +182,7 @@ impl Regions<'_> {
 
     /// The points within the band of the face's plane whose foot lies on the face.
     fn prism(&self, tri: [u32; 3]) -> Option<Region<5>> {
-        let n = face_normal(&tri, &self.mesh.vertices);
+        let n = unit_normal(&tri, &self.mesh.vertices);
         if n == Vec3::ZERO {
             return None;
         }

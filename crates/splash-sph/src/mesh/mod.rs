@@ -23,7 +23,7 @@ pub use post::{VolumeScope, clip_to_box, decimate};
 pub use quality::{Quality, SLIVER_DEGREES, SMALL_COMPONENT_FACES, quality, volume_error};
 pub use self_intersections::self_intersecting_faces;
 pub use signed_distance::{Cursor, SignedDistance, SurfaceBins};
-pub(crate) use stars::area_weighted_normals;
+pub(crate) use stars::{area_normal, area_weighted_normals, unit_normal};
 pub use topology::{Topology, component_volumes, signed_volume, topology};
 
 #[doc(no_inline)]

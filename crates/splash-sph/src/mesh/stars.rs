@@ -71,18 +71,29 @@ pub(crate) fn validate(mesh: &TriMesh) -> Result<()> {
     Ok(())
 }
 
+/// The normal of triangle `t` of `vertices`, (b − a) × (c − a): counter-clockwise seen from
+/// outside, its length twice the triangle's area.
+#[inline]
+pub(crate) fn area_normal(t: &[u32; 3], vertices: &[Vec3]) -> Vec3 {
+    let [a, b, c] = t.map(|i| vertices[i as usize]);
+    (b - a).cross(c - a)
+}
+
+/// The unit normal of triangle `t` of `vertices`, zero if it is degenerate.
+#[inline]
+pub(crate) fn unit_normal(t: &[u32; 3], vertices: &[Vec3]) -> Vec3 {
+    area_normal(t, vertices).normalize_or_zero()
+}
+
 /// Unit normals from the area-weighted sum of the face normals around each vertex; zero for a
 /// vertex without a triangle of non-zero area.
 pub(crate) fn area_weighted_normals(vertices: &[Vec3], triangles: &[[u32; 3]]) -> Vec<Vec3> {
     // The faces' normals in parallel, their sums in triangle order (the same bits on any
     // number of threads).
+    // The cross product's length is twice the area: the weighting comes for free.
     let faces: Vec<Vec3> = triangles
         .par_iter()
-        .map(|t| {
-            let [a, b, c] = t.map(|i| vertices[i as usize]);
-            // The cross product's length is twice the area: the weighting comes for free.
-            (b - a).cross(c - a)
-        })
+        .map(|t| area_normal(t, vertices))
         .collect();
     let mut sums = vec![Vec3::ZERO; vertices.len()];
     for (t, &n) in triangles.iter().zip(&faces) {

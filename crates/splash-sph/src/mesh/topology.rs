@@ -206,9 +206,8 @@ pub(crate) fn normal_agreement(mesh: &TriMesh) -> f64 {
     let mut face_sum = vec![glam::Vec3::ZERO; mesh.vertices.len()];
     let mut used = vec![false; mesh.vertices.len()];
     for t in mesh.triangles.iter().filter(|t| !is_degenerate(t)) {
-        let [a, b, c] = t.map(|i| mesh.vertices[i as usize]);
         // The cross product's length is twice the area: an area weighting for free.
-        let n = (b - a).cross(c - a);
+        let n = super::area_normal(t, &mesh.vertices);
         for &v in t {
             face_sum[v as usize] += n;
             used[v as usize] = true;

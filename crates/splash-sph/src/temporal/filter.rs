@@ -7,7 +7,9 @@ use rayon::prelude::*;
 use super::motion::{FrameMotion, mean_motions};
 use crate::error::Result;
 use crate::mesh::post::put_back_near;
-use crate::mesh::{Cursor, SignedDistance, SurfaceBins, TriMesh, area_weighted_normals};
+use crate::mesh::{
+    Cursor, SignedDistance, SurfaceBins, TriMesh, area_normal, area_weighted_normals,
+};
 
 /// Frame t's neighbours for [`follow_fluid`]: a neighbour frame's mesh and particles.
 #[derive(Debug, Clone, Copy)]
@@ -60,8 +62,7 @@ fn with_folds(
     let folded: Vec<&[u32; 3]> = triangles
         .par_iter()
         .filter(|t| {
-            let [a, b, c] = t.map(|v| vertices[v as usize]);
-            let n = (b - a).cross(c - a);
+            let n = area_normal(t, vertices);
             t.iter().any(|&v| normals[v as usize].dot(n) < 0.0)
         })
         .collect();

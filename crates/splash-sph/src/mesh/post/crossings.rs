@@ -9,7 +9,7 @@ use glam::{IVec3, Vec3};
 use rayon::prelude::*;
 use rustc_hash::FxHashMap;
 
-use crate::mesh::{cells_between, self_intersecting_faces};
+use crate::mesh::{area_normal, cells_between, self_intersecting_faces};
 use crate::neighbours::cell_of;
 
 /// Rounds of putting back: each looks again only near the faces whose corners went back.
@@ -152,14 +152,10 @@ fn first_faces(
 /// The corners of the faces whose normal points against their normal at `raw`, or None when
 /// no face turned over.
 fn turned_over(vertices: &[Vec3], triangles: &[[u32; 3]], raw: &[Vec3]) -> Option<Vec<bool>> {
-    let normal = |p: &[Vec3], t: &[u32; 3]| {
-        let [a, b, c] = t.map(|i| p[i as usize]);
-        (b - a).cross(c - a)
-    };
     let turned: Vec<&[u32; 3]> = triangles
         .par_iter()
         .with_min_len(4096)
-        .filter(|t| normal(raw, t).dot(normal(vertices, t)) < 0.0)
+        .filter(|t| area_normal(t, raw).dot(area_normal(t, vertices)) < 0.0)
         .collect();
     if turned.is_empty() {
         return None;

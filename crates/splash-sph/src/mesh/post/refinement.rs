@@ -12,6 +12,7 @@ use rayon::prelude::*;
 use std::sync::atomic::{AtomicU32, Ordering};
 
 use crate::mesh::adjacency::VertexFaces;
+use crate::mesh::unit_normal;
 
 /// Triangles per parallel task.
 const CHUNK: usize = 4096;
@@ -121,10 +122,7 @@ fn bisect(
     let unit: Vec<Vec3> = triangles
         .par_iter()
         .with_min_len(CHUNK)
-        .map(|t| {
-            let [a, b, c] = t.map(|i| vertices[i as usize]);
-            (b - a).cross(c - a).normalize_or_zero()
-        })
+        .map(|t| unit_normal(t, vertices))
         .collect();
     let cos_max = angle.cos();
     // Split flags by edge id (the owning corner); each triangle writes only its own corners.
