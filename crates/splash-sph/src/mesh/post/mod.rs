@@ -118,9 +118,9 @@ pub struct PostConfig {
     /// (default false): a low-pass in time along the flow (issue 38). Frames without both
     /// neighbours (a lone file, the ends of a sequence, a gap, a neighbour that fails) are
     /// meshed and post-processed alone. Not with `raw`. Experimental: carried jitter against
-    /// the default's on dense-dambreak 0.0224 → 0.0145 r, on B2 (a ball thrown into a pool)
-    /// 0.0184 → 0.0127 r, for 1.4–1.6× the wall time (B2 1.38–1.46×, dense-dambreak
-    /// 1.53–1.62×, two pinned cores), short of the issue's targets.
+    /// the default's on dense-dambreak 0.0224 → 0.0143 r, on B2 (a ball thrown into a pool)
+    /// 0.0184 → 0.0124 r, for 1.4–1.6× the wall time (B2 1.37×, dense-dambreak 1.51–1.58×,
+    /// two pinned cores), short of the issue's cost target.
     pub temporal: bool,
     /// Seconds between frames, to carry particles by their velocity when the files have no
     /// particle ids (default none: such sequences are post-processed frame by frame).
