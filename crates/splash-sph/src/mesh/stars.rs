@@ -89,8 +89,8 @@ pub(crate) fn unit_normal(t: &[u32; 3], vertices: &[Vec3]) -> Vec3 {
 /// vertex without a triangle of non-zero area.
 pub(crate) fn area_weighted_normals(vertices: &[Vec3], triangles: &[[u32; 3]]) -> Vec<Vec3> {
     // The faces' normals in parallel, their sums in triangle order (the same bits on any
-    // number of threads).
-    // The cross product's length is twice the area: the weighting comes for free.
+    // number of threads); a face normal's length is twice the area, so the weighting comes
+    // for free.
     let faces: Vec<Vec3> = triangles
         .par_iter()
         .map(|t| area_normal(t, vertices))

@@ -8,6 +8,7 @@ use glam::Vec3;
 use rayon::prelude::*;
 
 use crate::mesh::adjacency::{Neighbours, VertexFaces};
+use crate::mesh::area_normal;
 
 /// Vertices per parallel task: large enough to amortise the task, small enough to balance.
 const CHUNK: usize = 4096;
@@ -67,8 +68,7 @@ pub fn vertex_normals(
             for (k, n) in out.iter_mut().enumerate() {
                 let mut sum = Vec3::ZERO;
                 for f in rings.of(c * CHUNK + k) {
-                    let [a, b, d] = triangles[f].map(|i| vertices[i as usize]);
-                    sum += (b - a).cross(d - a);
+                    sum += area_normal(&triangles[f], vertices);
                 }
                 *n = sum.normalize_or_zero();
             }

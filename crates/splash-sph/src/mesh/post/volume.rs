@@ -9,6 +9,7 @@ use serde::{Deserialize, Serialize};
 
 use super::clearance::Clearance;
 use crate::mesh::adjacency::{Neighbours, VertexFaces};
+use crate::mesh::area_normal;
 
 /// What the volume steps of `PostConfig` restore: see `PostConfig::volume_scope`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -160,8 +161,7 @@ pub fn normals_and_measures(
         .zip(triangles.par_chunks(CHUNK))
         .for_each(|(crosses, triangles)| {
             for (n, t) in crosses.iter_mut().zip(triangles) {
-                let [a, b, d] = t.map(|i| vertices[i as usize]);
-                *n = (b - a).cross(d - a);
+                *n = area_normal(t, vertices);
             }
         });
     let Measures { runs, crosses } = measures;
